@@ -1,0 +1,100 @@
+"""``empact modes`` and ``empact frf``: the linear models of Sec. 2.1-2.2."""
+from __future__ import annotations
+
+import click
+import numpy as np
+
+from ..actuation import actuation_model
+from ..driveline import driveline_model, uncoupled_frequencies
+from ..params import DAMPING_LEVELS
+from . import echo_json, get_params, json_option, main, params_option, InputError
+
+MODELS = {"actuation": actuation_model, "driveline": driveline_model}
+
+
+@main.command("modes")
+@click.argument("model", type=click.Choice(list(MODELS)))
+@click.option("--ratio", "r_g", type=float, default=1.0, show_default=True,
+              help="Geometric ratio r_g.")
+@params_option
+@json_option
+def modes(model: str, r_g: float, params_file: str | None, as_json: bool) -> None:
+    """Undamped eigenfrequencies, mode shapes and modal energy of MODEL at a ratio."""
+    params = get_params(params_file)
+    lm = MODELS[model](params, r_g)
+    m = lm.modes()
+    if as_json:
+        data = {"model": model, "ratio": r_g, "coordinates": m.coordinates,
+                "springs": m.springs, "frequencies_hz": m.frequencies_hz,
+                "energy_fraction": m.energy_fraction, "shapes": m.shapes,
+                "normalised_shapes": m.normalised_shapes, "mass_matrix": m.mass_matrix,
+                "stiffness_matrix": m.stiffness_matrix}
+        if model == "driveline":
+            data["uncoupled_hz"] = uncoupled_frequencies(params)
+        echo_json(data)
+        return
+    click.echo(f"{model} model at r_g = {r_g:g}")
+    click.echo(f"{'mode':>4s} {'f [Hz]':>10s}  energy fraction per spring "
+               f"({', '.join(m.springs)})")
+    for j, f in enumerate(m.frequencies_hz):
+        e = " ".join(f"{x:+6.3f}" for x in m.energy_fraction[j])
+        click.echo(f"{j + 1:4d} {f:10.3f}  {e}")
+    if model == "driveline":
+        u = uncoupled_frequencies(params)
+        click.echo(f"uncoupled (belt removed): primary {u['primary']:.3f} Hz, "
+                   f"secondary {u['secondary']:.3f} Hz")
+
+
+def frequency_grid(fmin: float, fmax: float, n: int) -> np.ndarray:
+    """Log-spaced frequencies [Hz]; bad ranges are input errors."""
+    if not (0 < fmin < fmax) or n < 2:
+        raise InputError(f"--fmin {fmin:g} / --fmax {fmax:g} / --n {n}: need 0 < fmin < fmax "
+                         "and n >= 2")
+    return np.logspace(np.log10(fmin), np.log10(fmax), n)
+
+
+@main.command("frf")
+@click.argument("model", type=click.Choice(list(MODELS)))
+@click.option("--input", "inputs", multiple=True, default=None,
+              help="Input name (repeatable; default all), e.g. T_mp.")
+@click.option("--output", "outputs", multiple=True, default=None,
+              help="Output name (repeatable; default all coordinates), e.g. theta_mp; "
+                   "append _dot for a velocity.")
+@click.option("--damping", type=click.Choice(DAMPING_LEVELS), default="moderate",
+              show_default=True, help="Damping level (actuation model).")
+@click.option("--ratio", "r_g", type=float, default=1.0, show_default=True)
+@click.option("--fmin", type=float, default=0.1, show_default=True, help="[Hz]")
+@click.option("--fmax", type=float, default=1000.0, show_default=True, help="[Hz]")
+@click.option("--n", "n", type=int, default=400, show_default=True, help="Number of frequencies.")
+@params_option
+@json_option
+@click.option("--plot", "plot", type=click.Path(dir_okay=False), default=None,
+              help="Write a Bode plot (format from the suffix: .png, .svg, .pdf).")
+def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: str, r_g: float,
+        fmin: float, fmax: float, n: int, params_file: str | None, as_json: bool,
+        plot: str | None) -> None:
+    """Damped frequency response of MODEL, computed directly from M, C and K."""
+    params = get_params(params_file)
+    f = frequency_grid(fmin, fmax, n)
+    lm = actuation_model(params, r_g, damping) if model == "actuation" \
+        else driveline_model(params, r_g)
+    resp = lm.frequency_response(2 * np.pi * f, list(inputs) or None, list(outputs) or None,
+                                 label=f"{damping} damping" if model == "actuation" else "")
+    if plot:
+        from ..plotting import plot_bode, save_single
+        pairs = [(o, i) for i in resp.inputs for o in resp.outputs]
+        save_single(plot_bode([resp], pairs, title=f"{lm.name}"), plot)
+    if as_json:
+        echo_json({"model": model, "ratio": r_g, "damping": damping, "inputs": resp.inputs,
+                   "outputs": resp.outputs, "frequencies_hz": resp.frequencies_hz,
+                   "magnitude_db": resp.magnitude_db(), "phase_deg": resp.phase_deg(),
+                   "H": np.stack([resp.H.real, resp.H.imag], axis=-1)})
+        return
+    if not plot:
+        mag = resp.magnitude_db()
+        click.echo(f"{'f [Hz]':>10s} " + " ".join(f"{o + '/' + i:>22s}" for i in resp.inputs
+                                                  for o in resp.outputs) + "  [dB]")
+        for k in range(len(f)):
+            click.echo(f"{f[k]:10.4g} " + " ".join(f"{mag[a, b, k]:22.3f}"
+                                                   for b in range(len(resp.inputs))
+                                                   for a in range(len(resp.outputs))))

@@ -1,0 +1,149 @@
+"""Variator geometry of a pushbelt CVT (paper eqs. 4-6).
+
+Conventions (SI): running radii ``R_p`` (primary) and ``R_s`` (secondary) [m], geometric ratio
+``r_g = R_p / R_s`` (``r_g > 1`` is overdrive), centre distance ``a`` [m], wedge angle ``beta``
+[rad], wrapped-angle term ``phi = arcsin((R_p - R_s) / a)`` [rad] (eq. 4), belt length
+``L = 2 a cos(phi) + (pi + 2 phi) R_p + (pi - 2 phi) R_s`` (eq. 6), sheave translations
+``x = (R - R0) tan(beta)`` with ``R0 = R_min``, and ``Delta_x = x_p - x_s = a sin(phi) tan(beta)``
+(eq. 5).  Exact identity used throughout: ``dL/dR_p = pi + 2 phi``, ``dL/dR_s = pi - 2 phi``.
+
+All functions accept arrays and broadcast.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .params import ParameterError, VariatorParams
+
+__all__ = ["wrap_angle", "belt_length", "radii", "ratio_range", "VariatorState", "variator_state",
+           "check_ratio"]
+
+
+def wrap_angle(R_p: ArrayLike, R_s: ArrayLike, a: float) -> NDArray[np.float64]:
+    """Wrapped-angle term ``phi = arcsin((R_p - R_s) / a)`` [rad] (eq. 4)."""
+    return np.arcsin((np.asarray(R_p, float) - np.asarray(R_s, float)) / a)
+
+
+def belt_length(R_p: ArrayLike, R_s: ArrayLike, a: float) -> NDArray[np.float64]:
+    """Belt length ``L = 2 a cos(phi) + (pi + 2 phi) R_p + (pi - 2 phi) R_s`` [m] (eq. 6)."""
+    phi = wrap_angle(R_p, R_s, a)
+    return 2 * a * np.cos(phi) + (np.pi + 2 * phi) * R_p + (np.pi - 2 * phi) * R_s
+
+
+def radii(r_g: ArrayLike, L_belt: float, a: float, *, tol: float = 1e-13,
+          max_iter: int = 50) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Running radii ``(R_p, R_s)`` [m] for ratio(s) `r_g` at belt length `L_belt` [m].
+
+    Solves ``L(r_g R_s, R_s) = L_belt`` for ``R_s`` by Newton's method (vectorised), with the
+    exact derivative ``dL/dR_s = r_g (pi + 2 phi) + (pi - 2 phi)``.
+
+    Raises
+    ------
+    ParameterError
+        If `r_g` is not positive or the iteration does not converge (belt cannot span the
+        pulleys at that ratio).
+    """
+    r = np.asarray(r_g, float)
+    if np.any(~np.isfinite(r)) or np.any(r <= 0):
+        raise ParameterError(f"r_g = {r_g!r}: must be a positive finite ratio")
+    R_s = (L_belt - 2 * a) / (np.pi * (1 + r))  # exact for phi = 0
+    for _ in range(max_iter):
+        R_p = r * R_s
+        phi = wrap_angle(R_p, R_s, a)
+        f = 2 * a * np.cos(phi) + (np.pi + 2 * phi) * R_p + (np.pi - 2 * phi) * R_s - L_belt
+        step = f / (r * (np.pi + 2 * phi) + (np.pi - 2 * phi))
+        R_s = R_s - step
+        if np.all(np.abs(step) <= tol * L_belt):
+            break
+    else:
+        raise ParameterError(f"r_g = {r_g!r}: belt geometry did not converge (L_belt = {L_belt}, "
+                             f"a = {a})")
+    if np.any(~np.isfinite(R_s)):
+        raise ParameterError(f"r_g = {r_g!r}: no belt geometry at this ratio "
+                             f"(L_belt = {L_belt}, a = {a})")
+    return r * R_s, R_s
+
+
+@lru_cache(maxsize=64)
+def ratio_range(variator: VariatorParams) -> tuple[float, float]:
+    """Geometric ratio range ``(r_min, r_max)`` allowed by ``R_min <= R_p, R_s <= R_max``.
+
+    At the largest ratio either ``R_s = R_min`` or ``R_p = R_max``, whichever binds first; the
+    smallest ratio is the mirror image (eq. 6 is symmetric under exchanging the pulleys).
+    """
+    from scipy.optimize import brentq
+
+    v = variator
+    L = lambda R_p, R_s: float(belt_length(R_p, R_s, v.a)) - v.L_belt  # noqa: E731
+    R_med = (v.L_belt - 2 * v.a) / (2 * np.pi)
+    # R_s = R_min: find R_p; R_p = R_max: find R_s; keep the smaller ratio of the two.
+    candidates = []
+    upper = v.R_min + v.a * (1 - 1e-12)  # arcsin domain of eq. 4
+    if L(R_med, v.R_min) < 0 < L(upper, v.R_min):
+        R_p = brentq(lambda x: L(x, v.R_min), R_med, upper)
+        candidates.append(R_p / v.R_min)
+    lower = max(0.0, v.R_max - v.a * (1 - 1e-12))
+    if L(v.R_max, lower) < 0 < L(v.R_max, R_med):
+        R_s = brentq(lambda x: L(v.R_max, x), lower, R_med)
+        candidates.append(v.R_max / R_s)
+    if not candidates:
+        raise ParameterError(f"variator: no ratio range for R_min = {v.R_min}, R_max = {v.R_max}, "
+                             f"L_belt = {v.L_belt}, a = {v.a}")
+    r_max = min(candidates)
+    return 1.0 / r_max, r_max
+
+
+def check_ratio(r_g: ArrayLike, variator: VariatorParams, name: str = "r_g") -> NDArray[np.float64]:
+    """Return `r_g` as an array, or raise `ParameterError` if any value is outside the range."""
+    r = np.asarray(r_g, float)
+    lo, hi = ratio_range(variator)
+    bad = ~np.isfinite(r) | (r < lo * (1 - 1e-12)) | (r > hi * (1 + 1e-12))
+    if np.any(bad):
+        value = r[bad].flat[0] if r.ndim else float(r)
+        raise ParameterError(f"{name} = {value:g}: outside the geometric ratio range "
+                             f"[{lo:.4g}, {hi:.4g}] of the variator")
+    return r
+
+
+@dataclass(frozen=True)
+class VariatorState:
+    """Geometry of the variator at one or more ratios (arrays broadcast like `r_g`).
+
+    Attributes
+    ----------
+    r_g : geometric ratio [-]
+    R_p, R_s : running radii [m]
+    phi : wrapped-angle term [rad] (eq. 4)
+    x_p, x_s : sheave translations ``(R - R0) tan(beta)`` [m]
+    delta_x : ``x_p - x_s = a sin(phi) tan(beta)`` [m] (eq. 5)
+    L : belt length [m] (eq. 6), equal to ``L_belt`` to solver precision
+    dL_dRp, dL_dRs : ``pi + 2 phi`` and ``pi - 2 phi`` [-]
+    """
+
+    r_g: NDArray[np.float64]
+    R_p: NDArray[np.float64]
+    R_s: NDArray[np.float64]
+    phi: NDArray[np.float64]
+    x_p: NDArray[np.float64]
+    x_s: NDArray[np.float64]
+    delta_x: NDArray[np.float64]
+    L: NDArray[np.float64]
+    dL_dRp: NDArray[np.float64]
+    dL_dRs: NDArray[np.float64]
+
+
+def variator_state(r_g: ArrayLike, variator: VariatorParams) -> VariatorState:
+    """Geometry at ratio(s) `r_g` (checked against the geometric range)."""
+    v = variator
+    r = check_ratio(r_g, v)
+    R_p, R_s = radii(r, v.L_belt, v.a)
+    phi = wrap_angle(R_p, R_s, v.a)
+    tb = np.tan(v.beta)
+    return VariatorState(r_g=r, R_p=R_p, R_s=R_s, phi=phi, x_p=(R_p - v.R_min) * tb,
+                         x_s=(R_s - v.R_min) * tb, delta_x=v.a * np.sin(phi) * tb,
+                         L=belt_length(R_p, R_s, v.a), dL_dRp=np.pi + 2 * phi,
+                         dL_dRs=np.pi - 2 * phi)

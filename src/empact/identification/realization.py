@@ -1,0 +1,211 @@
+"""State-space realisation from measured step responses (Kung's method / ERA).
+
+The step responses are differenced into the Markov parameters of the zero-order-hold (ZOH)
+discrete model, ``h_0 = D`` and ``h_k = C A_d^(k-1) B_d``; a block Hankel matrix of
+``h_1, h_2, ...`` is factored by the SVD into an observability and a controllability matrix
+(balanced split of the singular values), ``A_d`` follows from the shift structure of the
+observability matrix (least squares), and the continuous model is the exact ZOH inverse:
+``A_c = logm(A_d) / dt`` and ``B_c = A_c (A_d - I)^-1 B_d``.
+"""
+from __future__ import annotations
+
+import numbers
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import control
+import numpy as np
+import scipy.linalg as sla
+
+__all__ = ["RealizationResult", "realize_steps"]
+
+
+@dataclass(frozen=True)
+class RealizationResult:
+    """Result of `realize_steps`.
+
+    Attributes
+    ----------
+    sys : control.StateSpace
+        Identified continuous-time model (states ``x0, x1, ...``).
+    sys_discrete : control.StateSpace
+        Identified ZOH discrete-time model, sample time ``dt`` [s].
+    singular_values : numpy.ndarray
+        Singular values of the block Hankel matrix, descending, shape (n_sv,).
+    order : int
+        Model order (number of states).
+    fit : numpy.ndarray
+        Normalised RMS fit per channel [%], shape (n_out, n_in):
+        ``100 (1 - ||y - y_hat|| / ||y - mean(y)||)``; NaN where the measured step is constant.
+    step_model : numpy.ndarray
+        Step responses of `sys_discrete` on the sample instants, shape (n_t, n_out, n_in).
+    """
+
+    sys: control.StateSpace
+    sys_discrete: control.StateSpace
+    singular_values: np.ndarray
+    order: int
+    fit: np.ndarray
+    step_model: np.ndarray
+
+
+def _positive_int(name: str, value) -> int | None:
+    if value is None:
+        return None
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral) or value < 1:
+        raise ValueError(f"{name} must be a positive integer or None, got {value!r}")
+    return int(value)
+
+
+def _names(name: str, names, count: int) -> list[str] | int:
+    if names is None:
+        return count
+    if isinstance(names, str) or len(names) != count:
+        raise ValueError(f"{name} must be a sequence of {count} names, got {names!r}")
+    return [str(s) for s in names]
+
+
+def _discrete_steps(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+                    n_t: int) -> np.ndarray:
+    """Step responses of ``(A, B, C, D)`` from rest, shape (n_t, n_out, n_in).
+
+    ``A^k B`` for k = 0 .. n_t-2 is built by doubling (log2(n_t) matrix products).
+    """
+    M, Ap = B[None], A
+    with np.errstate(over="ignore", invalid="ignore"):  # an unstable model may overflow
+        while M.shape[0] < n_t - 1:
+            M = np.concatenate([M, Ap @ M], axis=0)
+            Ap = Ap @ Ap
+        h = C @ M[: n_t - 1]
+        cum = np.concatenate([np.zeros((1,) + D.shape), np.cumsum(h, axis=0)], axis=0)
+    return D + cum
+
+
+def _select_order(s: np.ndarray, n_max: int, sv_threshold: float) -> int:
+    """Order at the largest ratio ``s[k-1] / s[k]`` among the significant singular values."""
+    n_sig = max(1, min(n_max, int(np.count_nonzero(s > sv_threshold * s[0]))))
+    nxt = np.append(s, 0.0)[1: n_sig + 1]
+    ratio = s[:n_sig] / np.maximum(nxt, np.finfo(float).tiny)
+    return int(np.argmax(ratio)) + 1
+
+
+def realize_steps(t, steps, order: int | None = None, *, n_block_rows: int | None = None,
+                  n_block_cols: int | None = None, sv_threshold: float = 1e-3,
+                  inputs: Sequence[str] | None = None,
+                  outputs: Sequence[str] | None = None) -> RealizationResult:
+    """Identify a continuous state-space model from sampled step responses.
+
+    Parameters
+    ----------
+    t : array_like
+        Uniformly spaced time vector [s], shape (n_t,); the steps are applied at ``t[0]``.
+    steps : array_like
+        Response of each output to a unit step on each input, from rest, shape
+        (n_t, n_out, n_in) [output units per input unit]. ``steps[0]`` is the direct
+        feedthrough ``D`` (usually zero).
+    order : int, optional
+        Model order. If None, it is chosen from the Hankel singular values ``s``: only
+        ``s_k > sv_threshold * s_1`` count as significant, and the order is the ``k`` with the
+        largest ratio ``s_k / s_(k+1)`` among them (the ratio to the first insignificant value
+        included). The threshold rejects the noise floor, the largest gap picks the
+        clearest rank break above it.
+    n_block_rows, n_block_cols : int, optional
+        Block rows / columns of the Hankel matrix; ``n_block_rows + n_block_cols <= n_t``.
+        Defaults: ``n_block_rows = min(n_t // 2, ceil(400 / n_out))`` and
+        ``n_block_cols = n_t - n_block_rows`` (all Markov parameters used).
+    sv_threshold : float, optional
+        Relative singular-value threshold for the order selection, in (0, 1).
+    inputs, outputs : sequence of str, optional
+        Signal names for the returned models.
+
+    Returns
+    -------
+    RealizationResult
+        Continuous and discrete models, Hankel singular values, order, fit [%] and the
+        model's step responses.
+
+    Raises
+    ------
+    ValueError
+        For malformed arguments, too few samples for the requested order or Hankel size, or
+        an identified ``A_d`` with eigenvalues on the closed negative real axis (no
+        continuous-time ZOH equivalent).
+    """
+    t = np.asarray(t, dtype=float)
+    steps = np.asarray(steps, dtype=float)
+    if t.ndim != 1:
+        raise ValueError(f"t must be 1-D with shape (n_t,), got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise ValueError("t must be finite, found NaN or inf")
+    n_t = t.size
+    if n_t < 4:
+        raise ValueError(f"t needs at least 4 samples, got n_t={n_t}")
+    dt = (t[-1] - t[0]) / (n_t - 1)
+    dev = np.max(np.abs(np.diff(t) - dt)) / abs(dt) if dt != 0 else np.inf
+    if not dt > 0 or dev > 1e-6:
+        raise ValueError(f"t must be increasing and uniformly spaced (relative spacing "
+                         f"deviation <= 1e-6), got deviation {dev:.3g}")
+    if steps.ndim != 3 or steps.shape[0] != n_t:
+        raise ValueError(f"steps must have shape (n_t={n_t}, n_out, n_in), got shape "
+                         f"{steps.shape}")
+    if not np.all(np.isfinite(steps)):
+        raise ValueError("steps must be finite, found NaN or inf")
+    order = _positive_int("order", order)
+    r = _positive_int("n_block_rows", n_block_rows)
+    s = _positive_int("n_block_cols", n_block_cols)
+    if not 0.0 < sv_threshold < 1.0:
+        raise ValueError(f"sv_threshold must be in (0, 1), got {sv_threshold!r}")
+    _, p, m = steps.shape
+    in_names, out_names = _names("inputs", inputs, m), _names("outputs", outputs, p)
+
+    r = min(n_t // 2, -(-400 // p)) if r is None else r
+    s = n_t - r if s is None else s
+    if r < 2 or r + s > n_t:
+        raise ValueError(f"too few samples: n_block_rows={r} (>= 2) and n_block_cols={s} need "
+                         f"n_t >= {max(r, 2) + s}, got n_t={n_t}")
+    n_max = min((r - 1) * p, s * m)
+    if order is not None and order > n_max:
+        raise ValueError(f"order={order} exceeds the maximum {n_max} identifiable with "
+                         f"n_block_rows={r}, n_block_cols={s} (n_t={n_t}); supply more samples")
+
+    h = np.diff(steps, axis=0, prepend=np.zeros((1, p, m)))       # h[0] = D, h[k] = C A^(k-1) B
+    idx = np.arange(r)[:, None] + np.arange(1, s + 1)[None, :]     # H[i, j] = h[1 + i + j]
+    hankel = h[idx].transpose(0, 2, 1, 3).reshape(r * p, s * m)
+    U, sv, Vt = np.linalg.svd(hankel, full_matrices=False)
+    if sv[0] == 0.0:
+        raise ValueError("steps are constant in time: nothing to identify")
+    n = _select_order(sv, n_max, sv_threshold) if order is None else order
+
+    root = np.sqrt(sv[:n])
+    obs, ctr = U[:, :n] * root, root[:, None] * Vt[:n]
+    Ad = np.linalg.lstsq(obs[:-p], obs[p:], rcond=None)[0]
+    Bd, Cd, D = ctr[:, :m], obs[:p], h[0]
+
+    lam = np.linalg.eigvals(Ad)
+    bad = (np.abs(lam.imag) <= 1e-10 * np.abs(lam)) & (lam.real <= 0.0)
+    if np.any(bad):
+        raise ValueError(f"identified A_d has eigenvalue(s) {np.round(lam[bad].real, 6)} on the "
+                         f"negative real axis or at zero: no continuous-time equivalent (try a "
+                         f"lower order)")
+    Ac = np.real(sla.logm(Ad)) / dt
+    try:
+        Bc = Ac @ np.linalg.solve(Ad - np.eye(n), Bd)
+    except np.linalg.LinAlgError:
+        raise ValueError("identified A_d has an eigenvalue at 1 (pure integrator): the ZOH "
+                         "inverse for B is undefined") from None
+
+    states = [f"x{i}" for i in range(n)]
+    sys_c = control.StateSpace(Ac, Bc, Cd, D, inputs=in_names, outputs=out_names,
+                               states=states)
+    sys_d = control.StateSpace(Ad, Bd, Cd, D, dt, inputs=in_names, outputs=out_names,
+                               states=states)
+    step_model = _discrete_steps(Ad, Bd, Cd, D, n_t)
+    err = np.linalg.norm(steps - step_model, axis=0)
+    ref = np.linalg.norm(steps - steps.mean(axis=0), axis=0)
+    fit = np.full((p, m), np.nan)
+    np.divide(err, ref, out=fit, where=ref > 0)
+    fit = 100.0 * (1.0 - fit)
+    for a in (sv, fit, step_model):
+        a.flags.writeable = False
+    return RealizationResult(sys=sys_c, sys_discrete=sys_d, singular_values=sv, order=n,
+                             fit=fit, step_model=step_model)

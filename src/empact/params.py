@@ -1,0 +1,383 @@
+"""Frozen, validated model parameters, loaded from and saved to TOML.
+
+A parameter set has one section per concept::
+
+    [variator]          belt and pulley geometry (eqs. 4-6 of the paper)
+    [actuation]         inertias, ratios and stiffnesses of the actuation (Fig. 3)
+    [damping.none]      damping levels of the actuation model (Fig. 6)
+    [damping.moderate]
+    [damping.large]
+    [driveline]         inertias and stiffnesses of the test-bench driveline (Fig. 7)
+    [traction]          traction curve mu(nu, r_g) (Fig. 10)
+    [operating]         a default operating point (r_g, nu, F_s, omega_p)
+
+All values are SI (radians, metres, kilograms, seconds).  The shipped set
+(`default_params`) is the result of ``empact calibrate`` on the paper's
+eigenfrequencies; a user file may give any subset of keys, the rest are taken
+from the shipped set.  Every value is checked on construction: a bad value
+raises `ParameterError` whose message names the field, the value and the
+allowed range.
+"""
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+import tomllib
+from dataclasses import dataclass, field, fields, asdict
+from importlib import resources
+from pathlib import Path
+from typing import Any, Mapping
+
+import tomli_w
+
+__all__ = [
+    "ParameterError", "VariatorParams", "ActuationParams", "DampingLevel", "DampingParams",
+    "DrivelineParams", "TractionParams", "OperatingPoint", "Params", "default_params",
+    "load_params", "save_params", "DAMPING_LEVELS",
+]
+
+DAMPING_LEVELS = ("none", "moderate", "large")
+
+
+class ParameterError(ValueError):
+    """A parameter value, key or file is not acceptable (one-line message)."""
+
+
+def _p(unit: str, doc: str, lo: float = 0.0, hi: float = math.inf, *, lo_open: bool = True,
+       hi_open: bool = False) -> Any:
+    """Field spec: a float with unit, description and an allowed interval."""
+    return field(metadata=dict(unit=unit, doc=doc, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open))
+
+
+def _interval(meta: Mapping[str, Any]) -> str:
+    lo = "(" if meta["lo_open"] else "["
+    hi = ")" if meta["hi_open"] or math.isinf(meta["hi"]) else "]"
+    return f"{lo}{meta['lo']:g}, {meta['hi']:g}{hi}"
+
+
+class _Section:
+    """Mixin: range-checks every float field after construction."""
+
+    _name = "section"
+
+    def __post_init__(self) -> None:
+        for f in fields(self):  # type: ignore[arg-type]
+            meta = f.metadata
+            if "unit" not in meta:
+                continue
+            value = getattr(self, f.name)
+            where = f"{self._name}.{f.name}"
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ParameterError(
+                    f"{where} = {value!r}: must be a number [{meta['unit']}] in {_interval(meta)}")
+            value = float(value)
+            lo_bad = value <= meta["lo"] if meta["lo_open"] else value < meta["lo"]
+            hi_bad = value >= meta["hi"] if meta["hi_open"] else value > meta["hi"]
+            if not math.isfinite(value) or lo_bad or hi_bad:
+                raise ParameterError(
+                    f"{where} = {value!r}: allowed range is {_interval(meta)} [{meta['unit']}]")
+            object.__setattr__(self, f.name, value)
+
+    @classmethod
+    def describe(cls) -> list[tuple[str, str, str, str]]:
+        """(name, unit, allowed interval, description) for every field."""
+        return [(f.name, f.metadata["unit"], _interval(f.metadata), f.metadata["doc"])
+                for f in fields(cls) if "unit" in f.metadata]  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class VariatorParams(_Section):
+    """Pushbelt variator geometry (paper eqs. 4-6)."""
+
+    _name = "variator"
+    a: float = _p("m", "centre distance between the pulley shafts")
+    beta: float = _p("rad", "pulley wedge angle", 0.0, math.pi / 4)
+    L_belt: float = _p("m", "belt length (running circumference)")
+    R_min: float = _p("m", "smallest running radius; also R0, the radius at zero sheave translation")
+    R_max: float = _p("m", "largest running radius")
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.R_max <= self.R_min:
+            raise ParameterError(
+                f"variator.R_max = {self.R_max!r}: must exceed variator.R_min = {self.R_min!r} [m]")
+        # The belt must fit: at r_g = 1 both radii are (L - 2a) / (2 pi).
+        R_med = (self.L_belt - 2 * self.a) / (2 * math.pi)
+        if not self.R_min < R_med < self.R_max:
+            raise ParameterError(
+                f"variator.L_belt = {self.L_belt!r}: gives the medium-ratio radius {R_med:.4g} m, "
+                f"which must lie in (R_min, R_max) = ({self.R_min:g}, {self.R_max:g}) m")
+
+
+@dataclass(frozen=True)
+class ActuationParams(_Section):
+    """Linear actuation model (paper Sec. 2.1, Fig. 3)."""
+
+    _name = "actuation"
+    J_mp: float = _p("kg m^2", "primary servo inertia (rotor and worm), coordinate q1")
+    J_ms: float = _p("kg m^2", "secondary servo inertia (rotor and chain sprocket), coordinate q2")
+    J_sp: float = _p("kg m^2", "primary sun gear with screw, ring/carrier/planets lumped, q3")
+    J_ss: float = _p("kg m^2", "secondary sun gear with screw input, q4")
+    m_p: float = _p("kg", "primary moving sheave with screw output, q5")
+    m_s: float = _p("kg", "secondary moving sheave with screw output, q6")
+    i_w: float = _p("-", "worm ratio (servo turns per ring turn)")
+    i_c: float = _p("-", "chain ratio (servo turns per ring turn)")
+    i_e: float = _p("-", "ring to sun ratio of the epicyclic sets (the paper: 2)")
+    s: float = _p("m/rad", "screw pitch (translation per radian)")
+    k_w: float = _p("N m/rad", "worm stiffness (spring 1)")
+    k_c: float = _p("N m/rad", "chain stiffness (spring 2)")
+    k_belt: float = _p("N/m", "longitudinal pushbelt stiffness (spring 3)")
+    k_tp: float = _p("N/m", "primary thrust bearing stiffness (spring 4)")
+    k_ts: float = _p("N/m", "secondary thrust bearing stiffness (spring 5)")
+
+
+@dataclass(frozen=True)
+class DampingLevel(_Section):
+    """One damping level of the actuation model (Fig. 6)."""
+
+    _name = "damping"
+    alpha: float = _p("s", "proportional spring damping, C_spring = alpha K", lo_open=False)
+    c_mp: float = _p("N m s/rad", "viscous friction of the primary servo", lo_open=False)
+    c_ms: float = _p("N m s/rad", "viscous friction of the secondary servo", lo_open=False)
+    c_sp: float = _p("N m s/rad", "viscous friction of the primary screw", lo_open=False)
+    c_ss: float = _p("N m s/rad", "viscous friction of the secondary screw", lo_open=False)
+    c_shafai: float = _p("N/m", "Shafai pulley damping: c_pulley = c_shafai / |omega| [N s/m]",
+                         lo_open=False)
+
+
+@dataclass(frozen=True)
+class DampingParams:
+    """The three damping levels of Fig. 6 and the pulley speed for Shafai's model."""
+
+    none: DampingLevel
+    moderate: DampingLevel
+    large: DampingLevel
+    omega_pulley: float = 300.0
+
+    def __post_init__(self) -> None:
+        if isinstance(self.omega_pulley, bool) or not isinstance(self.omega_pulley, (int, float)) \
+                or not math.isfinite(self.omega_pulley) or self.omega_pulley <= 0:
+            raise ParameterError(f"damping.omega_pulley = {self.omega_pulley!r}: allowed range is "
+                                 f"(0, inf) [rad/s]")
+        object.__setattr__(self, "omega_pulley", float(self.omega_pulley))
+
+    def level(self, name: str) -> DampingLevel:
+        """The damping level called `name` (one of ``DAMPING_LEVELS``)."""
+        if name not in DAMPING_LEVELS:
+            raise ParameterError(f"damping level {name!r}: must be one of {', '.join(DAMPING_LEVELS)}")
+        return getattr(self, name)
+
+
+@dataclass(frozen=True)
+class DrivelineParams(_Section):
+    """Test-bench driveline (paper Sec. 2.2, Fig. 7)."""
+
+    _name = "driveline"
+    J_d: float = _p("kg m^2", "drive motor inertia, q1")
+    J_p: float = _p("kg m^2", "primary pulley with torque converter, q2")
+    J_s: float = _p("kg m^2", "secondary pulley, q3")
+    J_l: float = _p("kg m^2", "load motor inertia, q4")
+    k_tc: float = _p("N m/rad", "torque converter lock-up clutch stiffness")
+    k_belt: float = _p("N/m", "pushbelt stiffness as a chain element (elongation R_p q2 - R_s q3)")
+    k_ds: float = _p("N m/rad", "driveshaft stiffness")
+
+
+@dataclass(frozen=True)
+class TractionParams(_Section):
+    """Analytic traction curve mu(nu, r_g) (Fig. 10), a Pacejka-type magic formula.
+
+    ``mu = D sin(C arctan(B nu - E (B nu - arctan(B nu))))``; B, C, D, E are given at the
+    LOW, MED and OD ratios and interpolated linearly in log(r_g) in between (held
+    constant outside).
+    """
+
+    _name = "traction"
+    r_low: float = _p("-", "LOW ratio where the *_low coefficients hold")
+    r_med: float = _p("-", "MED ratio where the *_med coefficients hold")
+    r_od: float = _p("-", "OD ratio where the *_od coefficients hold")
+    B_low: float = _p("-", "stiffness factor at LOW")
+    B_med: float = _p("-", "stiffness factor at MED")
+    B_od: float = _p("-", "stiffness factor at OD")
+    C_low: float = _p("-", "shape factor at LOW", 1.0, 2.0, lo_open=False)
+    C_med: float = _p("-", "shape factor at MED", 1.0, 2.0, lo_open=False)
+    C_od: float = _p("-", "shape factor at OD", 1.0, 2.0, lo_open=False)
+    D_low: float = _p("-", "peak traction coefficient at LOW", 0.0, 1.0)
+    D_med: float = _p("-", "peak traction coefficient at MED", 0.0, 1.0)
+    D_od: float = _p("-", "peak traction coefficient at OD", 0.0, 1.0)
+    E_low: float = _p("-", "curvature factor at LOW", -10.0, 1.0, lo_open=False)
+    E_med: float = _p("-", "curvature factor at MED", -10.0, 1.0, lo_open=False)
+    E_od: float = _p("-", "curvature factor at OD", -10.0, 1.0, lo_open=False)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not self.r_low < self.r_med < self.r_od:
+            raise ParameterError(
+                f"traction.r_med = {self.r_med!r}: must lie strictly between r_low = "
+                f"{self.r_low!r} and r_od = {self.r_od!r}")
+
+
+@dataclass(frozen=True)
+class OperatingPoint(_Section):
+    """A default operating point of the variator."""
+
+    _name = "operating"
+    r_g: float = _p("-", "geometric ratio R_p / R_s")
+    nu: float = _p("-", "slip (fraction, 0.01 is 1 %)", -1.0, 1.0, hi_open=True)
+    F_s: float = _p("N", "secondary clamping force")
+    omega_p: float = _p("rad/s", "primary pulley speed")
+
+
+_SECTIONS = {
+    "variator": VariatorParams, "actuation": ActuationParams, "driveline": DrivelineParams,
+    "traction": TractionParams, "operating": OperatingPoint,
+}
+
+
+@dataclass(frozen=True)
+class Params:
+    """A complete, validated parameter set.  Immutable: `from_dotted` returns a changed copy."""
+
+    variator: VariatorParams
+    actuation: ActuationParams
+    damping: DampingParams
+    driveline: DrivelineParams
+    traction: TractionParams
+    operating: OperatingPoint
+
+    def __post_init__(self) -> None:
+        from .geometry import ratio_range  # geometry depends on VariatorParams only
+        lo, hi = ratio_range(self.variator)
+        if not lo <= self.operating.r_g <= hi:
+            raise ParameterError(
+                f"operating.r_g = {self.operating.r_g!r}: outside the geometric ratio range "
+                f"[{lo:.4g}, {hi:.4g}] of this variator")
+
+    # -- conversion -----------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """Nested plain dictionary, as written to TOML."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], base: "Params | None" = None,
+                  source: str = "parameters") -> "Params":
+        """Build from a nested mapping; keys not given are taken from `base`.
+
+        Raises
+        ------
+        ParameterError
+            For an unknown section or key, a wrong type or a value out of range.
+        """
+        merged = base.to_dict() if base is not None else {}
+        _merge(merged, data, source, _schema())
+        try:
+            damping = merged["damping"]
+            levels = {name: DampingLevel(**damping[name]) for name in DAMPING_LEVELS}
+            sections = {name: kind(**merged[name]) for name, kind in _SECTIONS.items()}
+            return cls(damping=DampingParams(**levels, omega_pulley=damping["omega_pulley"]),
+                       **sections)
+        except KeyError as exc:
+            raise ParameterError(f"{source}: missing section or key {exc.args[0]!r}") from None
+        except TypeError as exc:  # missing fields of a section
+            raise ParameterError(f"{source}: {exc}") from None
+
+    def from_dotted(self, values: Mapping[str, float]) -> "Params":
+        """A copy with values changed by dotted name, e.g. ``{"damping.large.alpha": 1e-3}``."""
+        nested: dict[str, Any] = {}
+        for name, value in values.items():
+            node = nested
+            *path, last = name.split(".")
+            for part in path:
+                node = node.setdefault(part, {})
+            node[last] = value
+        return Params.from_dict(nested, base=self)
+
+    def get(self, dotted: str) -> float:
+        """The value of a dotted name such as ``"actuation.k_w"``."""
+        node: Any = self
+        for part in dotted.split("."):
+            if not hasattr(node, part) or part.startswith("_"):
+                raise ParameterError(f"unknown parameter {dotted!r}")
+            node = getattr(node, part)
+        if not isinstance(node, float):
+            raise ParameterError(f"parameter {dotted!r} is a section, not a value")
+        return node
+
+
+def _schema() -> dict[str, Any]:
+    """Nested dict of the allowed keys (values None) of a parameter file."""
+    names = lambda kind: {f.name: None for f in fields(kind)}  # noqa: E731
+    schema: dict[str, Any] = {name: names(kind) for name, kind in _SECTIONS.items()}
+    schema["damping"] = {"omega_pulley": None, **{lvl: names(DampingLevel) for lvl in DAMPING_LEVELS}}
+    return schema
+
+
+def _merge(into: dict[str, Any], data: Mapping[str, Any], where: str,
+           schema: Mapping[str, Any], path: str = "") -> None:
+    """Recursively merge `data` into `into`, refusing keys and tables not in `schema`."""
+    for key, value in data.items():
+        name = f"{path}.{key}" if path else key
+        if key not in schema:
+            raise ParameterError(f"{where}: unknown key {name!r} (allowed here: "
+                                 f"{', '.join(schema)})")
+        if isinstance(schema[key], Mapping):
+            if not isinstance(value, Mapping):
+                raise ParameterError(f"{where}: {name!r} must be a table, not {value!r}")
+            _merge(into.setdefault(key, {}), value, where, schema[key], name)
+        elif isinstance(value, Mapping):
+            raise ParameterError(f"{where}: {name!r} must be a value, not a table")
+        else:
+            into[key] = value
+
+
+def _read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: no such parameter file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"{path}: not valid TOML ({exc})") from None
+
+
+_DEFAULT: Params | None = None
+
+
+def default_params() -> Params:
+    """The shipped parameter set (``empact/data/default.toml``), calibrated to the paper."""
+    global _DEFAULT
+    if _DEFAULT is None:
+        text = resources.files("empact.data").joinpath("default.toml").read_text()
+        _DEFAULT = Params.from_dict(tomllib.loads(text), source="default.toml")
+    return _DEFAULT
+
+
+def load_params(path: str | os.PathLike[str] | None = None) -> Params:
+    """Load a TOML parameter file over the shipped defaults (`None`: the defaults)."""
+    if path is None:
+        return default_params()
+    return Params.from_dict(_read_toml(path), base=default_params(), source=str(path))
+
+
+def dumps_params(params: Params, header: str = "") -> str:
+    """TOML text of a parameter set, with an optional comment header."""
+    lines = "".join(f"# {line}\n" for line in header.splitlines())
+    return lines + tomli_w.dumps(params.to_dict())
+
+
+def save_params(params: Params, path: str | os.PathLike[str], header: str = "") -> None:
+    """Write a parameter set to TOML atomically (temporary file, then rename)."""
+    atomic_write_text(path, dumps_params(params, header))
+
+
+def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
+    """Write `text` to `path` through a temporary file in the same folder."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
