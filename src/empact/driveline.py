@@ -1,4 +1,4 @@
-"""Linear driveline (test-bench) model of the Empact CVT (paper Sec. 2.2, Fig. 7).
+r"""Linear driveline (test-bench) model of the Empact CVT (paper Sec. 2.2, Fig. 7).
 
 ::
 

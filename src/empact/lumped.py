@@ -11,6 +11,7 @@ Equations of motion: ``M q'' + C q' + K q = F u``.
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -279,4 +280,5 @@ class LumpedModel:
         C, _ = self.output_matrix(outputs)
         states = list(self.coordinates) + [f"{c}_dot" for c in self.coordinates]
         return control.ss(A, B, C, np.zeros((len(outputs), len(inputs))), inputs=inputs,
-                          outputs=outputs, states=states, name=self.name)
+                          outputs=outputs, states=states,
+                          name=re.sub(r"[^A-Za-z0-9_]+", "_", self.name).strip("_"))

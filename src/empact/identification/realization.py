@@ -82,8 +82,14 @@ def _discrete_steps(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
 
 
 def _select_order(s: np.ndarray, n_max: int, sv_threshold: float) -> int:
-    """Order at the largest ratio ``s[k-1] / s[k]`` among the significant singular values."""
-    n_sig = max(1, min(n_max, int(np.count_nonzero(s > sv_threshold * s[0]))))
+    """Order at the largest ratio ``s[k-1] / s[k]`` among the candidate singular values.
+
+    Candidates are those above ``sqrt(eps) s[0]`` if the Hankel matrix is numerically rank
+    deficient (noise-free data: the rank break wins), else those above ``sv_threshold s[0]``.
+    """
+    n_rank = int(np.count_nonzero(s > np.sqrt(np.finfo(float).eps) * s[0]))
+    n_sig = n_rank if n_rank < s.size else int(np.count_nonzero(s > sv_threshold * s[0]))
+    n_sig = max(1, min(n_max, n_sig))
     nxt = np.append(s, 0.0)[1: n_sig + 1]
     ratio = s[:n_sig] / np.maximum(nxt, np.finfo(float).tiny)
     return int(np.argmax(ratio)) + 1
@@ -104,11 +110,13 @@ def realize_steps(t, steps, order: int | None = None, *, n_block_rows: int | Non
         (n_t, n_out, n_in) [output units per input unit]. ``steps[0]`` is the direct
         feedthrough ``D`` (usually zero).
     order : int, optional
-        Model order. If None, it is chosen from the Hankel singular values ``s``: only
-        ``s_k > sv_threshold * s_1`` count as significant, and the order is the ``k`` with the
-        largest ratio ``s_k / s_(k+1)`` among them (the ratio to the first insignificant value
-        included). The threshold rejects the noise floor, the largest gap picks the
-        clearest rank break above it.
+        Model order. If None, it is chosen from the Hankel singular values ``s`` as the
+        ``k`` with the largest ratio ``s_k / s_(k+1)`` among the significant ``s_k`` (the
+        ratio to the first insignificant value included). Significant means
+        ``s_k > sv_threshold * s_1``, or ``s_k > sqrt(eps) * s_1`` when the Hankel matrix is
+        numerically rank deficient (noise-free data, where the order is its numerical rank).
+        The threshold rejects the noise floor; the largest gap picks the clearest rank break
+        above it.
     n_block_rows, n_block_cols : int, optional
         Block rows / columns of the Hankel matrix; ``n_block_rows + n_block_cols <= n_t``.
         Defaults: ``n_block_rows = min(n_t // 2, ceil(400 / n_out))`` and
