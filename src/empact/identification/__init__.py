@@ -16,7 +16,7 @@ RealizationResult
 FRFEstimate
     Frequencies [Hz], FRF, coherence and averaging information.
 """
-from .frf_estimation import FRFEstimate, estimate_frf
+from .frf_estimation import METHODS, FRFEstimate, estimate_frf
 from .realization import RealizationResult, realize_steps
 
-__all__ = ["realize_steps", "RealizationResult", "estimate_frf", "FRFEstimate"]
+__all__ = ["realize_steps", "RealizationResult", "estimate_frf", "FRFEstimate", "METHODS"]

@@ -1,0 +1,78 @@
+"""Measured records from CSV: named numeric columns with a header row.
+
+A record file has one header line of column names and one row per sample, for example::
+
+    time,T_ms,theta_ms,nu
+    0.000,0.12,0.0,0.010
+    0.001,0.10,1.3e-4,0.011
+
+The sample rate is given (``fs``) or follows from a time column, which must then be uniform.
+"""
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ["load_records", "sample_rate"]
+
+
+def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
+                 ) -> dict[str, np.ndarray]:
+    """Read the named columns of a CSV file as float arrays, shape (n_t,) each.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file, and the column, row and value that are wrong: a missing file
+        or column, a non-numeric or non-finite entry, fewer than `min_rows` rows.
+    """
+    path = Path(path)
+    try:
+        with path.open(newline="") as fh:
+            reader = csv.reader(fh)
+            header = [h.strip() for h in next(reader, [])]
+            rows = [r for r in reader if r and any(c.strip() for c in r)]
+    except FileNotFoundError:
+        raise ValueError(f"{path}: no such data file") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a text (CSV) file") from None
+    if not header:
+        raise ValueError(f"{path}: empty file (expected a header row of column names)")
+    out: dict[str, np.ndarray] = {}
+    for name in columns:
+        if name not in header:
+            raise ValueError(f"{path}: no column {name!r} (columns: {', '.join(header)})")
+        j = header.index(name)
+        values = np.empty(len(rows))
+        for i, row in enumerate(rows):
+            cell = row[j].strip() if j < len(row) else ""
+            try:
+                values[i] = float(cell)
+            except ValueError:
+                raise ValueError(f"{path}: column {name!r}, data row {i + 1}: {cell!r} is not a "
+                                 "number") from None
+            if not np.isfinite(values[i]):
+                raise ValueError(f"{path}: column {name!r}, data row {i + 1}: {cell!r} is not "
+                                 "finite")
+        out[name] = values
+    if len(rows) < min_rows:
+        raise ValueError(f"{path}: {len(rows)} data rows; at least {min_rows} are needed")
+    return out
+
+
+def sample_rate(t: np.ndarray, name: str = "time", rtol: float = 1e-6) -> float:
+    """Sample rate [Hz] of a uniform, increasing time vector; a one-line error otherwise."""
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.argmax(dt <= 0))
+        raise ValueError(f"column {name!r} must increase: row {i + 2} has {t[i + 1]!r} after "
+                         f"{t[i]!r}")
+    mean = (t[-1] - t[0]) / (len(t) - 1)
+    dev = np.abs(dt - mean).max() / mean
+    if dev > rtol:
+        raise ValueError(f"column {name!r} is not uniformly sampled (spacing varies by "
+                         f"{100 * dev:.3g} %, allowed {100 * rtol:g} %)")
+    return 1.0 / mean
