@@ -225,3 +225,30 @@ def test_frf_validation(u, y, kwargs, match):
     kwargs.setdefault("fs", FS)
     with pytest.raises(ValueError, match=match):
         estimate_frf(u, y, **kwargs)
+
+
+def test_realize_system_with_integrator():
+    """Servo torque -> position plants integrate; the ZOH inverse must stay defined there.
+
+    Truth: 1 / (s (s + 2)) in parallel with a 10 Hz, 5 % resonance; poles 0, -2 and the pair.
+    """
+    w0, z = 2 * np.pi * 10.0, 0.05
+    sys = control.parallel(control.tf([1.0], [1.0, 2.0, 0.0]),
+                           control.tf([w0**2], [1.0, 2 * z * w0, w0**2]))
+    sys = control.ss(sys)
+    t = np.arange(1000) / FS_STEP
+    steps = control.step_response(control.c2d(sys, 1 / FS_STEP), t).outputs.reshape(-1, 1, 1)
+    res = realize_steps(t, steps)
+    assert res.order == 4  # exact: noise-free data of an order-4 system
+    true = np.sort_complex(sys.poles())
+    got = np.sort_complex(res.sys.poles())
+    # integrator pole: |p| below 1e-6 rad/s (logm of an eigenvalue 1 to rounding)
+    assert np.abs(got[np.argmin(np.abs(got))]) < 1e-6
+    nz = np.abs(true) > 1e-9
+    cost = np.abs(true[nz][:, None] - got[None, :]) / np.abs(true[nz])[:, None]
+    r, c = linear_sum_assignment(cost)
+    assert cost[r, c].max() < 0.01  # non-zero poles within 1 % (issue 5, item 6)
+    w = 2 * np.pi * np.logspace(-1, 1.5, 30)
+    H_true = control.frequency_response(sys, w).complex.ravel()
+    H_id = control.frequency_response(res.sys, w).complex.ravel()
+    assert np.max(np.abs(H_id - H_true) / np.abs(H_true)) < 0.02  # FRF within 2 %

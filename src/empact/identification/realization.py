@@ -5,7 +5,10 @@ discrete model, ``h_0 = D`` and ``h_k = C A_d^(k-1) B_d``; a block Hankel matrix
 ``h_1, h_2, ...`` is factored by the SVD into an observability and a controllability matrix
 (balanced split of the singular values), ``A_d`` follows from the shift structure of the
 observability matrix (least squares), and the continuous model is the exact ZOH inverse:
-``A_c = logm(A_d) / dt`` and ``B_c = A_c (A_d - I)^-1 B_d``.
+``A_c = logm(A_d) / dt`` and ``B_c = (dt phi_1(A_c dt))^-1 B_d`` with
+``phi_1(X) = sum_k X^k / (k+1)!`` (from the exponential of an augmented matrix).  Unlike
+``A_c (A_d - I)^-1 B_d`` this stays defined for integrators (eigenvalues of ``A_d`` at 1),
+which the servo-torque-to-ratio plant has.
 """
 from __future__ import annotations
 
@@ -196,11 +199,10 @@ def realize_steps(t, steps, order: int | None = None, *, n_block_rows: int | Non
                          f"negative real axis or at zero: no continuous-time equivalent (try a "
                          f"lower order)")
     Ac = np.real(sla.logm(Ad)) / dt
-    try:
-        Bc = Ac @ np.linalg.solve(Ad - np.eye(n), Bd)
-    except np.linalg.LinAlgError:
-        raise ValueError("identified A_d has an eigenvalue at 1 (pure integrator): the ZOH "
-                         "inverse for B is undefined") from None
+    aug = np.zeros((2 * n, 2 * n))
+    aug[:n, :n], aug[:n, n:] = Ac * dt, np.eye(n)
+    gamma = sla.expm(aug)[:n, n:] * dt  # int_0^dt expm(A_c tau) dtau = dt phi_1(A_c dt)
+    Bc = np.linalg.solve(gamma, Bd)
 
     states = [f"x{i}" for i in range(n)]
     sys_c = control.StateSpace(Ac, Bc, Cd, D, inputs=in_names, outputs=out_names,
