@@ -1,0 +1,138 @@
+"""Non-minimum-phase behaviour of the actuation (paper Sec. 2.3; model notes Sec. 5).
+
+Two parts:
+
+* **Geometry.**  ``Delta_x = x_p - x_s = a sin(phi) tan(beta)`` (eq. 5) and the belt-length
+  change for an equal translation ``delta`` of both sheaves (primary closing, secondary
+  opening), exact from eq. 6 and to first order ``4 phi delta / tan(beta)``: negative below
+  r_g = 1 (the belt slackens, F_s falls, the slip rises), positive above.
+* **Zeros.**  The finite zeros of the T_mp -> nu channel of the exactly linearised model
+  (`empact.linearize`) over the ratio; the paper states a right-half-plane zero at r_g = 0.5
+  and none at r_g = 2.  `nmp_analysis` reports what the model gives, for either sheave
+  kinematics (`empact.nonlinear.ModelOptions.kinematics`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .geometry import belt_length, check_ratio, radii, wrap_angle
+from .linearize import plant, transmission_zeros
+from .nonlinear import nonlinear_model
+from .params import Params
+
+__all__ = ["BeltLengthChange", "belt_length_change", "NmpResult", "nmp_analysis"]
+
+
+@dataclass(frozen=True)
+class BeltLengthChange:
+    """Sec. 2.3 geometry over ratios (arrays of shape (n_r,)).
+
+    Attributes
+    ----------
+    r_g : ratios [-]
+    phi : wrapped-angle term [rad] (eq. 4)
+    delta_x : ``x_p - x_s = a sin(phi) tan(beta)`` [m] (eq. 5)
+    delta : the equal sheave translation used [m]
+    dL_exact : ``L(R_p + delta/tan(beta), R_s - delta/tan(beta)) - L(R_p, R_s)`` [m] (eq. 6)
+    dL_first_order : ``4 phi delta / tan(beta)`` [m]
+    """
+
+    r_g: NDArray[np.float64]
+    phi: NDArray[np.float64]
+    delta_x: NDArray[np.float64]
+    delta: float
+    dL_exact: NDArray[np.float64]
+    dL_first_order: NDArray[np.float64]
+
+
+def belt_length_change(params: Params, r_g: ArrayLike, delta: float = 1e-5) -> BeltLengthChange:
+    """Delta_x (eq. 5) and the belt-length change for an equal translation `delta` [m]."""
+    v = params.variator
+    if not (np.isfinite(delta) and 0 < abs(delta) < 1e-3):
+        raise ValueError(f"delta = {delta!r}: allowed range is 0 < |delta| < 1e-3 [m]")
+    r = np.atleast_1d(check_ratio(r_g, v))
+    R_p, R_s = radii(r, v.L_belt, v.a)
+    tb = np.tan(v.beta)
+    phi = wrap_angle(R_p, R_s, v.a)
+    dL = belt_length(R_p + delta / tb, R_s - delta / tb, v.a) - belt_length(R_p, R_s, v.a)
+    return BeltLengthChange(r_g=r, phi=phi, delta_x=v.a * np.sin(phi) * tb, delta=float(delta),
+                            dL_exact=dL, dL_first_order=4 * phi * delta / tb)
+
+
+@dataclass(frozen=True)
+class NmpResult:
+    """Zeros of T_mp -> nu over the ratio, and the Sec. 2.3 geometry.
+
+    Attributes
+    ----------
+    r_g : ratios [-], shape (n_r,)
+    zeros : tuple of arrays
+        Finite zeros [rad/s] (complex) of T_mp -> nu at each ratio, below `f_max`.
+    rhp_zeros : tuple of arrays
+        Those with a positive real part (beyond 1e-6 of their magnitude; zeros at the origin,
+        below 1e-3 rad/s, are not counted).
+    n_rhp : array of int, shape (n_r,)
+    geometry : BeltLengthChange
+    operating : dict
+        nu, F_s [N], omega_p [rad/s], model options.
+    f_max : float
+        Zeros above this frequency [Hz] are left out.
+    """
+
+    r_g: NDArray[np.float64]
+    zeros: tuple[NDArray[np.complex128], ...]
+    rhp_zeros: tuple[NDArray[np.complex128], ...]
+    n_rhp: NDArray[np.int64]
+    geometry: BeltLengthChange
+    operating: dict
+    f_max: float
+
+    def summary(self) -> list[dict]:
+        """One row per ratio: RHP zeros [Hz] as (real, imag) pairs."""
+        return [{"r_g": float(r), "n_rhp": int(n),
+                 "rhp_zeros_hz": [(float(z.real / 2 / np.pi), float(z.imag / 2 / np.pi))
+                                  for z in rz]}
+                for r, n, rz in zip(self.r_g, self.n_rhp, self.rhp_zeros)]
+
+
+def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *, nu: float = 0.004,
+                 F_s: float = 10e3, omega_p: float = 300.0, f_max: float = 200.0,
+                 **options) -> NmpResult:
+    """Zeros of the exactly linearised T_mp -> nu transfer over `ratios`.
+
+    Parameters
+    ----------
+    params : Params
+    ratios : array, shape (n_r,)
+        Geometric ratios [-].
+    nu : float
+        Slip at the operating points [-] (on the rising branch of the traction curve, so the
+        plant is stable).
+    F_s : float
+        Clamping force [N].
+    omega_p : float
+        Primary speed [rad/s].
+    f_max : float
+        Keep zeros below this frequency [Hz].
+    **options
+        `empact.nonlinear.ModelOptions` (default: moderate damping, torque-controlled drive
+        and load, ``kinematics="actuation"``).
+    """
+    r = np.atleast_1d(np.asarray(ratios, float))
+    model = nonlinear_model(params, **options)
+    zs, rhp = [], []
+    for rg in r:
+        sys, _ = plant(params, float(rg), nu, F_s, omega_p, model=model)
+        z = transmission_zeros(sys, "T_mp", "nu")
+        z = z[np.abs(z) < 2 * np.pi * f_max]
+        zs.append(z)
+        rhp.append(z[(z.real > 1e-6 * np.abs(z)) & (np.abs(z) > 1e-3)])
+    return NmpResult(r_g=r, zeros=tuple(zs), rhp_zeros=tuple(rhp),
+                     n_rhp=np.array([len(z) for z in rhp]),
+                     geometry=belt_length_change(params, r), f_max=f_max,
+                     operating={"nu": nu, "F_s": F_s, "omega_p": omega_p,
+                                "options": {k: getattr(model.options, k)
+                                            for k in model.options.__dataclass_fields__}})
