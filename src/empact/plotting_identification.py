@@ -54,3 +54,40 @@ def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None 
     if title:
         fig.suptitle(title)
     return fig
+
+
+def plot_identified_plant(results, f_hz: np.ndarray, title: str = "") -> Figure:
+    """Fig. 2: |(T_mp, T_ms) -> (r_g, nu)| of identified (solid) and exact (dashed) models.
+
+    Parameters
+    ----------
+    results : sequence of `empact.identification.plant_id.PlantIdentification`
+    f_hz : frequencies [Hz]
+    """
+    import control
+
+    fig, axes = new_figure(2, 2, size=(10, 6.5), sharex=True)
+    w = 2 * np.pi * np.asarray(f_hz)
+    for k, res in enumerate(results):
+        color = f"C{k}"
+        for sys, ls, kind in ((res.realization.sys, "-", "identified"), (res.exact, "--", "exact")):
+            H = control.frequency_response(sys, w).complex
+            for i in range(2):
+                for j in range(2):
+                    axes[i, j].loglog(f_hz, np.abs(H[i, j]), ls=ls, color=color,
+                                      label=f"r_g = {res.r_g:g}, {kind}"
+                                      + (f" (order {res.realization.order})"
+                                         if kind == "identified" else ""))
+    names_in, names_out = ("T_mp", "T_ms"), ("r_g", "nu")
+    for i in range(2):
+        for j in range(2):
+            axes[i, j].set_title(f"{names_in[j]} -> {names_out[i]}", fontsize=9)
+            axes[i, j].grid(True, which="both", lw=0.3)
+    axes[0, 0].set_ylabel("|r_g / T| [1/(N m)]")
+    axes[1, 0].set_ylabel("|nu / T| [1/(N m)]")
+    for ax in axes[-1]:
+        ax.set_xlabel("frequency [Hz]")
+    axes[0, 0].legend(fontsize=6)
+    if title:
+        fig.suptitle(title)
+    return fig

@@ -5,8 +5,9 @@ import click
 import numpy as np
 
 from ..identification import METHODS, estimate_frf
+from ..identification.rig import EXCITATIONS
 from ..identification.records import load_records, sample_rate
-from . import InputError, echo_json, json_option, main
+from . import InputError, echo_json, get_params, json_option, main, params_option
 
 
 @main.command("frf-estimate")
@@ -58,3 +59,135 @@ def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], f
                     cells.append(f"{20 * np.log10(abs(est.H[i, j, k]) + 1e-300):24.3f} "
                                  f"{est.coherence[i, j, k]:5.3f}")
             click.echo(f"{f:10.4g} " + " ".join(cells))
+
+
+def _ratios(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise InputError(f"--ratios {text!r}: give comma-separated numbers, e.g. 0.5,1,2") \
+            from None
+    if not values:
+        raise InputError(f"--ratios {text!r}: give at least one ratio")
+    return values
+
+
+@main.command("identify")
+@click.option("--ratios", default="0.5,1,2", show_default=True,
+              help="Comma-separated geometric ratios.")
+@click.option("--slip", "nu", type=float, default=0.004, show_default=True,
+              help="Slip (fraction: 0.004 is 0.4 %).")
+@click.option("--clamp", "F_s", type=float, default=10e3, show_default=True, help="F_s [N].")
+@click.option("--speed", "omega_p", type=float, default=300.0, show_default=True,
+              help="Primary speed [rad/s].")
+@click.option("--order", type=int, default=None, help="Model order (default: by fit).")
+@click.option("--step", "step", type=float, default=1e-4, show_default=True,
+              help="Servo torque step size [N m].")
+@params_option
+@json_option
+@click.option("--out", type=click.Path(file_okay=False), default=None,
+              help="Folder for the step responses (CSV), models (JSON) and the Fig. 2 plot.")
+def identify(ratios: str, nu: float, F_s: float, omega_p: float, order: int | None, step: float,
+             params_file: str | None, as_json: bool, out: str | None) -> None:
+    """Fig. 2: identify (T_mp, T_ms) -> (r_g, nu) from step responses of the nonlinear model."""
+    from ..identification.plant_id import identify_plant
+
+    if order is not None and order < 1:
+        raise InputError(f"--order {order}: must be a positive integer")
+    if not (np.isfinite(step) and step != 0):
+        raise InputError(f"--step {step:g}: must be a non-zero torque [N m]")
+    params = get_params(params_file)
+    results = [identify_plant(params, r, nu, F_s, omega_p, order=order,
+                              amplitudes=(step, step)) for r in _ratios(ratios)]
+    data = [{"ratio": res.r_g, "operating_point": res.experiment.op.as_dict(),
+             "order": res.realization.order, "fit_percent": res.realization.fit,
+             "singular_values": res.realization.singular_values[:40],
+             "A": res.realization.sys.A, "B": res.realization.sys.B,
+             "C": res.realization.sys.C, "D": res.realization.sys.D,
+             "inputs": ["T_mp", "T_ms"], "outputs": ["r_g", "nu"]} for res in results]
+    if out:
+        _write_identification(out, results, data)
+    if as_json:
+        echo_json(data)
+    else:
+        for d in data:
+            fit = np.asarray(d["fit_percent"])
+            click.echo(f"r_g = {d['ratio']:g}: order {d['order']}, step fits "
+                       f"{', '.join(f'{v:.2f}' for v in fit.ravel())} %")
+
+
+def _write_identification(out: str, results, data) -> None:
+    """Write step responses, models and the figure into `out` (atomically, as a folder)."""
+    import json
+    import shutil
+    import tempfile
+    from pathlib import Path
+
+    from ..plotting import save_figure
+    from ..plotting_identification import plot_identified_plant
+    from . import to_jsonable
+
+    dest = Path(out).resolve()
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(dir=dest.parent, prefix=f".{dest.name}.tmp-"))
+    try:
+        for res in results:
+            e = res.experiment
+            cols = np.column_stack([e.t, e.steps.reshape(len(e.t), -1)])
+            np.savetxt(tmp / f"steps_rg_{res.r_g:g}.csv", cols, delimiter=",", comments="",
+                       header="time [s],r_g/T_mp [1/(N m)],r_g/T_ms [1/(N m)],"
+                              "nu/T_mp [1/(N m)],nu/T_ms [1/(N m)]")
+        (tmp / "models.json").write_text(json.dumps(to_jsonable(data), indent=1))
+        save_figure(plot_identified_plant(results, np.logspace(-1, np.log10(200), 400)),
+                    tmp / "fig2_identified_plant")
+        if dest.exists():
+            shutil.rmtree(dest)
+        tmp.rename(dest)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+@main.command("rig")
+@click.option("--excite", type=click.Choice(["T_mp", "T_ms"]), default="T_mp",
+              show_default=True, help="The servo torque to excite.")
+@click.option("--excitation", type=click.Choice(EXCITATIONS), default="multisine",
+              show_default=True)
+@click.option("--ratio", "r_g", type=float, default=0.5, show_default=True)
+@click.option("--slip", "nu", type=float, default=0.0, show_default=True, help="Slip fraction.")
+@click.option("--clamp", "F_s", type=float, default=10e3, show_default=True, help="F_s [N].")
+@click.option("--speed", "omega_p", type=float, default=300.0, show_default=True,
+              help="Primary speed [rad/s].")
+@click.option("--rms", type=float, default=0.05, show_default=True,
+              help="Excitation RMS [N m].")
+@click.option("--band", default="0.5:100", show_default=True, help="Excited band LO:HI [Hz].")
+@click.option("--duration", type=float, default=16.384, show_default=True, help="[s]")
+@click.option("--fs", "fs", type=float, default=1000.0, show_default=True,
+              help="Sample rate [Hz].")
+@click.option("--friction", type=float, default=0.2, show_default=True,
+              help="Spindle Coulomb friction torque [N m] (both spindles).")
+@click.option("--seed", type=int, default=1, show_default=True)
+@params_option
+@click.option("--out", required=True, type=click.Path(dir_okay=False),
+              help="CSV records (time, T_mp, T_ms, theta_mp, theta_ms, nu).")
+def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p: float,
+        rms: float, band: str, duration: float, fs: float, friction: float, seed: int,
+        params_file: str | None, out: str) -> None:
+    """Virtual test rig (Fig. 14): excite a servo torque of the nonlinear model with friction
+    and sensor noise; write records that `empact frf-estimate` reads."""
+    from ..identification.rig import RigSettings, run_rig
+    from ..params import atomic_write_text
+
+    try:
+        lo, hi = (float(v) for v in band.split(":"))
+    except ValueError:
+        raise InputError(f"--band {band!r}: give LO:HI in Hz, e.g. 0.5:100") from None
+    settings = RigSettings(r_g=r_g, nu=nu, F_s=F_s, omega_p=omega_p, excite=excite,
+                           excitation=excitation, band=(lo, hi), rms=rms, duration=duration,
+                           sample_rate=fs, coulomb=(friction, friction), seed=seed,
+                           settle=0.0)  # the records are written whole
+    rec = run_rig(get_params(params_file), settings, progress=True)
+    if not rec.complete:
+        raise InputError(f"rig simulation incomplete, nothing written: {rec.message}")
+    atomic_write_text(out, rec.to_csv())
+    click.echo(out)

@@ -22,6 +22,9 @@ import scipy.linalg as sla
 
 __all__ = ["RealizationResult", "realize_steps"]
 
+#: highest order tried by the `min_fit` order selection
+MAX_FIT_ORDER = 40
+
 
 @dataclass(frozen=True)
 class RealizationResult:
@@ -98,9 +101,37 @@ def _select_order(s: np.ndarray, n_max: int, sv_threshold: float) -> int:
     return int(np.argmax(ratio)) + 1
 
 
+def _model(U, sv, Vt, n, h, p, m, n_t, dt, steps):
+    """Continuous and discrete model of order `n` from the Hankel SVD, its steps and fit."""
+    root = np.sqrt(sv[:n])
+    obs, ctr = U[:, :n] * root, root[:, None] * Vt[:n]
+    Ad = np.linalg.lstsq(obs[:-p], obs[p:], rcond=None)[0]
+    Bd, Cd, D = ctr[:, :m], obs[:p], h[0]
+
+    lam = np.linalg.eigvals(Ad)
+    bad = (np.abs(lam.imag) <= 1e-10 * np.abs(lam)) & (lam.real <= 0.0)
+    if np.any(bad):
+        raise ValueError(f"identified A_d has eigenvalue(s) {np.round(lam[bad].real, 6)} on the "
+                         f"negative real axis or at zero: no continuous-time equivalent (try a "
+                         f"lower order)")
+    Ac = np.real(sla.logm(Ad)) / dt
+    aug = np.zeros((2 * n, 2 * n))
+    aug[:n, :n], aug[:n, n:] = Ac * dt, np.eye(n)
+    gamma = sla.expm(aug)[:n, n:] * dt  # int_0^dt expm(A_c tau) dtau = dt phi_1(A_c dt)
+    Bc = np.linalg.solve(gamma, Bd)
+
+    step_model = _discrete_steps(Ad, Bd, Cd, D, n_t)
+    err = np.linalg.norm(steps - step_model, axis=0)
+    ref = np.linalg.norm(steps - steps.mean(axis=0), axis=0)
+    fit = np.full((p, m), np.nan)
+    np.divide(err, ref, out=fit, where=ref > 0)
+    fit = 100.0 * (1.0 - fit)
+    return Ac, Bc, Cd, D, Ad, Bd, step_model, fit
+
+
 def realize_steps(t, steps, order: int | None = None, *, n_block_rows: int | None = None,
                   n_block_cols: int | None = None, sv_threshold: float = 1e-3,
-                  inputs: Sequence[str] | None = None,
+                  min_fit: float | None = None, inputs: Sequence[str] | None = None,
                   outputs: Sequence[str] | None = None) -> RealizationResult:
     """Identify a continuous state-space model from sampled step responses.
 
@@ -126,6 +157,11 @@ def realize_steps(t, steps, order: int | None = None, *, n_block_rows: int | Non
         ``n_block_cols = n_t - n_block_rows`` (all Markov parameters used).
     sv_threshold : float, optional
         Relative singular-value threshold for the order selection, in (0, 1).
+    min_fit : float, optional
+        With ``order=None``: instead of the singular-value rule, the smallest order whose
+        worst channel fits the steps to at least `min_fit` percent (the best-fitting order if
+        none does).  For data whose singular values decay without a clear gap, such as the
+        step responses of a nonlinear model.  One SVD serves all orders tried.
     inputs, outputs : sequence of str, optional
         Signal names for the returned models.
 
@@ -185,36 +221,32 @@ def realize_steps(t, steps, order: int | None = None, *, n_block_rows: int | Non
     U, sv, Vt = np.linalg.svd(hankel, full_matrices=False)
     if sv[0] == 0.0:
         raise ValueError("steps are constant in time: nothing to identify")
-    n = _select_order(sv, n_max, sv_threshold) if order is None else order
-
-    root = np.sqrt(sv[:n])
-    obs, ctr = U[:, :n] * root, root[:, None] * Vt[:n]
-    Ad = np.linalg.lstsq(obs[:-p], obs[p:], rcond=None)[0]
-    Bd, Cd, D = ctr[:, :m], obs[:p], h[0]
-
-    lam = np.linalg.eigvals(Ad)
-    bad = (np.abs(lam.imag) <= 1e-10 * np.abs(lam)) & (lam.real <= 0.0)
-    if np.any(bad):
-        raise ValueError(f"identified A_d has eigenvalue(s) {np.round(lam[bad].real, 6)} on the "
-                         f"negative real axis or at zero: no continuous-time equivalent (try a "
-                         f"lower order)")
-    Ac = np.real(sla.logm(Ad)) / dt
-    aug = np.zeros((2 * n, 2 * n))
-    aug[:n, :n], aug[:n, n:] = Ac * dt, np.eye(n)
-    gamma = sla.expm(aug)[:n, n:] * dt  # int_0^dt expm(A_c tau) dtau = dt phi_1(A_c dt)
-    Bc = np.linalg.solve(gamma, Bd)
-
+    if min_fit is not None and not 0 < min_fit < 100:
+        raise ValueError(f"min_fit must be in (0, 100) percent, got {min_fit!r}")
+    if order is not None or min_fit is None:
+        n = _select_order(sv, n_max, sv_threshold) if order is None else order
+        model = _model(U, sv, Vt, n, h, p, m, n_t, dt, steps)
+    else:  # smallest order reaching min_fit on every channel, else the best one tried
+        model = None
+        for k in range(1, min(n_max, MAX_FIT_ORDER) + 1):
+            try:
+                cand = _model(U, sv, Vt, k, h, p, m, n_t, dt, steps)
+            except ValueError:  # no continuous-time equivalent at this order
+                continue
+            if model is None or np.nanmin(cand[-1]) > np.nanmin(model[-1]):
+                model = cand
+            if np.nanmin(cand[-1]) >= min_fit:
+                break
+        if model is None:
+            raise ValueError(f"no order up to {min(n_max, MAX_FIT_ORDER)} has a continuous-time "
+                             "equivalent")
+    Ac, Bc, Cd, D, Ad, Bd, step_model, fit = model
+    n = Ac.shape[0]
     states = [f"x{i}" for i in range(n)]
     sys_c = control.StateSpace(Ac, Bc, Cd, D, inputs=in_names, outputs=out_names,
                                states=states)
     sys_d = control.StateSpace(Ad, Bd, Cd, D, dt, inputs=in_names, outputs=out_names,
                                states=states)
-    step_model = _discrete_steps(Ad, Bd, Cd, D, n_t)
-    err = np.linalg.norm(steps - step_model, axis=0)
-    ref = np.linalg.norm(steps - steps.mean(axis=0), axis=0)
-    fit = np.full((p, m), np.nan)
-    np.divide(err, ref, out=fit, where=ref > 0)
-    fit = 100.0 * (1.0 - fit)
     for a in (sv, fit, step_model):
         a.flags.writeable = False
     return RealizationResult(sys=sys_c, sys_discrete=sys_d, singular_values=sv, order=n,
