@@ -137,4 +137,7 @@ def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool 
 def _load_sections() -> None:
     """Import the modules that register report sections (in report order)."""
     from . import report_sections  # noqa: F401
+    from . import report_slip  # noqa: F401
+    from . import report_nonlinear  # noqa: F401
+    from . import report_identification  # noqa: F401
 

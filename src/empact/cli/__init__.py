@@ -79,7 +79,7 @@ def main() -> None:
 
 
 def _register() -> None:
-    from . import linear, params_cmd, report_cmd  # noqa: F401
+    from . import linear, nonlinear, params_cmd, report_cmd, slip  # noqa: F401
     from . import identification  # noqa: F401
 
 

@@ -1,0 +1,183 @@
+"""Traction curves mu(nu, r_g): analytic and tabulated models (issue 3, item 1; paper Fig. 10)."""
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from numpy.testing import assert_allclose
+
+from empact.cli import main
+from empact.params import ParameterError
+from empact.traction import (MagicFormulaTraction, TabulatedTraction, load_traction,
+                             traction_curves, traction_from_params)
+
+RATIOS = (0.43, 1.0, 2.25)  # paper Fig. 10: LOW, MED, OD
+
+
+@pytest.fixture(scope="module")
+def magic(params):
+    return traction_from_params(params)
+
+
+def sampled_table(magic, ratios=RATIOS):
+    """Curves sampling the analytic model densely (finer in the steep micro-slip region)."""
+    nu = np.concatenate([[0.0], np.geomspace(1e-6, 0.1, 600)])
+    return {r: (nu, magic.mu(nu, r)) for r in ratios}
+
+
+# -- analytic model -------------------------------------------------------------------------
+def test_magic_formula_is_odd_and_zero_at_zero(magic):
+    nu = np.linspace(-0.1, 0.1, 41)
+    for r in (0.5, 1.0, 2.0):
+        # exact symmetry of sin(C arctan(phi)) with phi odd in nu: equal to rounding (1e-15)
+        assert_allclose(magic.mu(-nu, r), -magic.mu(nu, r), atol=1e-15)
+    assert magic.mu(0.0, 1.0) == 0.0
+
+
+def test_magic_formula_slope_is_the_derivative(magic):
+    nu = np.array([-0.03, 0.0002, 0.001, 0.005, 0.01, 0.02, 0.04, 0.08])
+    r = np.array([0.43, 0.7, 1.0, 1.6, 2.25, 2.5, 1.0, 0.5])
+    h = 1e-8
+    fd = (magic.mu(nu + h, r) - magic.mu(nu - h, r)) / (2 * h)
+    # central difference, truncation O(h^2 mu''') and rounding O(eps / h): rtol 1e-5
+    assert_allclose(magic.dmu(nu, r), fd, rtol=1e-5, atol=1e-9)
+
+
+def test_coefficients_interpolate_in_log_ratio(params):
+    t = params.traction
+    magic = MagicFormulaTraction.from_params(t)
+    B, C, D, E = magic.coefficients([t.r_low, t.r_med, t.r_od, 0.3, 3.0])
+    assert_allclose(B, [t.B_low, t.B_med, t.B_od, t.B_low, t.B_od], rtol=1e-15)  # knots; held
+    assert_allclose(D, [t.D_low, t.D_med, t.D_od, t.D_low, t.D_od], rtol=1e-15)
+    r_mid = np.sqrt(t.r_med * t.r_od)  # midpoint in log(r_g): the average, exactly
+    assert_allclose(magic.coefficients(r_mid)[3], (t.E_med + t.E_od) / 2, rtol=1e-12)
+
+
+def test_shipped_curves_show_fig10_and_the_slip_claims(magic):
+    curves = traction_curves(magic, RATIOS, np.linspace(0, 0.1, 4001))
+    nu_pk, mu_pk = curves.peak()
+    # model notes Sec. 4: published pushbelt curves peak around mu = 0.09-0.12
+    assert np.all((mu_pk >= 0.09 - 1e-9) & (mu_pk <= 0.12))
+    # Fig. 10: rises to a maximum, declines beyond it at some ratios (here MED and OD)
+    assert curves.mu[1, -1] < mu_pk[1] and curves.mu[2, -1] < mu_pk[2]
+    # paper Sec. 2.2: at r_g = 1 the slope is small positive at 1-3 % and negative by 4 %
+    assert np.all(magic.dmu([0.01, 0.02, 0.03], 1.0) > 0)
+    assert magic.dmu([0.01, 0.02, 0.03], 1.0).max() < 0.05
+    assert magic.dmu(0.04, 1.0) < 0
+    # steep micro-slip: mu' > 1 at 0.1 % (full coupling, model notes Sec. 4)
+    assert magic.dmu(0.001, 1.0) > 1
+
+
+def test_slip_outside_the_range_is_an_error(magic):
+    with pytest.raises(ParameterError, match=r"nu = 0\.3: outside the valid slip range "
+                                             r"\[-0\.2, 0\.2\]"):
+        magic.mu([0.01, 0.3], 1.0)
+    with pytest.raises(ParameterError, match=r"r_g = -1: must be a positive finite ratio"):
+        magic.dmu(0.01, -1.0)
+
+
+def test_traction_follows_the_parameters(params):
+    changed = params.from_dotted({"traction.D_med": 0.12})
+    # at r_g = r_med the coefficients are the MED ones: mu scales with D exactly
+    assert_allclose(traction_from_params(changed).mu(0.02, 1.0),
+                    traction_from_params(params).mu(0.02, 1.0) * 0.12 / 0.1, rtol=1e-14)
+
+
+# -- tabulated model ------------------------------------------------------------------------
+def test_tabulated_agrees_with_the_analytic_curve_it_samples(magic):
+    tab = TabulatedTraction.from_curves(sampled_table(magic))
+    nu = np.linspace(-0.095, 0.095, 397)
+    for r in RATIOS:
+        # PCHIP through 600 log-spaced samples: interpolation error below 1e-6 (measured:
+        # largest about 2e-8, in the micro-slip knee)
+        assert_allclose(tab.mu(nu, r), magic.mu(nu, r), atol=1e-6)
+        flat = np.abs(nu) >= 0.005
+        # slopes: the interpolant's derivative; within 5 % of the analytic slope (plus 2e-3
+        # absolute near mu' = 0) away from the steep knee
+        assert_allclose(tab.dmu(nu[flat], r), magic.dmu(nu[flat], r), rtol=0.05, atol=2e-3)
+        same_sign = np.sign(tab.dmu(nu[flat], r)) == np.sign(magic.dmu(nu[flat], r))
+        assert np.all(same_sign | (np.abs(magic.dmu(nu[flat], r)) < 2e-3))
+
+
+def test_tabulated_slope_is_the_derivative_of_the_interpolant(magic):
+    tab = TabulatedTraction.from_curves(sampled_table(magic, (1.0,)))
+    nu = np.array([-0.02, 0.0015, 0.0123, 0.0371, 0.0789])
+    h = 1e-9
+    fd = (tab.mu(nu + h, 1.0) - tab.mu(nu - h, 1.0)) / (2 * h)
+    # central difference on a piecewise cubic (no knot inside +-h): rtol 1e-5
+    assert_allclose(tab.dmu(nu, 1.0), fd, rtol=1e-5)
+
+
+def test_odd_extension_and_linear_in_ratio():
+    tab = TabulatedTraction.from_curves({0.5: ([0, 0.01, 0.05], [0, 0.08, 0.1]),
+                                         2.0: ([0, 0.01, 0.05], [0, 0.06, 0.09])})
+    assert tab.nu_range == (-0.05, 0.05)
+    assert_allclose(tab.mu(-0.01, 0.5), -0.08, rtol=1e-15)  # odd extension, exact sample
+    assert_allclose(tab.mu(0.01, 1.25), 0.07, rtol=1e-14)  # midway in r_g: the average
+    assert_allclose(tab.mu(0.01, 3.0), 0.06, rtol=1e-15)  # held constant beyond the last ratio
+    with pytest.raises(ParameterError, match=r"nu = 0\.06: outside the valid slip range"):
+        tab.mu(0.06, 1.0)
+
+
+def test_table_not_starting_at_zero_has_no_extension():
+    tab = TabulatedTraction.from_curves({1.0: ([0.001, 0.01, 0.05], [0.05, 0.09, 0.1])})
+    assert tab.nu_range == (0.001, 0.05)
+
+
+@pytest.mark.parametrize("nu, mu, match", [
+    ([0, 0.02, 0.01, 0.03], [0, 0.05, 0.06, 0.07], r"nu must increase strictly, but nu\[2\] = "
+                                                   r"0\.01 follows nu\[1\] = 0\.02"),
+    ([0, 0.01, np.nan], [0, 0.05, 0.06], r"nu\[2\] = nan: must be a finite number"),
+    ([0, 0.01, 0.02], [0, np.nan, 0.06], r"mu\[1\] = nan: must be a finite number"),
+    ([0, 0.01], [0, 0.05], r"2 points, need at least 3"),
+    ([0, 0.01, 0.02], [0, 0.5, 1.2], r"mu\[2\] = 1\.2 \(at nu = 0\.02\): allowed range is "
+                                     r"\[0, 1\]"),
+    ([0, 0.01, 0.02], [0, -0.1, 0.06], r"mu\[1\] = -0\.1 .*allowed range is \[0, 1\]"),
+    ([0, 0.01, 0.02, 0.03], [0, 0.05, 0.06], r"4 nu values but 3 mu values"),
+])
+def test_nonsense_tables_are_refused(nu, mu, match):
+    with pytest.raises(ParameterError, match=match) as err:
+        TabulatedTraction.from_curves({1.0: (nu, mu)}, source="t.csv")
+    assert "\n" not in str(err.value) and "curve r_g = 1" in str(err.value)
+
+
+def test_csv_and_toml_files(tmp_path, magic):
+    csv_path = tmp_path / "mu.csv"
+    rows = ["r_g,nu,mu"] + [f"{r},{n},{m}" for r in (0.5, 2.0)
+                            for n, m in zip([0, 0.005, 0.02, 0.05], [0, 0.07, 0.09, 0.085])]
+    csv_path.write_text("\n".join(rows) + "\n")
+    toml_path = tmp_path / "mu.toml"
+    toml_path.write_text("".join(f"[[curve]]\nr_g = {r}\nnu = [0, 0.005, 0.02, 0.05]\n"
+                                 "mu = [0, 0.07, 0.09, 0.085]\n" for r in (2.0, 0.5)))
+    a, b = load_traction(csv_path), load_traction(toml_path)
+    nu = np.linspace(-0.05, 0.05, 11)
+    assert_allclose(a.mu(nu, 1.0), b.mu(nu, 1.0), rtol=0, atol=0)  # same data: identical
+    assert a.ratios == (0.5, 2.0)
+
+
+@pytest.mark.parametrize("name, text, match", [
+    ("a.csv", "ratio,nu,mu\n1,0,0\n", r"must name exactly the columns r_g, nu, mu"),
+    ("a.csv", "r_g,nu,mu\n1,0,0\n1,x,0.1\n", r"row 3: 'x' is not a number"),
+    ("a.csv", "r_g,nu,mu\n1,0,0\n1,0.01\n", r"row 3: 2 fields, expected 3"),
+    ("a.toml", "[[curve]]\nr_g = 1\nnu = [0, 0.01, 0.02]\n", r"curve 1 has keys \['nu', 'r_g'\]"),
+    ("a.toml", "[[curve]]\nr_g = 1\nnu = [0, 0.01, 0.02]\nmu = [0, 0.1, 0.1]\n[[curve]]\n"
+               "r_g = 1\nnu = [0, 0.01, 0.02]\nmu = [0, 0.1, 0.1]\n", r"r_g = 1 given twice"),
+    ("a.txt", "x", r"must be \.csv or \.toml"),
+])
+def test_bad_files_are_refused(tmp_path, name, text, match):
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(ParameterError, match=match):
+        load_traction(path)
+
+
+def test_cli_traction_table_and_bad_table(tmp_path):
+    good = tmp_path / "good.csv"
+    good.write_text("r_g,nu,mu\n1,0,0\n1,0.01,0.09\n1,0.05,0.1\n")
+    res = CliRunner().invoke(main, ["slip", "traction", "--traction", str(good), "--ratio", "1",
+                                    "--slip", "0:0.05:6", "--json"])
+    assert res.exit_code == 0, res.output
+    bad = tmp_path / "bad.csv"
+    bad.write_text("r_g,nu,mu\n1,0,0\n1,0.02,0.09\n1,0.01,0.1\n")
+    res = CliRunner().invoke(main, ["slip", "poles", "--traction", str(bad)])
+    assert res.exit_code == 2
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error:") and "nu must increase" in lines[0]
