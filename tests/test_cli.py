@@ -9,6 +9,23 @@ from empact import paper
 from empact.cli import main
 
 
+KNOWN_DEVIATIONS = (
+    # Sec. 2.3 / Sec. 3: with the Sec. 2.1 kinematics a right-half-plane zero of T_mp -> nu
+    # appears at every ratio, r_g = 2 included
+    "none at r_g = 2",
+    # Sec. 4 / Fig. 14: the servo angle falls with -1.35 rather than -1 between 1 and 2 Hz
+    "Slope -1 (within 0.35) between 1 and 2 Hz, T_mp -> theta_mp",
+)
+
+
+def _not_shown(html):
+    """The text before each NOT-shown verdict (the claim it judges), one string each."""
+    import re
+
+    text = re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ", html))
+    return [text[max(0, m.start() - 160):m.start()] for m in re.finditer("NOT shown", text)]
+
+
 def run(*args):
     return CliRunner().invoke(main, list(args))
 
@@ -72,6 +89,11 @@ def test_reproduce_writes_complete_report(tmp_path):
         assert (out / f"{stem}.png").exists() and (out / f"{stem}.svg").exists()
         assert f"{stem}.png" in html
     assert (out / "table1.csv").exists() and (out / "table2.csv").exists()
-    assert "NOT shown" not in html  # every paper claim checked in the report holds
+    # every paper claim the report checks holds, except the documented deviations below
+    # (README, "Paper inconsistencies"); an unexpected failure or pass changes this set
+    snippets = _not_shown(html)
+    matched = [[claim for claim in KNOWN_DEVIATIONS if claim in snip] for snip in snippets]
+    assert all(len(m) == 1 for m in matched), snippets  # no unexplained failure
+    assert sorted(m[0] for m in matched) == sorted(KNOWN_DEVIATIONS), snippets
     leftovers = [p.name for p in tmp_path.iterdir() if p.name != "rep"]
     assert leftovers == []  # the temporary folder was moved into place

@@ -252,3 +252,24 @@ def test_realize_system_with_integrator():
     H_true = control.frequency_response(sys, w).complex.ravel()
     H_id = control.frequency_response(res.sys, w).complex.ravel()
     assert np.max(np.abs(H_id - H_true) / np.abs(H_true)) < 0.02  # FRF within 2 %
+
+
+def test_frf_unexcited_bins_are_nan_not_errors():
+    """A multisine excites only its lines: the FRF is undefined (NaN) between them."""
+    fs, period = 1000.0, 256
+    k = np.arange(5, 40)
+    spec = np.zeros(period // 2 + 1, complex)
+    spec[k] = np.exp(2j * np.pi * np.random.default_rng(4).uniform(size=k.size))
+    u = np.tile(np.fft.irfft(spec, period), 24)
+    b, a = _resonance(30.0, 0.05)
+    y = sg.lfilter(b, a, u)
+    skip = 8 * period  # 2 s: the 30 Hz, 5 % transient decays by exp(-19)
+    est = estimate_frf(u[skip:], y[skip:], fs, nperseg=period, noverlap=0, window="boxcar")
+    lines = np.isin(np.arange(len(est.frequencies_hz)), k)
+    assert np.all(np.isfinite(est.H[0, 0, lines]))
+    assert np.all(np.isnan(est.H[0, 0, ~lines])) and np.all(np.isnan(est.coherence[0, 0, ~lines]))
+    # periodic excitation, whole periods, steady state: exact at the lines up to rounding
+    true = _true_frf((b, a), est.frequencies_hz[lines])
+    assert np.max(np.abs(est.H[0, 0, lines] - true) / np.abs(true)) < 1e-6
+    with pytest.raises(ValueError, match="no power"):
+        estimate_frf(np.zeros(512), y[:512], fs)

@@ -22,6 +22,9 @@ __all__ = ["FRFEstimate", "estimate_frf"]
 
 METHODS = ("H1", "H2")
 
+#: relative input power below which a frequency counts as not excited
+UNEXCITED = 1e-10
+
 
 @dataclass(frozen=True)
 class FRFEstimate:
@@ -119,8 +122,15 @@ def estimate_frf(u, y, fs: float, method: str = "H1", nperseg: int | None = None
     Raises
     ------
     ValueError
-        For malformed arguments, an unknown `method`, H2 on a non-square system, or a
-        singular input (H1) / output-input (H2) spectral matrix.
+        For malformed arguments, an unknown `method`, H2 on a non-square system, inputs
+        without power at every frequency, or a singular output-input spectral matrix (H2).
+
+    Notes
+    -----
+    Frequencies where the inputs carry no power (the smallest eigenvalue of the input
+    spectral matrix below ``UNEXCITED`` times its largest value over all frequencies), such as
+    the bins between the lines of a multisine, get NaN in `H` and in the coherences: the FRF is
+    not defined there.
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -155,15 +165,26 @@ def estimate_frf(u, y, fs: float, method: str = "H1", nperseg: int | None = None
                    noverlap=noverlap, detrend=detrend, axis=-1)    # P[a, b] = E[conj(Z_a) Z_b]
     auto = np.einsum("aaf->af", P).real                             # (n_c, n_f)
     Suu, Suy = P[:m, :m].transpose(2, 0, 1), P[:m, m:].transpose(2, 0, 1)
-    try:
-        H1t = np.linalg.solve(Suu, Suy)                             # (n_f, n_in, n_out)
-        Ht = H1t if method == "H1" else np.linalg.solve(P[m:, :m].transpose(2, 0, 1),
-                                                        P[m:, m:].transpose(2, 0, 1))
-    except np.linalg.LinAlgError:
-        which = "S_uu (inputs linearly dependent or zero)" if method == "H1" else "S_yu"
-        raise ValueError(f"singular spectral matrix {which} at some frequency") from None
+    # frequencies the inputs do not excite (between the lines of a multisine, outside a band):
+    # the input spectral matrix is singular there and the FRF is undefined -> NaN
+    lam = np.linalg.eigvalsh(Suu)                                   # (n_f, n_in), ascending
+    excited = lam[:, 0] > UNEXCITED * lam[:, -1].max()
+    if not excited.any():
+        raise ValueError("the inputs carry no power at any frequency (all zero?)")
+    H1t = np.full((len(f), m, p), np.nan, complex)
+    H1t[excited] = np.linalg.solve(Suu[excited], Suy[excited])      # (n_f, n_in, n_out)
+    Ht = H1t
+    if method == "H2":
+        Syu = P[m:, :m].transpose(2, 0, 1)
+        ok = excited & (np.abs(np.linalg.det(Syu)) > 0)
+        Ht = np.full_like(H1t, np.nan)
+        try:
+            Ht[ok] = np.linalg.solve(Syu[ok], P[m:, m:].transpose(2, 0, 1)[ok])
+        except np.linalg.LinAlgError:
+            raise ValueError("singular spectral matrix S_yu at some excited frequency") from None
 
     coherence = _ratio(np.abs(P[:m, m:]) ** 2, auto[:m, None] * auto[None, m:]).transpose(1, 0, 2)
+    coherence[:, :, ~excited] = np.nan
     coherent = np.einsum("fji,fji->if", H1t.conj(), Suy).real     # S_yu S_uu^-1 S_uy
     multiple = _ratio(coherent, auto[m:])
     n_avg = 1 + (n_t - nperseg) // (nperseg - noverlap)
