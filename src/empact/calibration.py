@@ -23,7 +23,6 @@ parameter's allowed range, and minimises ``sum weight * (f_model / f_target - 1)
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, fields
 from typing import Any, Sequence
 
@@ -32,7 +31,7 @@ from scipy.optimize import least_squares
 
 from .actuation import actuation_model
 from .driveline import driveline_model, uncoupled_frequencies
-from .params import ParameterError, Params, _SECTIONS, DampingLevel
+from .params import ParameterError, Params, _SECTIONS, DampingLevel, read_toml
 
 __all__ = ["Target", "CalibrationResult", "load_targets", "calibrate", "model_frequencies"]
 
@@ -135,13 +134,7 @@ def _check_target(raw: dict[str, Any], where: str) -> Target:
 
 def load_targets(path: str) -> tuple[tuple[Target, ...], tuple[str, ...]]:
     """Read a targets file; returns ``(targets, free)``.  Errors name the entry and key."""
-    try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: no such targets file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"{path}: not valid TOML ({exc})") from None
+    data = read_toml(path, "targets")
     unknown = set(data) - {"free", "target"}
     if unknown:
         raise ParameterError(f"{path}: unknown key {sorted(unknown)[0]!r} (allowed: free, target)")

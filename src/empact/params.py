@@ -330,12 +330,15 @@ def _merge(into: dict[str, Any], data: Mapping[str, Any], where: str,
             into[key] = value
 
 
-def _read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+def read_toml(path: str | os.PathLike[str], what: str = "parameter") -> dict[str, Any]:
+    """Parse a TOML file; a missing file or bad syntax is a one-line `ParameterError`."""
     try:
         with open(path, "rb") as fh:
             return tomllib.load(fh)
     except FileNotFoundError:
-        raise ParameterError(f"{path}: no such parameter file") from None
+        raise ParameterError(f"{path}: no such {what} file") from None
+    except IsADirectoryError:
+        raise ParameterError(f"{path}: is a folder, not a {what} file") from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{path}: not valid TOML ({exc})") from None
 
@@ -356,7 +359,7 @@ def load_params(path: str | os.PathLike[str] | None = None) -> Params:
     """Load a TOML parameter file over the shipped defaults (`None`: the defaults)."""
     if path is None:
         return default_params()
-    return Params.from_dict(_read_toml(path), base=default_params(), source=str(path))
+    return Params.from_dict(read_toml(path), base=default_params(), source=str(path))
 
 
 def dumps_params(params: Params, header: str = "") -> str:

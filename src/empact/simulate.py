@@ -57,7 +57,7 @@ from numpy.typing import NDArray
 from . import _nonlinear_kernel as K
 from .nonlinear import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, ModelOptions, \
     nonlinear_model
-from .params import ParameterError, Params
+from .params import ParameterError, Params, read_toml
 from .trim import TrimResult, trim
 
 __all__ = ["Scenario", "SimulationResult", "load_scenario", "list_examples", "example_path",
@@ -128,13 +128,7 @@ def load_scenario(path: str | os.PathLike[str]) -> Scenario:
         One line naming the file, the key, the bad value and what is allowed.
     """
     src = str(path)
-    try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except FileNotFoundError:
-        raise ParameterError(f"{src}: no such scenario file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"{src}: not valid TOML ({exc})") from None
+    data = read_toml(path, "scenario")
     return scenario_from_dict(data, src)
 
 

@@ -89,7 +89,7 @@ def _ratios(text: str) -> list[float]:
               help="Folder for the step responses (CSV), models (JSON) and the Fig. 2 plot.")
 def identify(ratios: str, nu: float, F_s: float, omega_p: float, order: int | None, step: float,
              params_file: str | None, as_json: bool, out: str | None) -> None:
-    """Fig. 2: identify (T_mp, T_ms) -> (r_g, nu) from step responses of the nonlinear model."""
+    """Identify (T_mp, T_ms) -> (r_g, nu) from step responses of the nonlinear model (Fig 2)."""
     from ..identification.plant_id import identify_plant
 
     if order is not None and order < 1:
@@ -173,8 +173,10 @@ def _write_identification(out: str, results, data) -> None:
 def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p: float,
         rms: float, band: str, duration: float, fs: float, friction: float, seed: int,
         params_file: str | None, out: str) -> None:
-    """Virtual test rig (Fig. 14): excite a servo torque of the nonlinear model with friction
-    and sensor noise; write records that `empact frf-estimate` reads."""
+    """Virtual test rig: excite a servo torque of the nonlinear model (Fig 14).
+
+    The model has spindle Coulomb friction and sensor noise; the records it writes are what
+    `empact frf-estimate` reads."""
     from ..identification.rig import RigSettings, run_rig
     from ..params import atomic_write_text
 

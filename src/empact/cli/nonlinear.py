@@ -177,7 +177,7 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
 @json_option
 def nmp_cmd(ratios, nu, F_s, omega_p, f_max, plot, damping, drive, load, kinematics,
             params_file, as_json) -> None:
-    """Sec. 2.3: Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio."""
+    """Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio (Sec 2.3)."""
     from ..nmp import nmp_analysis
 
     try:

@@ -321,7 +321,7 @@ def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, plot) 
 @plot_option
 def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk, workers,
             as_json, plot) -> None:
-    """Stability map over two ranges, e.g. --slip 0.001:0.06:200 --ratio 0.5:2.2:200."""
+    """Stability map over two ranges (--slip 0.001:0.06:200 --ratio 0.5:2.2:200)."""
     params, tr = _setup(params_file, traction_file)
     raw = dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed)
     base, sweeps = _grid(params, raw, max_sweeps=2, exact=2)
