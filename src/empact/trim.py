@@ -145,8 +145,13 @@ def trim(model: EmpactModel, r_g: float, omega_p: float, *, nu: float | None = N
     r_g = float(r_g)
     if not (np.isfinite(omega_p) and omega_p > 0):
         raise TrimError(f"omega_p = {omega_p!r}: allowed range is (0, inf) [rad/s]")
-    if nu is not None and not (np.isfinite(nu) and -1 < nu < 1):
-        raise TrimError(f"nu = {nu!r}: allowed range is (-1, 1)")
+    if nu is not None:
+        from .traction import traction_from_params
+
+        lo, hi = traction_from_params(model.params).nu_range
+        if not (np.isfinite(nu) and lo <= nu <= hi):
+            raise TrimError(f"nu = {nu!r}: outside the valid slip range [{lo:g}, {hi:g}] of the "
+                            "traction curve")
     if F_s is not None and not (np.isfinite(F_s) and F_s > 0):
         raise TrimError(f"F_s = {F_s!r}: allowed range is (0, inf) [N]")
     if T_l is not None and not np.isfinite(T_l):
