@@ -9,7 +9,14 @@ Two parts:
 * **Zeros.**  The finite zeros of the T_mp -> nu channel of the exactly linearised model
   (`empact.linearize`) over the ratio; the paper states a right-half-plane zero at r_g = 0.5
   and none at r_g = 2.  `nmp_analysis` reports what the model gives, for either sheave
-  kinematics (`empact.nonlinear.ModelOptions.kinematics`).
+  kinematics (`empact.nonlinear.ModelOptions.kinematics`) and for either slip signal:
+  ``slip="eq2"``, the slip of eq. 2 on the current radii, or ``slip="speed"``, the slip a
+  speed measurement gives at the operating ratio, ``1 - omega_s / (r_g0 omega_p)``, whose
+  linearisation is ``nu~ - (1 - nu0) r_g~ / r_g0`` (eq. 2 without its direct dependence on the
+  ratio; the paper's Fig. 12 slip is linearised at constant r_g in the same way).
+
+A zero counts as right-half-plane when its real part exceeds 1e-3 of its magnitude (damping
+ratio below -0.001): lightly damped zeros on the imaginary axis stay out of the count.
 """
 from __future__ import annotations
 
@@ -23,7 +30,9 @@ from .linearize import plant, transmission_zeros
 from .nonlinear import nonlinear_model
 from .params import Params
 
-__all__ = ["BeltLengthChange", "belt_length_change", "NmpResult", "nmp_analysis"]
+__all__ = ["BeltLengthChange", "belt_length_change", "NmpResult", "nmp_analysis", "SLIPS"]
+
+SLIPS = ("eq2", "speed")
 
 
 @dataclass(frozen=True)
@@ -72,9 +81,12 @@ class NmpResult:
     zeros : tuple of arrays
         Finite zeros [rad/s] (complex) of T_mp -> nu at each ratio, below `f_max`.
     rhp_zeros : tuple of arrays
-        Those with a positive real part (beyond 1e-6 of their magnitude; zeros at the origin,
-        below 1e-3 rad/s, are not counted).
+        Those with a real part above 1e-3 of their magnitude (zeros at the origin, below
+        1e-3 rad/s, are not counted).
     n_rhp : array of int, shape (n_r,)
+    n_rhp_real : array of int, shape (n_r,)
+        Real right-half-plane zeros (imaginary part below 1e-6 of the magnitude).
+    slip : "eq2" or "speed" (see the module docstring)
     geometry : BeltLengthChange
     operating : dict
         nu, F_s [N], omega_p [rad/s], model options.
@@ -86,21 +98,23 @@ class NmpResult:
     zeros: tuple[NDArray[np.complex128], ...]
     rhp_zeros: tuple[NDArray[np.complex128], ...]
     n_rhp: NDArray[np.int64]
+    n_rhp_real: NDArray[np.int64]
+    slip: str
     geometry: BeltLengthChange
     operating: dict
     f_max: float
 
     def summary(self) -> list[dict]:
         """One row per ratio: RHP zeros [Hz] as (real, imag) pairs."""
-        return [{"r_g": float(r), "n_rhp": int(n),
+        return [{"r_g": float(r), "n_rhp": int(n), "n_rhp_real": int(nr),
                  "rhp_zeros_hz": [(float(z.real / 2 / np.pi), float(z.imag / 2 / np.pi))
                                   for z in rz]}
-                for r, n, rz in zip(self.r_g, self.n_rhp, self.rhp_zeros)]
+                for r, n, nr, rz in zip(self.r_g, self.n_rhp, self.n_rhp_real, self.rhp_zeros)]
 
 
 def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *, nu: float = 0.004,
                  F_s: float = 10e3, omega_p: float = 300.0, f_max: float = 200.0,
-                 **options) -> NmpResult:
+                 slip: str = "eq2", **options) -> NmpResult:
     """Zeros of the exactly linearised T_mp -> nu transfer over `ratios`.
 
     Parameters
@@ -117,21 +131,32 @@ def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *, nu: flo
         Primary speed [rad/s].
     f_max : float
         Keep zeros below this frequency [Hz].
+    slip : {"eq2", "speed"}
+        The slip signal (see the module docstring).
     **options
         `empact.nonlinear.ModelOptions` (default: moderate damping, torque-controlled drive
         and load, ``kinematics="actuation"``).
     """
+    import control
+
+    if slip not in SLIPS:
+        raise ValueError(f"slip = {slip!r}: choose from {', '.join(SLIPS)}")
     r = np.atleast_1d(np.asarray(ratios, float))
     model = nonlinear_model(params, **options)
     zs, rhp = [], []
     for rg in r:
-        sys, _ = plant(params, float(rg), nu, F_s, omega_p, model=model)
+        sys, op = plant(params, float(rg), nu, F_s, omega_p, model=model)
+        if slip == "speed":  # nu~ - (1 - nu0) r_g~ / r_g0: eq. 2 at the operating ratio
+            w = np.array([-(1 - op.nu) / op.r_g, 1.0])
+            sys = control.ss(sys.A, sys.B, w @ sys.C, w @ sys.D, inputs=list(sys.input_labels),
+                             outputs=["nu"], states=list(sys.state_labels))
         z = transmission_zeros(sys, "T_mp", "nu")
         z = z[np.abs(z) < 2 * np.pi * f_max]
         zs.append(z)
-        rhp.append(z[(z.real > 1e-6 * np.abs(z)) & (np.abs(z) > 1e-3)])
+        rhp.append(z[(z.real > 1e-3 * np.abs(z)) & (np.abs(z) > 1e-3)])
+    real = [int(np.sum(np.abs(z.imag) < 1e-6 * np.abs(z))) for z in rhp]
     return NmpResult(r_g=r, zeros=tuple(zs), rhp_zeros=tuple(rhp),
-                     n_rhp=np.array([len(z) for z in rhp]),
+                     n_rhp=np.array([len(z) for z in rhp]), n_rhp_real=np.array(real), slip=slip,
                      geometry=belt_length_change(params, r), f_max=f_max,
                      operating={"nu": nu, "F_s": F_s, "omega_p": omega_p,
                                 "options": {k: getattr(model.options, k)

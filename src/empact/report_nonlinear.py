@@ -20,8 +20,6 @@ def nmp_section(ctx: Context) -> str:
     ratios = np.geomspace(0.45, 2.25, 13)
     res = nmp_analysis(ctx.params, np.unique(np.r_[ratios, RATIOS]), nu=NU0, F_s=FS0,
                        omega_p=WP0)
-    alt = nmp_analysis(ctx.params, RATIOS, nu=NU0, F_s=FS0, omega_p=WP0,
-                       kinematics="equal-translation")
     g = res.geometry
     rows = []
     for k, r in enumerate(res.r_g):
@@ -30,23 +28,37 @@ def nmp_section(ctx: Context) -> str:
         rows.append([r, 1e3 * g.delta_x[k], g.dL_exact[k] / g.delta, z])
     at = {float(r): n for r, n in zip(res.r_g, res.n_rhp)}
     geo_ok = bool(g.dL_exact[res.r_g < 1].max() < 0 < g.dL_exact[res.r_g > 1].min())
-    alt_txt = "; ".join(f"r_g = {r:g}: {n} RHP" for r, n in zip(alt.r_g, alt.n_rhp))
+    combos = [(kin, sl, nmp_analysis(ctx.params, RATIOS, nu=NU0, F_s=FS0, omega_p=WP0,
+                                     kinematics=kin, slip=sl))
+              for kin in ("actuation", "equal-translation") for sl in ("eq2", "speed")]
+    combo_rows = [[kin, sl] + ["; ".join(f"{v.real / 2 / np.pi:+.3g} {v.imag / 2 / np.pi:+.3g}j"
+                                         for v in a.rhp_zeros[k]) or "none"
+                               for k in range(len(RATIOS))] for kin, sl, a in combos]
+    et_speed = combos[3][2]
+    et_ok = bool(et_speed.n_rhp_real[0] > 0 and et_speed.n_rhp[-1] == 0)
     note = (f"<p>Geometry (eqs. 5-6): for an equal translation of both sheaves the belt length "
             f"falls below r_g = 1 and rises above it, first order 4 phi delta / tan(beta): "
             f"{verdict(geo_ok)}.</p>"
             f"<p>Zeros of the exactly linearised T_mp -> nu channel at nu = {NU0:g}, F_s = "
             f"{FS0:g} N, omega_p = {WP0:g} rad/s (moderate damping, torque-controlled drive and "
-            f"load). Paper: a right-half-plane zero at r_g = 0.5 "
-            f"({verdict(at[0.5] > 0)}) and none at r_g = 2 ({verdict(at[2.0] == 0)}). In this "
-            f"model a real RHP zero near 1 Hz appears at every ratio: with the calibrated "
-            f"sheave kinematics of the actuation model (Table 1), a primary-servo rotation "
-            f"against the inertia-held secondary sun moves the two sheaves in opposite senses and "
-            f"unloads the belt directly, whatever the sign of phi; the ratio path then drives "
-            f"the slip the other way. The 48 Hz chain-mode zeros nearly cancel their poles "
-            f"(left half-plane at all ratios). With the sheave sense reversed so that a "
-            f"held secondary servo gives the paper's equal translation "
-            f"(kinematics = 'equal-translation', not calibrated to Table 1): {alt_txt}. "
-            f"Neither reproduces the paper's claim; see the issue notes.</p>")
+            f"load), shipped model. Paper: a right-half-plane zero at r_g = 0.5 "
+            f"({verdict(at[0.5] > 0)}) and none at r_g = 2 ({verdict(at[2.0] == 0)}). In the "
+            f"shipped model a real RHP zero near 1 Hz appears at every ratio: with the sheave "
+            f"kinematics that Sec. 2.1's mode shapes require (calibrated to Table 1), a "
+            f"primary-servo rotation against the inertia-held secondary sun squeezes both "
+            f"sheaves and changes the clamping force directly, whatever the sign of phi; the "
+            f"ratio path then drives the slip the other way.</p>"
+            f"<p>The table below separates the two choices the paper leaves open: the sheave "
+            f"kinematics (Sec. 2.1 'actuation', or Sec. 1 / 2.3 'equal-translation', where the "
+            f"primary servo alone translates both sheaves equally) and the slip signal (eq. 2 on "
+            f"the current radii, or the speed slip 1 - omega_s / (r_g0 omega_p) at the operating "
+            f"ratio). With equal translation and the speed slip the paper's statement holds "
+            f"(real RHP zero at r_g = 0.5, none at r_g = 2): {verdict(et_ok)}; but the "
+            f"equal-translation kinematics cannot give Sec. 2.1's mode shapes (README, 'Paper "
+            f"inconsistencies').</p>")
+    note += ctx.table("nmp_conventions", ["kinematics", "slip"]
+                      + [f"RHP zeros at r_g = {r:g} [Hz]" for r in RATIOS], combo_rows,
+                      "Right-half-plane zeros of T_mp -> nu by kinematics and slip signal")
     return (ctx.figure(plot_nmp(res, title="Sec. 2.3: belt length and zeros of T_mp -> nu"),
                        "nmp_zeros", "Sec. 2.3: Delta_x and belt-length change over the ratio "
                        "(left); zeros of T_mp -> nu (right, filled: right half-plane)")

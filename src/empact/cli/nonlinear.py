@@ -170,13 +170,16 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
               help="Primary speed [rad/s].")
 @click.option("--fmax", "f_max", type=float, default=200.0, show_default=True,
               help="Largest zero frequency reported [Hz].")
+@click.option("--slip-signal", "slip_signal", type=click.Choice(["eq2", "speed"]), default="eq2",
+              show_default=True, help="Slip of eq. 2, or from the shaft speeds at the "
+              "operating ratio (see empact.nmp).")
 @click.option("--plot", "plot", type=click.Path(dir_okay=False), default=None,
               help="Write the figure (format from the suffix).")
 @_add(model_options)
 @params_option
 @json_option
-def nmp_cmd(ratios, nu, F_s, omega_p, f_max, plot, damping, drive, load, kinematics,
-            params_file, as_json) -> None:
+def nmp_cmd(ratios, nu, F_s, omega_p, f_max, slip_signal, plot, damping, drive, load,
+            kinematics, params_file, as_json) -> None:
     """Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio (Sec 2.3)."""
     from ..nmp import nmp_analysis
 
@@ -188,7 +191,7 @@ def nmp_cmd(ratios, nu, F_s, omega_p, f_max, plot, damping, drive, load, kinemat
         raise InputError("--ratios: give at least one ratio")
     params = get_params(params_file)
     res = nmp_analysis(params, r, nu=nu, F_s=F_s, omega_p=omega_p, f_max=f_max,
-                       **_options(drive, load, damping, kinematics))
+                       slip=slip_signal, **_options(drive, load, damping, kinematics))
     if plot:
         from ..plotting import save_single
         from ..plotting_nonlinear import plot_nmp
@@ -199,7 +202,8 @@ def nmp_cmd(ratios, nu, F_s, omega_p, f_max, plot, damping, drive, load, kinemat
                    "dL_exact_m": g.dL_exact, "dL_first_order_m": g.dL_first_order,
                    "zeros_hz": [z / (2 * np.pi) for z in res.zeros],
                    "rhp_zeros_hz": [z / (2 * np.pi) for z in res.rhp_zeros],
-                   "n_rhp": res.n_rhp, "operating_point": res.operating})
+                   "n_rhp": res.n_rhp, "n_rhp_real": res.n_rhp_real,
+                   "slip_signal": res.slip, "operating_point": res.operating})
         return
     click.echo(f"{'r_g':>6s} {'Delta_x [mm]':>13s} {'dL/delta exact':>15s} {'4 phi/tan(b)':>13s}"
                f"  RHP zeros of T_mp -> nu [Hz]")
