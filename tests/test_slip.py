@@ -377,3 +377,78 @@ def test_cli_bad_options_one_line_exit_2(args, match):
     assert res.exit_code == 2, res.output
     lines = res.output.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error:") and match in lines[0]
+
+
+# -- stability map by polynomial roots (method="roots") ---------------------------------------
+def test_map_roots_agree_with_eigvals_on_a_grid(params):
+    nu, r = np.linspace(0.0005, 0.06, 41), np.linspace(0.43, 2.25, 37)
+    a = stability_map(params, "nu", nu, "r_g", r, base=FIG11, method="roots")
+    b = stability_map(params, "nu", nu, "r_g", r, base=FIG11, method="reduced")
+    assert a.method == "roots" and a.n_fallback == 0 and b.n_fallback == 0
+    # reference: np.linalg.eigvals of the same 5x5 matrices; both exact to rounding (roots are
+    # certified to 1e-11 relative, LAPACK ~eps |A|): 1e-9 relative or 1e-9 absolute near zero
+    assert_allclose(a.max_real, b.max_real, rtol=1e-9, atol=1e-9)
+    assert_allclose(a.min_damping, b.min_damping, rtol=1e-9, atol=1e-9)
+    assert np.array_equal(a.unstable, b.unstable) and 0 < a.unstable_fraction < 1
+
+
+def test_charpoly_is_that_of_the_reduced_matrices(params):
+    from empact.slip import _assemble_reduced, _mass_stiffness, _reduced_charpoly, _terms
+    t = _terms(params, np.linspace(0.5, 2.2, 6), np.linspace(0.002, 0.05, 6), 1e4, 300.0, None)
+    J, K = _mass_stiffness(params)
+    A = _assemble_reduced(J, K, t["r_g"], t["rho"], t["c_s"])
+    co = _reduced_charpoly(J, K, t["r_g"], t["rho"], t["c_s"])
+    # np.poly (eigenvalues -> coefficients) is exact to rounding of the eigenvalues: 1e-10
+    assert_allclose(co, np.array([np.poly(a) for a in A]), rtol=1e-10)
+
+
+def test_polyroots_random_known_roots():
+    from empact._polyroots import polyroots
+    rng = np.random.default_rng(12345)
+    N = 500
+    # one real root and two complex pairs, moduli log-uniform in [1, 1e4] (the slip range),
+    # damping ratios in [0.01, 0.9]: well separated, so every root must be certified
+    mag = 10 ** rng.uniform(0, 4, (N, 3))
+    zeta = rng.uniform(0.01, 0.9, (N, 2))
+    pairs = mag[:, 1:] * (-zeta + 1j * np.sqrt(1 - zeta**2))
+    roots = np.stack([-mag[:, 0] + 0j, pairs[:, 0], pairs[:, 0].conj(), pairs[:, 1],
+                      pairs[:, 1].conj()], axis=1)
+    coeffs = np.array([np.poly(z).real for z in roots])
+    z, ok = polyroots(coeffs)
+    assert ok.all()
+    for k in range(N):  # every exact root is matched by a computed one to 1e-10 relative
+        err = np.abs(z[k][None, :] - roots[k][:, None]).min(axis=1) / np.abs(roots[k])
+        assert err.max() < 1e-10
+
+
+def test_polyroots_flags_repeated_roots():
+    from empact._polyroots import polyroots
+    c = np.array([np.poly([2.0, 2.0, -3.0, 1j, -1j]).real,  # double root: never certified
+                  np.poly([-1.0, -2.0, -3.0, 1 + 5j, 1 - 5j]).real,  # simple roots
+                  np.poly([0.0, 0.0, -3.0, 1j, -1j]).real])  # exact zeros: deflated, exact
+    z, ok = polyroots(c)
+    assert ok.tolist() == [False, True, True]
+    assert_allclose(np.sort_complex(z[1]), np.sort_complex([-3, -2, -1, 1 - 5j, 1 + 5j]),
+                    rtol=1e-12)
+    assert np.sum(z[2] == 0) == 2
+
+
+def test_map_roots_falls_back_to_eigvals_and_counts(params, monkeypatch):
+    import empact.slip as slip_mod
+    nu, F = np.linspace(0.001, 0.05, 7), np.linspace(2e3, 3e4, 5)
+    ref = stability_map(params, "nu", nu, "F_s", F, base=FIG11, method="reduced")
+    real = slip_mod._reduced_charpoly
+
+    def poisoned(*args):  # points 3 and 11 get a polynomial with a double root
+        co = real(*args)
+        for k in (3, 11):
+            if k < co.shape[0]:
+                co[k] = np.poly([-5.0, -5.0, -1.0, -1 + 9j, -1 - 9j]).real
+        return co
+
+    monkeypatch.setattr(slip_mod, "_reduced_charpoly", poisoned)
+    sm = stability_map(params, "nu", nu, "F_s", F, base=FIG11, method="roots", chunk_size=20)
+    assert sm.n_fallback == 4  # 35 points in chunks of 20 and 15: points 3, 11, 23, 31
+    # the fallback is LAPACK on the (untouched) matrices: the reference path to rounding
+    assert_allclose(sm.max_real, ref.max_real, rtol=1e-9, atol=1e-9)
+    assert_allclose(sm.min_damping, ref.min_damping, rtol=1e-9, atol=1e-9)

@@ -106,7 +106,7 @@ N_STRUCTURAL_ZEROS = 3
 REDUCED_STATES = ("e_tc", "e_ds", "omega_p", "omega_s", "omega_l")
 
 Variable = Literal["r_g", "nu", "F_s", "omega_p"]
-MapMethod = Literal["reduced", "full"]
+MapMethod = Literal["roots", "reduced", "full"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -354,6 +354,33 @@ def _assemble_reduced(J: NDArray[np.float64], K: NDArray[np.float64], r_g: NDArr
     A[:, 3, 3] = -c_s / J_s
     A[:, 4, 1] = k_ds / J_l                   # J_l w_l' = k_ds e_ds
     return A
+
+
+def _reduced_charpoly(J: NDArray[np.float64], K: NDArray[np.float64],
+                      r_g: NDArray[np.float64], rho: NDArray[np.float64],
+                      c_s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Characteristic polynomials of `_assemble_reduced`'s matrices, shape (N, 6), highest
+    power first, monic.
+
+    Closed form ``Q(s) / (J_d J_p J_s J_l)`` (module docstring) with ``P = p2 s^2 + p0``,
+    ``S = s2 s^2 + s0``: ``s P S`` gives the odd powers, the belt term ``c_s [r_g rho (J_d s^2 +
+    k_tc) S + (J_l s^2 + k_ds) P]`` the even ones.  Every coefficient is a sum of positive
+    products (times ``c_s``), so each is exact to a few ulps - no cancellation.
+    """
+    J_d, J_p, J_s, J_l = J
+    k_tc, k_ds = K[0, 0], K[2, 2]
+    p2, p0 = J_d * J_p, k_tc * (J_d + J_p)
+    s2, s0 = J_s * J_l, k_ds * (J_s + J_l)
+    lead = p2 * s2
+    g = r_g * rho
+    co = np.empty((r_g.shape[0], 6))
+    co[:, 0] = 1.0
+    co[:, 1] = c_s * (g * (J_d * s2) + J_l * p2) / lead
+    co[:, 2] = (p2 * s0 + p0 * s2) / lead
+    co[:, 3] = c_s * (g * (J_d * s0 + k_tc * s2) + (J_l * p0 + k_ds * p2)) / lead
+    co[:, 4] = p0 * s0 / lead
+    co[:, 5] = c_s * (g * (k_tc * s0) + k_ds * p0) / lead
+    return co
 
 
 def _assemble(J: NDArray[np.float64], K: NDArray[np.float64], r_g: NDArray[np.float64],
@@ -840,6 +867,10 @@ def zero_locus(params: Params, r_g: ArrayLike, base: SlipOperatingPoint | None =
 # --------------------------------------------------------------------------------------------
 # Stability map
 # --------------------------------------------------------------------------------------------
+#: Certified relative accuracy of every pole of ``stability_map(method="roots")``
+#: (`empact._polyroots`); points that miss it are recomputed with `numpy.linalg.eigvals`.
+_ROOTS_RTOL = 1e-11
+
 @dataclass(frozen=True)
 class StabilityMap:
     """Largest pole real part and smallest damping ratio over a grid of two variables.
@@ -852,6 +883,9 @@ class StabilityMap:
     max_real : largest real part of the non-structural poles [1/s], shape (ny, nx)
     min_damping : smallest damping ratio [-], shape (ny, nx)
     tol : real parts above ``tol`` [1/s] count as unstable
+    method : the method that computed the map ("roots", "reduced" or "full")
+    n_fallback : ``method="roots"`` only: number of points whose polynomial roots were not
+        certified and were recomputed with `numpy.linalg.eigvals` (0 for the other methods)
     """
 
     x_name: str
@@ -862,6 +896,8 @@ class StabilityMap:
     max_real: NDArray[np.float64]
     min_damping: NDArray[np.float64]
     tol: float
+    method: str = "reduced"
+    n_fallback: int = 0
 
     @property
     def unstable(self) -> NDArray[np.bool_]:
@@ -876,7 +912,7 @@ class StabilityMap:
 
 def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variable,
                   y: ArrayLike, *, base: SlipOperatingPoint | None = None,
-                  traction: TractionModel | None = None, method: MapMethod = "reduced",
+                  traction: TractionModel | None = None, method: MapMethod = "roots",
                   chunk_size: int = 4096, workers: int = 1, tol: float = 1e-6) -> StabilityMap:
     """Stability of the slip model over a grid of two operating-point variables.
 
@@ -890,12 +926,19 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
     x, y : their values, shapes (nx,), (ny,)
     base : the other two variables (default: the ``[operating]`` point of `params`)
     traction : traction model (default `traction_from_params(params)`)
-    method : {"reduced", "full"}
+    method : {"roots", "reduced", "full"}
         ``"full"``: the stacked ``A`` of `state_matrices`, shape (chunk, 8, 8), and the three
-        eigenvalues of smallest magnitude dropped as the structural zeros.  ``"reduced"``
-        (default): the stacked matrices of `reduced_matrices`, shape (chunk, 5, 5), whose
-        eigenvalues are exactly the five non-structural ones - no magnitude rule, and about
-        twice as fast.  Both give the same map to rounding.
+        eigenvalues of smallest magnitude dropped as the structural zeros.  ``"reduced"``:
+        the stacked matrices of `reduced_matrices`, shape (chunk, 5, 5), whose eigenvalues
+        are exactly the five non-structural ones - no magnitude rule, and about twice as
+        fast.  ``"roots"`` (default): per point the closed-form characteristic polynomial of
+        the reduced matrix (`_reduced_charpoly`) and its roots by a compiled Aberth-Ehrlich
+        iteration (`empact._polyroots`), each root certified to ``1e-11`` relative by
+        inclusion disks; points that are not certified (repeated or clustered poles) are
+        recomputed with `numpy.linalg.eigvals` on the reduced matrices and counted in
+        ``StabilityMap.n_fallback``.  About 1.5x faster than ``"reduced"``; the first call
+        in a process compiles the numba kernels (seconds) or loads them from numba's
+        on-disk cache (~0.3 s).  All three give the same map to rounding.
     chunk_size : points per eigenvalue call (>= 1)
     workers : threads working on chunks in parallel (>= 1; numpy's eigenvalue routine
         releases the GIL)
@@ -910,8 +953,8 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
     if x_name == y_name:
         raise ParameterError(f"stability map over {x_name!r} twice: choose two different "
                              f"variables of {', '.join(VARIABLES)}")
-    if method not in ("reduced", "full"):
-        raise ParameterError(f"method = {method!r}: choose 'reduced' or 'full'")
+    if method not in ("roots", "reduced", "full"):
+        raise ParameterError(f"method = {method!r}: choose 'roots', 'reduced' or 'full'")
     chunk_size, workers = int(chunk_size), int(workers)
     if chunk_size < 1:
         raise ParameterError(f"chunk_size = {chunk_size!r}: must be >= 1")
@@ -929,6 +972,9 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
     n = nx * yv.size
     max_real = np.empty(n)
     min_damp = np.empty(n)
+    fallbacks: list[int] = []  # one entry per chunk (list.append is thread-safe)
+    if method == "roots":
+        from ._polyroots import polyroots
 
     def work(start: int) -> None:
         idx = np.arange(start, min(start + chunk_size, n))
@@ -939,6 +985,15 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
         if method == "full":
             eig = np.linalg.eigvals(_assemble_A(J, K, r, rho, c_s))
             max_real[idx], min_damp[idx] = stability_measures(eig)
+        elif method == "roots":
+            z, ok = polyroots(_reduced_charpoly(J, K, r, rho, c_s), rtol=_ROOTS_RTOL)
+            mr, mz = _measures(z)
+            bad = np.flatnonzero(~ok)
+            if bad.size:  # not certified: exactly these points by LAPACK, counted
+                mr[bad], mz[bad] = _measures(np.linalg.eigvals(
+                    _assemble_reduced(J, K, r[bad], rho[bad], c_s[bad])))
+            fallbacks.append(int(bad.size))
+            max_real[idx], min_damp[idx] = mr, mz
         else:
             eig = np.linalg.eigvals(_assemble_reduced(J, K, r, rho, c_s))
             max_real[idx], min_damp[idx] = _measures(eig)
@@ -955,4 +1010,4 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
     shape = (yv.size, nx)
     return StabilityMap(x_name=x_name, y_name=y_name, x=xv, y=yv, base=base,
                         max_real=max_real.reshape(shape), min_damping=min_damp.reshape(shape),
-                        tol=float(tol))
+                        tol=float(tol), method=method, n_fallback=int(sum(fallbacks)))
