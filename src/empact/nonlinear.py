@@ -384,6 +384,8 @@ def nonlinear_model(params: Params, options: ModelOptions | None = None, **kwarg
     options : ModelOptions, optional
         All choices at once; or give them as keywords (``damping="none"``, ``belt="locked"``,
         ...; see `ModelOptions`).  Unknown keywords are an error.
+    **kwargs
+        The `ModelOptions` fields as keywords (instead of `options`).
 
     Examples
     --------

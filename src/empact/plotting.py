@@ -107,6 +107,8 @@ def plot_bode(responses: Sequence[FrequencyResponse], pairs: Sequence[tuple[str,
     ----------
     responses : the responses to overlay (one line style each, labelled by ``label``)
     pairs : ``(output, input)`` pairs, one column of panels each
+    title : figure title
+    phase : draw the phase row under the magnitude row
     """
     rows = 2 if phase else 1
     fig, axes = new_figure(rows, len(pairs), size=(4.2 * len(pairs) + 1, 2.6 * rows + 0.8),

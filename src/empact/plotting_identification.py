@@ -23,6 +23,7 @@ def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None 
     est : the estimate
     pairs : ``(output, input)`` names (default: all)
     models : model responses to overlay (dashed), with the same signal names
+    title : figure title
     fmin : lowest frequency shown [Hz] (default: the first non-zero bin)
     """
     pairs = list(pairs or [(o, i) for i in est.inputs for o in est.outputs])

@@ -91,6 +91,7 @@ class Scenario:
     omega_min : float
         Stop when omega_p falls to this [rad/s].
     max_steps : int
+        Give up (incomplete result) after this many integration steps.
     """
 
     name: str
@@ -297,6 +298,8 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
         Largest step [s].
     omega_min : float
         Stop when omega_p falls to this [rad/s].
+    max_steps : int
+        Give up (incomplete result) after this many integration steps.
     progress : bool
         A tqdm progress bar on stderr.
 

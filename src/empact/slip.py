@@ -765,6 +765,7 @@ def pole_sweep(params: Params, name: Variable, values: ArrayLike,
 
     Parameters
     ----------
+    params : the parameter set
     name : "nu", "F_s", "omega_p" or "r_g"
     values : values of that variable, shape (n,)
     base : the other variables (default: the ``[operating]`` point of `params`)
@@ -922,6 +923,7 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
 
     Parameters
     ----------
+    params : the parameter set
     x_name, y_name : two different variables of "nu", "F_s", "omega_p", "r_g"
     x, y : their values, shapes (nx,), (ny,)
     base : the other two variables (default: the ``[operating]`` point of `params`)

@@ -1,0 +1,1 @@
+"""Data files shipped with empact: default parameters, calibration targets, scenarios."""
