@@ -65,6 +65,8 @@ Compute only; figures are drawn by `empact.plotting_slip`.
 """
 from __future__ import annotations
 
+import os
+
 import math
 from dataclasses import dataclass
 from typing import Literal, Sequence
@@ -914,7 +916,7 @@ class StabilityMap:
 def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variable,
                   y: ArrayLike, *, base: SlipOperatingPoint | None = None,
                   traction: TractionModel | None = None, method: MapMethod = "roots",
-                  chunk_size: int = 4096, workers: int = 1, tol: float = 1e-6) -> StabilityMap:
+                  chunk_size: int = 4096, workers: int | None = None, tol: float = 1e-6) -> StabilityMap:
     """Stability of the slip model over a grid of two operating-point variables.
 
     The grid (``len(y) * len(x)`` points) is processed in chunks of `chunk_size` points: for
@@ -942,8 +944,8 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
         in a process compiles the numba kernels (seconds) or loads them from numba's
         on-disk cache (~0.3 s).  All three give the same map to rounding.
     chunk_size : points per eigenvalue call (>= 1)
-    workers : threads working on chunks in parallel (>= 1; numpy's eigenvalue routine
-        releases the GIL)
+    workers : threads working on chunks in parallel (>= 1; default: one per CPU core; the
+        compiled root finder and numpy's eigenvalue routine release the GIL)
     tol : real parts above this [1/s] count as unstable (absorbs rounding only)
 
     Returns
@@ -957,6 +959,7 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
                              f"variables of {', '.join(VARIABLES)}")
     if method not in ("roots", "reduced", "full"):
         raise ParameterError(f"method = {method!r}: choose 'roots', 'reduced' or 'full'")
+    workers = (os.cpu_count() or 1) if workers is None else workers
     chunk_size, workers = int(chunk_size), int(workers)
     if chunk_size < 1:
         raise ParameterError(f"chunk_size = {chunk_size!r}: must be >= 1")

@@ -316,7 +316,7 @@ def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, plot) 
               show_default=True, help="Stacked 5x5 reduced matrices or the full 8x8 ones.")
 @click.option("--chunk", "chunk", type=int, default=4096, show_default=True,
               help="Points per batched eigenvalue call (bounds memory).")
-@click.option("--workers", type=int, default=1, show_default=True, help="Threads.")
+@click.option("--workers", type=int, default=None, help="Threads (default: one per CPU core).")
 @json_option
 @plot_option
 def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk, workers,
