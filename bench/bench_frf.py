@@ -36,7 +36,7 @@ def main():
     err = np.max(np.abs(ours.H - H_ref).max(axis=(0, 1)) / np.abs(H_ref).max(axis=(0, 1)))
     print(f"machine: {platform.machine()}, {platform.processor() or 'cpu'}, python "
           f"{platform.python_version()}, numpy {np.__version__}, control {control.__version__}")
-    print(f"2000 frequencies, 2 inputs x 2 outputs, 12 states (best of 7)")
+    print("2000 frequencies, 2 inputs x 2 outputs, 12 states (best of 7)")
     print(f"empact vectorised FRF:        {1e3 * t_ours:8.2f} ms")
     print(f"control.frequency_response:   {1e3 * t_ctrl:8.2f} ms")
     print(f"ratio (control / empact):     {t_ctrl / t_ours:8.1f}x   (target >= 5x)")

@@ -18,7 +18,7 @@ KNOWN_DEVIATIONS = (
     "every mode and ratio):",
     # ... and the 48 Hz zeros lie just below their pole, not above it
     "T_mp -> nu):",
-    # Sec. 4 / Fig. 14: the servo angle falls with -1.35 rather than -1 between 1 and 2 Hz
+    # Sec. 4 / Fig. 14: the servo angle falls with -1.73 rather than -1 between 1 and 2 Hz
     "Slope -1 (within 0.35) between 1 and 2 Hz, T_mp -> theta_mp",
 )
 

@@ -10,12 +10,10 @@ from empact import paper
 from empact.actuation import actuation_model
 from empact.cli import main
 from empact.driveline import driveline_model
-from empact.linearize import linearize, plant, transmission_zeros
 from empact.nmp import belt_length_change, nmp_analysis
 from empact.nonlinear import ModelOptions, nonlinear_model, rhs
 from empact.params import ParameterError
-from empact.simulate import (example_path, load_scenario, run_scenario, scenario_from_dict,
-                             simulate)
+from empact.simulate import example_path, load_scenario, run_scenario, simulate
 from empact.trim import TrimError, trim
 
 OP = dict(nu=0.004, F_s=10e3)  # on the rising branch of the default traction curve

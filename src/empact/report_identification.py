@@ -147,12 +147,12 @@ def fig14(ctx: Context) -> str:
               + "".join(f"<li>Slope -1 (within 0.35) between 1 and 2 Hz, {k}: "
                         f"{verdict(abs(slopes[k][0] + 1) < 0.35)}</li>"
                         for k in ("T_mp -> theta_mp", "T_ms -> theta_ms"))
-              + f"</ul><p>In this model the low-frequency response of the servo angles is "
-              f"set by the belt-preload geometric stiffness of the shift mode (about 0.4 Hz "
-              f"without friction) and by the spindle friction, which holds the spindles so that "
-              f"the worm and chain compliance remain: the magnitude is nearly flat between 2 and "
-              f"10 Hz rather than falling with -1.</p>"
-              f"<p>At nu0 = 0 the load torque is zero, so the slip responds only weakly to the "
-              f"servo torques (about -105 dB re 1/(N m) below 2 Hz); a realistic slip "
-              f"resolution of 1e-5 buries it in noise, as the paper found, so the rig here "
-              f"assumes 1e-7.</p>")
+              + "</ul><p>In this model the low-frequency response of the servo angles is "
+              "set by the belt-preload geometric stiffness of the shift mode (about 0.4 Hz "
+              "without friction) and by the spindle friction, which holds the spindles so that "
+              "the worm and chain compliance remain: the magnitude is nearly flat between 2 and "
+              "10 Hz rather than falling with -1.</p>"
+              "<p>At nu0 = 0 the load torque is zero, so the slip responds only weakly to the "
+              "servo torques (about -105 dB re 1/(N m) below 2 Hz); a realistic slip "
+              "resolution of 1e-5 buries it in noise, as the paper found, so the rig here "
+              "assumes 1e-7.</p>")
