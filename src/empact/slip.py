@@ -114,34 +114,28 @@ MapMethod = Literal["roots", "reduced", "full"]
 # --------------------------------------------------------------------------------------------
 # Operating point and eqs. 1-2
 # --------------------------------------------------------------------------------------------
+def _check(name: str, value: ArrayLike, bad_fn, allowed: str) -> NDArray[np.float64]:
+    """`value` as an array, or a `ParameterError` naming the first bad entry and `allowed`."""
+    a = np.asarray(value, float)
+    bad = ~np.isfinite(a) | bad_fn(a)
+    if np.any(bad):
+        raise ParameterError(f"{name} = {float(a[bad].flat[0]):g}: allowed range is {allowed}")
+    return a
+
+
 def _check_speed(omega_p: ArrayLike) -> NDArray[np.float64]:
-    w = np.asarray(omega_p, float)
-    if np.any(w == 0):
+    if np.any(np.asarray(omega_p, float) == 0):
         raise ParameterError("omega_p = 0: the slip nu = 1 - omega_s / (r_g omega_p) (eq. 2) is "
                              "undefined at standstill; allowed range is (0, inf) [rad/s]")
-    bad = ~np.isfinite(w) | (w < 0)
-    if np.any(bad):
-        raise ParameterError(f"omega_p = {float(w[bad].flat[0]) if w.ndim else float(w):g}: "
-                             "allowed range is (0, inf) [rad/s]")
-    return w
+    return _check("omega_p", omega_p, lambda w: w < 0, "(0, inf) [rad/s]")
 
 
 def _check_clamp(F_s: ArrayLike) -> NDArray[np.float64]:
-    f = np.asarray(F_s, float)
-    bad = ~np.isfinite(f) | (f < 0)
-    if np.any(bad):
-        raise ParameterError(f"F_s = {float(f[bad].flat[0]) if f.ndim else float(f):g}: allowed "
-                             "range is [0, inf) [N]")
-    return f
+    return _check("F_s", F_s, lambda f: f < 0, "[0, inf) [N]")
 
 
 def _check_slip_value(nu: ArrayLike) -> NDArray[np.float64]:
-    n = np.asarray(nu, float)
-    bad = ~np.isfinite(n) | (np.abs(n) >= 1)
-    if np.any(bad):
-        raise ParameterError(f"nu = {float(n[bad].flat[0]) if n.ndim else float(n):g}: allowed "
-                             "range is (-1, 1) (a fraction: 0.01 is 1 %)")
-    return n
+    return _check("nu", nu, lambda n: np.abs(n) >= 1, "(-1, 1) (a fraction: 0.01 is 1 %)")
 
 
 @dataclass(frozen=True)
