@@ -308,6 +308,9 @@ def _state_jacobian(x, u, p, ix, A):
 def _input_direction(x, u, du, p, ix, out):
     """out = (df/du) du by one complex step (the explicit time derivative for Rosenbrock)."""
     n = x.shape[0]
+    if not np.any(du != 0.0):  # inputs constant on this piece (the common case)
+        out[:] = 0.0
+        return
     h = 1e-30
     xc = x.astype(np.complex128)
     uc = u.astype(np.complex128) + 1j * h * du

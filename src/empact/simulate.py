@@ -368,7 +368,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
         message = (f"stopped at t = {t:.6g} s: {STATUS[status]}; state: {state}")
     keep = slice(0, max(filled, 1))
     tt = samples[keep]
-    U = np.array([_inputs_at(ti, sig_t, sig_v, sig_n) for ti in tt])
+    U = _inputs_at(tt, sig_t, sig_v, sig_n)
     return SimulationResult(t=tt, x=X[keep], y=Y[keep], u=U, states=model.states,
                             outputs=model.outputs, inputs=model.inputs, complete=complete,
                             message=message, scenario=name,
@@ -376,20 +376,22 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
                                    "t_end": t})
 
 
-def _inputs_at(t: float, sig_t, sig_v, sig_n) -> NDArray[np.float64]:
-    """Right-continuous value of every input signal at time t."""
-    u = np.empty(len(sig_n))
+def _inputs_at(t, sig_t, sig_v, sig_n) -> NDArray[np.float64]:
+    """Right-continuous value of every input signal at time(s) `t`.
+
+    A scalar `t` gives shape (n_inputs,); an array of shape (n_t,) gives (n_t, n_inputs).
+    """
+    tt = np.atleast_1d(np.asarray(t, float))
+    u = np.empty((tt.size, len(sig_n)))
     for k, n in enumerate(sig_n):
         ts, vs = sig_t[k, :n], sig_v[k, :n]
-        if t < ts[0]:
-            u[k] = vs[0]
-        elif t >= ts[-1]:
-            u[k] = vs[-1]
-        else:
-            i = np.searchsorted(ts, t, side="right") - 1
-            dt = ts[i + 1] - ts[i]
-            u[k] = vs[i] + (vs[i + 1] - vs[i]) * (t - ts[i]) / dt if dt > 0 else vs[i + 1]
-    return u
+        i = np.clip(np.searchsorted(ts, tt, side="right") - 1, 0, max(n - 2, 0))
+        j = np.minimum(i + 1, n - 1)
+        dt = ts[j] - ts[i]
+        frac = np.divide(tt - ts[i], dt, out=np.ones_like(tt), where=dt > 0)
+        u[:, k] = np.where(tt < ts[0], vs[0], np.where(
+            tt >= ts[-1], vs[-1], vs[i] + (vs[j] - vs[i]) * frac))
+    return u[0] if np.ndim(t) == 0 else u
 
 
 def scenario_model(scenario: Scenario, params: Params) -> tuple[EmpactModel, TrimResult]:
