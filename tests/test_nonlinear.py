@@ -265,9 +265,12 @@ def test_nmp_claim_holds_for_equal_translation_and_speed_slip(params):
     # the traction slope at 0.4 % slip, not a calibrated target)
     assert len(real[0]) == 1 and 2 < real[0][0] < 10
     assert res.n_rhp[2] == 0  # r_g = 2: no right-half-plane zero at all
-    # with eq. 2's slip the same kinematics have no real RHP zero at any ratio
+    # with eq. 2's slip the same kinematics have no real RHP zero at any ratio, but complex
+    # RHP pairs at every ratio (measured 0.77 +- 4.11j Hz at 0.5, three pairs at 2): the
+    # paper's pattern is absent with the slip the model outputs
     eq2 = nmp_analysis(params, [0.5, 1.0, 2.0], kinematics="equal-translation")
     assert np.all(eq2.n_rhp_real == 0)
+    assert np.all(eq2.n_rhp >= 2)
     with pytest.raises(ValueError, match="slip = 'nu'"):
         nmp_analysis(params, [1.0], slip="nu")
 
