@@ -10,7 +10,7 @@ import time
 import control
 import numpy as np
 
-from empact.actuation import actuation_model
+from empact.linear.actuation import actuation_model
 from empact.params import default_params
 
 

@@ -10,12 +10,9 @@ Timed, in this process (best of `REPEATS` for the batched paths):
   and ONE `numpy.linalg.eigvals` call; the three structural zeros dropped by magnitude.
 * ``stability_map(method="reduced")``: the same with the exact 5 x 5 reduction
   (structural zeros removed analytically), one thread and ``os.cpu_count()`` threads.
-* ``stability_map(method="roots")`` (the default): per point the closed-form characteristic
-  polynomial of the 5 x 5 reduced matrix and its roots by a compiled (numba) Aberth-Ehrlich
-  iteration with a certificate; uncertified points fall back to `numpy.linalg.eigvals` (count
-  printed).  One thread and ``os.cpu_count()`` threads.  The numba kernels are compiled (or
-  loaded from the on-disk cache) by an untimed warm-up call before the timing; that warm-up
-  time is printed separately.
+  (The compiled polynomial-root path of issue 3 was removed in issue 9: a cold process, which
+  is how the CLI and the report use the map, paid 1.3-4.2 s for it against 0.8 s for this
+  path; see RESULTS.md.)
 * the loop: for every point ``control.ss(A, B, C, D).poles()`` on the *same* 8 x 8 matrices
   (built beforehand by `state_matrices`, not timed), then the same stability measures.  The
   batched timings include building the matrices; the loop's do not.
@@ -32,10 +29,8 @@ import time
 import control
 import numpy as np
 
-from empact._polyroots import warm_up
-
-from empact.params import default_params
-from empact.slip import SlipOperatingPoint, stability_map, stability_measures, state_matrices
+from empact.params import OperatingPoint, default_params
+from empact.slip import stability_map, stability_measures, state_matrices
 
 N_SIDE, REPEATS = 200, 3
 
@@ -51,22 +46,16 @@ def best_time(fn, repeats: int = REPEATS):
 
 def main() -> None:
     params = default_params()
-    base = SlipOperatingPoint(r_g=1.0, nu=0.01, F_s=1e4, omega_p=300.0)
+    base = OperatingPoint(r_g=1.0, nu=0.01, F_s=1e4, omega_p=300.0)
     nu = np.linspace(0.0005, 0.06, N_SIDE)
     r_g = np.linspace(0.43, 2.25, N_SIDE)
     n = nu.size * r_g.size
     cpus = os.cpu_count() or 1
 
-    t0 = time.perf_counter()
-    warm_up()  # numba compile / cache load: NOT in the timings below
-    t_compile = time.perf_counter() - t0
-
     runs = {
         "batched full 8x8, 1 thread": dict(method="full"),
         "batched reduced 5x5, 1 thread": dict(method="reduced"),
         f"batched reduced 5x5, {cpus} threads": dict(method="reduced", workers=cpus),
-        "roots (Aberth, numba), 1 thread": dict(method="roots"),
-        f"roots (Aberth, numba), {cpus} threads": dict(method="roots", workers=cpus),
     }
     timings, maps = {}, {}
     for label, kw in runs.items():
@@ -86,8 +75,7 @@ def main() -> None:
     loop_rate = n / t_loop
 
     print(f"stability map {N_SIDE} x {N_SIDE} = {n} points (nu x r_g), control "
-          f"{control.__version__}, numpy {np.__version__}, {cpus} CPUs; numba warm-up "
-          f"(compile or cache load, not timed) {t_compile:.2f} s")
+          f"{control.__version__}, numpy {np.__version__}, {cpus} CPUs")
     print(f"{'path':38s} {'time [s]':>9s} {'points/s':>11s} {'vs loop':>8s}  agreement")
     print(f"{'loop: control.ss(...).poles() per point':38s} {t_loop:9.3f} {loop_rate:11.0f} "
           f"{1.0:7.1f}x  (reference, full loop, matrices prebuilt)")
@@ -99,8 +87,7 @@ def main() -> None:
         same = np.array_equal(sm.unstable.ravel(), max_real > sm.tol)
         print(f"{label:38s} {t:9.3f} {n / t:11.0f} {t_loop / t:7.1f}x  max |d max_real| / "
               f"max |max_real| = {d_re:.1e}, max |d min_damping| = {d_z:.1e}, same unstable "
-              f"set: {same}" + (f", eigvals fallbacks: {sm.n_fallback}"
-                                 if sm.method == "roots" else ""))
+              f"set: {same}")
 
 
 if __name__ == "__main__":

@@ -1,10 +1,8 @@
 """Traction curves mu(nu, r_g): analytic and tabulated models (issue 3, item 1; paper Fig. 10)."""
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from numpy.testing import assert_allclose
 
-from empact.cli import main
 from empact.params import ParameterError
 from empact.traction import (MagicFormulaTraction, TabulatedTraction, load_traction,
                              traction_curves, traction_from_params)
@@ -167,17 +165,3 @@ def test_bad_files_are_refused(tmp_path, name, text, match):
     path.write_text(text)
     with pytest.raises(ParameterError, match=match):
         load_traction(path)
-
-
-def test_cli_traction_table_and_bad_table(tmp_path):
-    good = tmp_path / "good.csv"
-    good.write_text("r_g,nu,mu\n1,0,0\n1,0.01,0.09\n1,0.05,0.1\n")
-    res = CliRunner().invoke(main, ["slip", "traction", "--traction", str(good), "--ratio", "1",
-                                    "--slip", "0:0.05:6", "--json"])
-    assert res.exit_code == 0, res.output
-    bad = tmp_path / "bad.csv"
-    bad.write_text("r_g,nu,mu\n1,0,0\n1,0.02,0.09\n1,0.01,0.1\n")
-    res = CliRunner().invoke(main, ["slip", "poles", "--traction", str(bad)])
-    assert res.exit_code == 2
-    lines = res.output.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error:") and "nu must increase" in lines[0]

@@ -1,2 +1,105 @@
-"""empact: dynamic analysis and simulation of electromechanically actuated pushbelt CVTs."""
+"""empact: dynamic analysis and simulation of electromechanically actuated pushbelt CVTs.
+
+After "Dynamic analysis of the Empact CVT: ratio and slip dependent, non-minimum phase
+dynamics".  SI units throughout (rad, m, kg, s, N); Hz, degrees and dB only for display.
+
+Parameters and operating points
+===============================
+   load_params        -- a TOML parameter file over the shipped set
+   default_params     -- the shipped, calibrated set
+   save_params        -- write a parameter set (TOML)
+   Params             -- a frozen, validated parameter set
+   OperatingPoint     -- r_g, nu, F_s, omega_p (the ``[operating]`` table)
+   ParameterError     -- the error of every bad value, file or option (one line)
+
+Variator geometry and traction (eqs. 1, 4-6; Fig. 10)
+=====================================================
+   variator_state     -- radii, wrap angle, sheave translations, belt length at ratios
+   belt_length        -- eq. 6
+   ratio_range        -- the variator's geometric ratio range
+   traction_from_params, load_traction, traction_curves
+                      -- analytic and tabulated traction curves mu(nu, r_g)
+
+Linear models (Sec. 2.1, 2.2)
+=============================
+   actuation_model    -- servos, worm, epicyclic sets, screws, sheaves, belt (Fig. 3)
+   driveline_model    -- the test-bench driveline (Fig. 7)
+   LumpedModel        -- M, C, K from kinematic rows: modes, FRFs, state space
+   calibrate          -- fit parameters to target eigenfrequencies
+
+Slip dynamics (Sec. 2.2, Figs. 9-13)
+====================================
+   slip_model         -- the driveline with the linearised belt damper (eq. 3)
+   belt_root_locus    -- poles over c_b (Fig. 9)
+   pole_sweep         -- poles over an operating variable (Fig. 11)
+   zero_locus         -- zeros of F_s -> nu over the ratio (Fig. 13)
+   stability_map      -- stability over two operating variables
+
+Nonlinear model (Secs. 2.3, 3)
+==============================
+   nonlinear_model    -- the whole CVT (compiled right-hand side)
+   trim               -- steady operating points
+   linearize, plant   -- exact linearisation; the (T_mp, T_ms) -> (r_g, nu) plant
+   nmp_analysis       -- non-minimum-phase zeros of T_mp -> nu (Sec. 2.3)
+   simulate, run_scenario, load_scenario
+                      -- time simulation
+
+Identification and experiments (Secs. 3, 4)
+===========================================
+   realize_steps      -- state-space realisation from step responses
+   estimate_frf       -- H1/H2 FRFs with coherence from records
+   identify_plant     -- Fig. 2 by realisation of the nonlinear model's steps
+   run_rig, rig_frf   -- the virtual test rig (Fig. 14)
+
+LTI tools
+=========
+   frequency_response -- C (jwI - A)^-1 B + D, vectorised
+   transmission_zeros -- invariant zeros
+   root_locus         -- eigenvalues along any parameter, continuous branches
+
+The report (`empact.report.build_report`), the figures (`empact.plotting`) and the checked
+claims (`empact.reproduction`) are subpackages.  Names are imported on first use, so
+``import empact`` is fast.
+"""
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
 __version__ = "0.1.0"
+
+#: public name -> module that defines it
+_CATALOGUE = {
+    "load_params": "params", "default_params": "params", "save_params": "params",
+    "Params": "params", "OperatingPoint": "params", "ParameterError": "errors",
+    "variator_state": "geometry", "belt_length": "geometry", "ratio_range": "geometry",
+    "traction_from_params": "traction", "load_traction": "traction",
+    "traction_curves": "traction",
+    "actuation_model": "linear.actuation", "driveline_model": "linear.driveline",
+    "LumpedModel": "linear.lumped", "calibrate": "linear.calibration",
+    "slip_model": "slip.model", "belt_root_locus": "slip.loci", "pole_sweep": "slip.loci",
+    "zero_locus": "slip.loci", "stability_map": "slip.stability",
+    "nonlinear_model": "nonlinear.model", "trim": "nonlinear.trim",
+    "linearize": "nonlinear.linearize", "plant": "nonlinear.linearize",
+    "nmp_analysis": "nonlinear.nmp", "simulate": "nonlinear.simulate",
+    "run_scenario": "nonlinear.simulate", "load_scenario": "nonlinear.scenario",
+    "realize_steps": "identification.realization",
+    "estimate_frf": "identification.frf_estimation",
+    "identify_plant": "experiments.plant_id", "run_rig": "experiments.rig",
+    "rig_frf": "experiments.rig",
+    "frequency_response": "lti", "transmission_zeros": "lti", "root_locus": "lti",
+}
+
+__all__ = sorted(_CATALOGUE)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _CATALOGUE:
+        value = getattr(importlib.import_module(f".{_CATALOGUE[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'empact' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_CATALOGUE))

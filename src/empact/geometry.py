@@ -7,17 +7,26 @@ Conventions (SI): running radii ``R_p`` (primary) and ``R_s`` (secondary) [m], g
 ``x = (R - R0) tan(beta)`` with ``R0 = R_min``, and ``Delta_x = x_p - x_s = a sin(phi) tan(beta)``
 (eq. 5).  Exact identity used throughout: ``dL/dR_p = pi + 2 phi``, ``dL/dR_s = pi - 2 phi``.
 
-All functions accept arrays and broadcast.
+All functions accept arrays and broadcast.  The root finds are Newton iterations on the exact
+derivatives above (vectorised over ratios; bracketed for the range): no scipy import, which
+keeps ``empact params`` fast (see ``bench/bench_geometry.py`` for the comparison with
+``scipy.optimize``).  The compiled nonlinear kernel has a numba twin of `belt_length`
+(`empact.nonlinear._kernel.belt_length`), tested equal.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .params import ParameterError, VariatorParams
+from ._validate import check_values
+from .errors import ParameterError
+
+if TYPE_CHECKING:  # annotations only: params imports this module
+    from .params import VariatorParams
 
 __all__ = ["wrap_angle", "belt_length", "radii", "ratio_range", "VariatorState", "variator_state",
            "check_ratio"]
@@ -29,9 +38,13 @@ def wrap_angle(R_p: ArrayLike, R_s: ArrayLike, a: float) -> NDArray[np.float64]:
 
 
 def belt_length(R_p: ArrayLike, R_s: ArrayLike, a: float) -> NDArray[np.float64]:
-    """Belt length ``L = 2 a cos(phi) + (pi + 2 phi) R_p + (pi - 2 phi) R_s`` [m] (eq. 6)."""
+    """Belt length ``L = 2 a cos(phi) + (pi + 2 phi) R_p + (pi - 2 phi) R_s`` [m] (eq. 6).
+
+    The only implementation of eq. 6 outside the compiled kernel (which has a numba twin).
+    """
     phi = wrap_angle(R_p, R_s, a)
-    return 2 * a * np.cos(phi) + (np.pi + 2 * phi) * R_p + (np.pi - 2 * phi) * R_s
+    return 2 * a * np.cos(phi) + (np.pi + 2 * phi) * np.asarray(R_p, float) \
+        + (np.pi - 2 * phi) * np.asarray(R_s, float)
 
 
 def radii(r_g: ArrayLike, L_belt: float, a: float, *, tol: float = 1e-13,
@@ -39,7 +52,8 @@ def radii(r_g: ArrayLike, L_belt: float, a: float, *, tol: float = 1e-13,
     """Running radii ``(R_p, R_s)`` [m] for ratio(s) `r_g` at belt length `L_belt` [m].
 
     Solves ``L(r_g R_s, R_s) = L_belt`` for ``R_s`` by Newton's method (vectorised), with the
-    exact derivative ``dL/dR_s = r_g (pi + 2 phi) + (pi - 2 phi)``.
+    exact derivative ``dL/dR_s = r_g (pi + 2 phi) + (pi - 2 phi)``, from the exact solution
+    for ``phi = 0``.
 
     Raises
     ------
@@ -47,25 +61,45 @@ def radii(r_g: ArrayLike, L_belt: float, a: float, *, tol: float = 1e-13,
         If `r_g` is not positive or the iteration does not converge (belt cannot span the
         pulleys at that ratio).
     """
-    r = np.asarray(r_g, float)
-    if np.any(~np.isfinite(r)) or np.any(r <= 0):
-        raise ParameterError(f"r_g = {r_g!r}: must be a positive finite ratio")
+    r = check_values("r_g", r_g, 0.0, lo_open=True)
     R_s = (L_belt - 2 * a) / (np.pi * (1 + r))  # exact for phi = 0
-    for _ in range(max_iter):
-        R_p = r * R_s
-        phi = wrap_angle(R_p, R_s, a)
-        f = 2 * a * np.cos(phi) + (np.pi + 2 * phi) * R_p + (np.pi - 2 * phi) * R_s - L_belt
-        step = f / (r * (np.pi + 2 * phi) + (np.pi - 2 * phi))
-        R_s = R_s - step
-        if np.all(np.abs(step) <= tol * L_belt):
-            break
-    else:
-        raise ParameterError(f"r_g = {r_g!r}: belt geometry did not converge (L_belt = {L_belt}, "
-                             f"a = {a})")
+    with np.errstate(invalid="ignore"):
+        for _ in range(max_iter):
+            R_p = r * R_s
+            phi = wrap_angle(R_p, R_s, a)
+            f = 2 * a * np.cos(phi) + (np.pi + 2 * phi) * R_p + (np.pi - 2 * phi) * R_s - L_belt
+            step = f / (r * (np.pi + 2 * phi) + (np.pi - 2 * phi))
+            R_s = R_s - step
+            if np.all(np.abs(step) <= tol * L_belt):
+                break
+        else:
+            R_s = np.full_like(R_s, np.nan)
     if np.any(~np.isfinite(R_s)):
-        raise ParameterError(f"r_g = {r_g!r}: no belt geometry at this ratio "
-                             f"(L_belt = {L_belt}, a = {a})")
+        bad = r[~np.isfinite(R_s)].flat[0] if r.ndim else float(r)
+        raise ParameterError(f"r_g = {bad:g}: no belt geometry at this ratio "
+                             f"(L_belt = {L_belt:g} m, a = {a:g} m)")
     return r * R_s, R_s
+
+
+def _bracketed_newton(f: Callable[[float], float], df: Callable[[float], float], lo: float,
+                      hi: float, tol: float) -> float:
+    """Root of `f` in ``[lo, hi]`` (``f(lo) < 0 < f(hi)``): Newton steps, bisection whenever a
+    step would leave the bracket."""
+    x = 0.5 * (lo + hi)
+    for _ in range(200):
+        fx = f(x)
+        if fx < 0:
+            lo = x
+        else:
+            hi = x
+        d = df(x)
+        x_new = x - fx / d if d > 0 else 0.5 * (lo + hi)
+        if not lo < x_new < hi:
+            x_new = 0.5 * (lo + hi)
+        if abs(x_new - x) <= tol or hi - lo <= tol:
+            return x_new
+        x = x_new
+    return x
 
 
 @lru_cache(maxsize=64)
@@ -75,24 +109,27 @@ def ratio_range(variator: VariatorParams) -> tuple[float, float]:
     At the largest ratio either ``R_s = R_min`` or ``R_p = R_max``, whichever binds first; the
     smallest ratio is the mirror image (eq. 6 is symmetric under exchanging the pulleys).
     """
-    from scipy.optimize import brentq
-
     v = variator
-    L = lambda R_p, R_s: float(belt_length(R_p, R_s, v.a)) - v.L_belt  # noqa: E731
     R_med = (v.L_belt - 2 * v.a) / (2 * np.pi)
-    # R_s = R_min: find R_p; R_p = R_max: find R_s; keep the smaller ratio of the two.
+    tol = 1e-15 * v.L_belt
     candidates = []
+    # R_s = R_min: dL/dR_p = pi + 2 phi
     upper = v.R_min + v.a * (1 - 1e-12)  # arcsin domain of eq. 4
-    if L(R_med, v.R_min) < 0 < L(upper, v.R_min):
-        R_p = brentq(lambda x: L(x, v.R_min), R_med, upper)
+    f = lambda x: float(belt_length(x, v.R_min, v.a)) - v.L_belt  # noqa: E731
+    if f(R_med) < 0 < f(upper):
+        R_p = _bracketed_newton(f, lambda x: np.pi + 2 * float(wrap_angle(x, v.R_min, v.a)),
+                                R_med, upper, tol)
         candidates.append(R_p / v.R_min)
+    # R_p = R_max: dL/dR_s = pi - 2 phi; L decreases as R_s falls, so solve -L
     lower = max(0.0, v.R_max - v.a * (1 - 1e-12))
-    if L(v.R_max, lower) < 0 < L(v.R_max, R_med):
-        R_s = brentq(lambda x: L(v.R_max, x), lower, R_med)
+    g = lambda x: float(belt_length(v.R_max, x, v.a)) - v.L_belt  # noqa: E731
+    if g(lower) < 0 < g(R_med):
+        R_s = _bracketed_newton(g, lambda x: np.pi - 2 * float(wrap_angle(v.R_max, x, v.a)),
+                                lower, R_med, tol)
         candidates.append(v.R_max / R_s)
     if not candidates:
-        raise ParameterError(f"variator: no ratio range for R_min = {v.R_min}, R_max = {v.R_max}, "
-                             f"L_belt = {v.L_belt}, a = {v.a}")
+        raise ParameterError(f"variator: no ratio range for R_min = {v.R_min:g}, R_max = "
+                             f"{v.R_max:g}, L_belt = {v.L_belt:g}, a = {v.a:g} m")
     r_max = min(candidates)
     return 1.0 / r_max, r_max
 

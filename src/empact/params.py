@@ -9,7 +9,8 @@ A parameter set has one section per concept::
     [damping.large]
     [driveline]         inertias and stiffnesses of the test-bench driveline (Fig. 7)
     [traction]          traction curve mu(nu, r_g) (Fig. 10)
-    [operating]         a default operating point (r_g, nu, F_s, omega_p)
+    [operating]         the default operating point (r_g, nu, F_s, omega_p), used by every
+                        analysis that is not given one (slip model, trim, plants, NMP, Fig. 2)
 
 All values are SI (radians, metres, kilograms, seconds).  The shipped set
 (`default_params`) is the result of ``empact calibrate`` on the paper's
@@ -22,42 +23,41 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 import tomllib
-from dataclasses import dataclass, field, fields, asdict
+from dataclasses import asdict, dataclass, field, fields, replace
 from importlib import resources
-from pathlib import Path
 from typing import Any, Mapping
 
 import tomli_w
 
+from ._io import atomic_write_text
+from ._validate import check_choice, check_number, interval
+from .errors import ParameterError
+from .geometry import ratio_range
+
 __all__ = [
     "ParameterError", "VariatorParams", "ActuationParams", "DampingLevel", "DampingParams",
     "DrivelineParams", "TractionParams", "OperatingPoint", "Params", "default_params",
-    "load_params", "save_params", "DAMPING_LEVELS",
+    "load_params", "save_params", "dumps_params", "read_toml", "DAMPING_LEVELS",
+    "OPERATING_VARIABLES",
 ]
 
 DAMPING_LEVELS = ("none", "moderate", "large")
 
 
-class ParameterError(ValueError):
-    """A parameter value, key or file is not acceptable (one-line message)."""
-
-
 def _p(unit: str, doc: str, lo: float = 0.0, hi: float = math.inf, *, lo_open: bool = True,
-       hi_open: bool = False) -> Any:
+       hi_open: bool = False, note: str = "") -> Any:
     """Field spec: a float with unit, description and an allowed interval."""
-    return field(metadata=dict(unit=unit, doc=doc, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open))
+    return field(metadata=dict(unit=unit, doc=doc, lo=lo, hi=hi, lo_open=lo_open,
+                               hi_open=hi_open, note=note))
 
 
 def _interval(meta: Mapping[str, Any]) -> str:
-    lo = "(" if meta["lo_open"] else "["
-    hi = ")" if meta["hi_open"] or math.isinf(meta["hi"]) else "]"
-    return f"{lo}{meta['lo']:g}, {meta['hi']:g}{hi}"
+    return interval(meta["lo"], meta["hi"], lo_open=meta["lo_open"], hi_open=meta["hi_open"])
 
 
 class _Section:
-    """Mixin: range-checks every float field after construction."""
+    """Mixin: range-checks every float field after construction (`empact._validate`)."""
 
     _name = "section"
 
@@ -66,17 +66,9 @@ class _Section:
             meta = f.metadata
             if "unit" not in meta:
                 continue
-            value = getattr(self, f.name)
-            where = f"{self._name}.{f.name}"
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ParameterError(
-                    f"{where} = {value!r}: must be a number [{meta['unit']}] in {_interval(meta)}")
-            value = float(value)
-            lo_bad = value <= meta["lo"] if meta["lo_open"] else value < meta["lo"]
-            hi_bad = value >= meta["hi"] if meta["hi_open"] else value > meta["hi"]
-            if not math.isfinite(value) or lo_bad or hi_bad:
-                raise ParameterError(
-                    f"{where} = {value!r}: allowed range is {_interval(meta)} [{meta['unit']}]")
+            value = check_number(f"{self._name}.{f.name}", getattr(self, f.name), meta["lo"],
+                                 meta["hi"], lo_open=meta["lo_open"], hi_open=meta["hi_open"],
+                                 unit=meta["unit"], note=meta["note"])
             object.__setattr__(self, f.name, value)
 
     @classmethod
@@ -156,17 +148,13 @@ class DampingParams:
     omega_pulley: float = 300.0
 
     def __post_init__(self) -> None:
-        if isinstance(self.omega_pulley, bool) or not isinstance(self.omega_pulley, (int, float)) \
-                or not math.isfinite(self.omega_pulley) or self.omega_pulley <= 0:
-            raise ParameterError(f"damping.omega_pulley = {self.omega_pulley!r}: allowed range is "
-                                 f"(0, inf) [rad/s]")
-        object.__setattr__(self, "omega_pulley", float(self.omega_pulley))
+        object.__setattr__(self, "omega_pulley",
+                           check_number("damping.omega_pulley", self.omega_pulley, 0.0,
+                                        lo_open=True, unit="rad/s"))
 
     def level(self, name: str) -> DampingLevel:
         """The damping level called `name` (one of ``DAMPING_LEVELS``)."""
-        if name not in DAMPING_LEVELS:
-            raise ParameterError(f"damping level {name!r}: must be one of {', '.join(DAMPING_LEVELS)}")
-        return getattr(self, name)
+        return getattr(self, check_choice("damping", name, DAMPING_LEVELS))
 
 
 @dataclass(frozen=True)
@@ -217,15 +205,57 @@ class TractionParams(_Section):
                 f"{self.r_low!r} and r_od = {self.r_od!r}")
 
 
+#: Operating-point variables: unit and description (names as in the paper).
+OPERATING_VARIABLES = {"r_g": ("-", "geometric ratio R_p / R_s"),
+                       "nu": ("-", "slip (fraction, 0.01 is 1 %)"),
+                       "F_s": ("N", "secondary clamping force"),
+                       "omega_p": ("rad/s", "primary pulley speed")}
+
+
 @dataclass(frozen=True)
 class OperatingPoint(_Section):
-    """A default operating point of the variator."""
+    """An operating point of the variator (names as in the paper), validated on construction.
+
+    The one operating-point type of empact: the ``[operating]`` table of a parameter file, the
+    point of the slip model and the trim request of the nonlinear model.
+
+    Attributes
+    ----------
+    r_g : geometric ratio ``R_p / R_s`` [-], > 0 (checked against the variator where used)
+    nu : slip [-] (a fraction: 0.01 is 1 %), in (-1, 1)
+    F_s : secondary clamping force [N], >= 0
+    omega_p : primary pulley speed [rad/s], > 0 (eq. 2 is undefined at standstill)
+    """
 
     _name = "operating"
-    r_g: float = _p("-", "geometric ratio R_p / R_s")
-    nu: float = _p("-", "slip (fraction, 0.01 is 1 %)", -1.0, 1.0, hi_open=True)
-    F_s: float = _p("N", "secondary clamping force")
-    omega_p: float = _p("rad/s", "primary pulley speed")
+    r_g: float = _p("-", OPERATING_VARIABLES["r_g"][1])
+    nu: float = _p("-", OPERATING_VARIABLES["nu"][1], -1.0, 1.0, hi_open=True)
+    F_s: float = _p("N", OPERATING_VARIABLES["F_s"][1], lo_open=False)
+    omega_p: float = _p("rad/s", OPERATING_VARIABLES["omega_p"][1],
+                        note="the slip nu = 1 - omega_s / (r_g omega_p) of eq. 2 is undefined "
+                             "at standstill")
+
+    @property
+    def omega_s(self) -> float:
+        """Secondary speed ``r_g (1 - nu) omega_p`` [rad/s] (eq. 2 solved for omega_s)."""
+        return self.r_g * (1 - self.nu) * self.omega_p
+
+    @classmethod
+    def from_params(cls, params: "Params", **changes: float) -> "OperatingPoint":
+        """The ``[operating]`` point of a parameter set, with keyword `changes`."""
+        return params.operating.replace(**changes)
+
+    def replace(self, **changes: float) -> "OperatingPoint":
+        """A copy with some variables changed (validated)."""
+        unknown = set(changes) - set(OPERATING_VARIABLES)
+        if unknown:
+            raise ParameterError(f"unknown operating-point variable {sorted(unknown)[0]!r}: "
+                                 f"choose from {', '.join(OPERATING_VARIABLES)}")
+        return replace(self, **changes)
+
+    def as_dict(self) -> dict[str, float]:
+        """``{"r_g": ..., "nu": ..., "F_s": ..., "omega_p": ...}`` (SI)."""
+        return dict(r_g=self.r_g, nu=self.nu, F_s=self.F_s, omega_p=self.omega_p)
 
 
 _SECTIONS = {
@@ -246,7 +276,6 @@ class Params:
     operating: OperatingPoint
 
     def __post_init__(self) -> None:
-        from .geometry import ratio_range  # geometry depends on VariatorParams only
         lo, hi = ratio_range(self.variator)
         if not lo <= self.operating.r_g <= hi:
             raise ParameterError(
@@ -339,8 +368,12 @@ def read_toml(path: str | os.PathLike[str], what: str = "parameter") -> dict[str
         raise ParameterError(f"{path}: no such {what} file") from None
     except IsADirectoryError:
         raise ParameterError(f"{path}: is a folder, not a {what} file") from None
+    except UnicodeDecodeError:
+        raise ParameterError(f"{path}: not a text file (TOML must be UTF-8)") from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{path}: not valid TOML ({exc})") from None
+    except OSError as exc:
+        raise ParameterError(f"{path}: cannot be read ({exc.strerror})") from None
 
 
 _DEFAULT: Params | None = None
@@ -371,16 +404,3 @@ def dumps_params(params: Params, header: str = "") -> str:
 def save_params(params: Params, path: str | os.PathLike[str], header: str = "") -> None:
     """Write a parameter set to TOML atomically (temporary file, then rename)."""
     atomic_write_text(path, dumps_params(params, header))
-
-
-def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
-    """Write `text` to `path` through a temporary file in the same folder."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise

@@ -52,9 +52,11 @@ from typing import Mapping, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.interpolate import PchipInterpolator
+from ._lazy import lazy_module
+from .errors import ParameterError
+from .params import Params, TractionParams
 
-from .params import ParameterError, Params, TractionParams
+interpolate = lazy_module("scipy.interpolate")
 
 __all__ = ["TractionModel", "MagicFormulaTraction", "TabulatedTraction", "TractionCurves",
            "traction_from_params", "load_traction", "traction_curves", "MAGIC_NU_MAX"]
@@ -224,8 +226,10 @@ class TabulatedTraction:
     nu_data: tuple[NDArray[np.float64], ...]
     mu_data: tuple[NDArray[np.float64], ...]
     source: str = "traction table"
-    _interp: tuple[PchipInterpolator, ...] = field(init=False, repr=False, compare=False)
-    _slope: tuple[PchipInterpolator, ...] = field(init=False, repr=False, compare=False)
+    _interp: tuple[interpolate.PchipInterpolator, ...] = field(init=False, repr=False,
+                                                               compare=False)
+    _slope: tuple[interpolate.PchipInterpolator, ...] = field(init=False, repr=False,
+                                                              compare=False)
 
     def __post_init__(self) -> None:
         ratios = tuple(float(r) for r in self.ratios)
@@ -245,7 +249,7 @@ class TabulatedTraction:
             if nu[0] == 0.0 and mu[0] == 0.0:  # odd extension to negative slip
                 nu = np.concatenate([-nu[:0:-1], nu])
                 mu = np.concatenate([-mu[:0:-1], mu])
-            p = PchipInterpolator(nu, mu, extrapolate=False)
+            p = interpolate.PchipInterpolator(nu, mu, extrapolate=False)
             nus.append(nu)
             mus.append(mu)
             interp.append(p)
@@ -288,7 +292,7 @@ class TabulatedTraction:
         return w
 
     def _evaluate(self, nu: ArrayLike, r_g: ArrayLike,
-                  funcs: Sequence[PchipInterpolator]) -> NDArray[np.float64]:
+                  funcs: Sequence[interpolate.PchipInterpolator]) -> NDArray[np.float64]:
         nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, self.source)
         w = self._weights(r_a)
         out = np.zeros(nu_a.shape)

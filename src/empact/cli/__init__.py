@@ -1,89 +1,50 @@
 """Command-line interface: a thin layer over the public API.
 
-``empact --help`` lists the commands.  Errors in input (parameter files, options, data) print
-one line ``error: ...`` on stderr and exit with status 2; nothing is written then.
+``empact --help`` lists the commands.  Each command's module is imported only when that command
+runs (a lazy click group), so ``empact --help`` and ``empact params show`` start in a fraction
+of a second.  Errors in input (parameter files, options, data) print one line ``error: ...`` on
+stderr and exit with status 2; nothing is written then.
 """
 from __future__ import annotations
 
-import json
-import math
 import sys
-from typing import Any
 
 import click
-import numpy as np
 
-from ..params import ParameterError, load_params
+from ._common import LazyGroup
 
-__all__ = ["main"]
+__all__ = ["main", "COMMANDS"]
 
-
-class InputError(click.ClickException):
-    """Bad input: one line on stderr, exit status 2."""
-
-    exit_code = 2
-
-    def show(self, file: Any = None) -> None:
-        click.echo(f"error: {self.format_message()}", err=True)
-
-
-class _Group(click.Group):
-    """Turns the library's validation errors into `InputError`."""
-
-    def invoke(self, ctx: click.Context) -> Any:
-        try:
-            return super().invoke(ctx)
-        except (ParameterError, ValueError) as exc:
-            raise InputError(str(exc).splitlines()[0] if str(exc) else type(exc).__name__) \
-                from None
-
-
-def to_jsonable(obj: Any) -> Any:
-    """numpy arrays and scalars to lists and floats; complex to ``[re, im]``; NaN to None."""
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, (complex, np.complexfloating)):
-        return [to_jsonable(float(obj.real)), to_jsonable(float(obj.imag))]
-    if isinstance(obj, (np.floating, float)):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
+#: command name -> ("module:object", short help); the module is imported when the command runs
+COMMANDS = {
+    "params": ("empact.cli.params_cmd:params_group", "Show and validate parameter files."),
+    "calibrate": ("empact.cli.linear:calibrate_cmd",
+                  "Fit parameters to target eigenfrequencies."),
+    "modes": ("empact.cli.linear:modes",
+              "Eigenfrequencies, mode shapes and modal energy (Tables 1-2)."),
+    "frf": ("empact.cli.linear:frf", "Damped frequency response of a linear model (Fig. 6)."),
+    "slip": ("empact.cli.slip:slip_group",
+             "Slip dynamics: traction, poles, root locus, FRFs, zeros, maps (Figs. 9-13)."),
+    "simulate": ("empact.cli.nonlinear:simulate_cmd", "Simulate a scenario of the nonlinear "
+                 "model."),
+    "linearize": ("empact.cli.nonlinear:linearize_cmd",
+                  "Exact linear plant at an operating point (JSON, .mat, .npz)."),
+    "nmp": ("empact.cli.nonlinear:nmp_cmd", "Zeros of T_mp -> nu over the ratio (Sec. 2.3)."),
+    "identify": ("empact.cli.identification:identify",
+                 "Identify the plant from step responses (Fig. 2)."),
+    "rig": ("empact.cli.identification:rig", "Virtual test rig records (Fig. 14)."),
+    "frf-estimate": ("empact.cli.identification:frf_estimate",
+                     "FRFs with coherence from measured records (CSV)."),
+    "reproduce": ("empact.cli.report_cmd:reproduce",
+                  "Reproduce every table and figure of the paper."),
+}
 
 
-def echo_json(data: Any) -> None:
-    """Print `data` as JSON on stdout."""
-    click.echo(json.dumps(to_jsonable(data), indent=1))
 
-
-params_option = click.option("--params", "params_file", type=click.Path(dir_okay=False),
-                             default=None, help="TOML parameter file (default: shipped set).")
-json_option = click.option("--json", "as_json", is_flag=True, help="Print JSON on stdout.")
-
-
-def get_params(path: str | None):
-    """Load parameters (errors become `InputError` through the group)."""
-    return load_params(path)
-
-
-@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=LazyGroup, lazy=COMMANDS, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="empact")
 def main() -> None:
     """empact: dynamic analysis of electromechanically actuated pushbelt CVTs."""
-
-
-def _register() -> None:
-    from . import linear, nonlinear, params_cmd, report_cmd, slip  # noqa: F401
-    from . import identification  # noqa: F401
-
-
-_register()
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())

@@ -4,13 +4,15 @@ from __future__ import annotations
 import click
 import numpy as np
 
+from ..experiments.rig import EXCITATIONS
+from ..geometry import check_ratio
 from ..identification import METHODS, estimate_frf
-from ..identification.rig import EXCITATIONS
 from ..identification.records import load_records, sample_rate
-from . import InputError, echo_json, get_params, json_option, main, params_option
+from ._common import (InputError, echo_json, get_params, json_option, operating_point,
+                      params_option)
 
 
-@main.command("frf-estimate")
+@click.command("frf-estimate")
 @click.argument("data", type=click.Path(dir_okay=False))
 @click.option("--input", "inputs", multiple=True, required=True,
               help="Input column (repeatable for simultaneous uncorrelated inputs).")
@@ -39,9 +41,9 @@ def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], f
                        np.column_stack([rec[c] for c in outputs]), fs, method=method,
                        nperseg=nperseg, inputs=inputs, outputs=outputs)
     if plot:
-        from ..plotting import save_single
-        from ..plotting_identification import plot_frf_estimate
-        save_single(plot_frf_estimate(est, title=str(data)), plot)
+        from ..plotting import plot_frf_estimate
+
+        plot_frf_estimate(est, title=str(data)).save(plot)
     if as_json:
         echo_json({"data": data, "fs_hz": fs, "method": est.method, "inputs": est.inputs,
                    "outputs": est.outputs, "n_averages": est.n_averages,
@@ -72,7 +74,7 @@ def _ratios(text: str) -> list[float]:
     return values
 
 
-@main.command("identify")
+@click.command("identify")
 @click.option("--ratios", default="0.5,1,2", show_default=True,
               help="Comma-separated geometric ratios.")
 @click.option("--slip", "nu", type=float, default=0.004, show_default=True,
@@ -90,15 +92,18 @@ def _ratios(text: str) -> list[float]:
 def identify(ratios: str, nu: float, F_s: float, omega_p: float, order: int | None, step: float,
              params_file: str | None, as_json: bool, out: str | None) -> None:
     """Identify (T_mp, T_ms) -> (r_g, nu) from step responses of the nonlinear model (Fig 2)."""
-    from ..identification.plant_id import identify_plant
+    from ..experiments.plant_id import identify_plant
 
     if order is not None and order < 1:
         raise InputError(f"--order {order}: must be a positive integer")
     if not (np.isfinite(step) and step != 0):
         raise InputError(f"--step {step:g}: must be a non-zero torque [N m]")
     params = get_params(params_file)
-    results = [identify_plant(params, r, nu, F_s, omega_p, order=order,
-                              amplitudes=(step, step)) for r in _ratios(ratios)]
+    base = operating_point(params, trim=True, slip=nu, clamp=F_s, speed=omega_p)
+    r_list = _ratios(ratios)
+    check_ratio(r_list, params.variator, "--ratios")
+    results = [identify_plant(params, base.replace(r_g=r), order=order, amplitudes=(step, step))
+               for r in r_list]
     data = [{"ratio": res.r_g, "operating_point": res.experiment.op.as_dict(),
              "order": res.realization.order, "fit_percent": res.realization.fit,
              "singular_values": res.realization.singular_values[:40],
@@ -123,9 +128,8 @@ def _write_identification(out: str, results, data) -> None:
     import tempfile
     from pathlib import Path
 
-    from ..plotting import save_figure
-    from ..plotting_identification import plot_identified_plant
-    from . import to_jsonable
+    from ..plotting import plot_identified_plant, save_figure
+    from ._common import to_jsonable
 
     dest = Path(out).resolve()
     dest.parent.mkdir(parents=True, exist_ok=True)
@@ -138,7 +142,7 @@ def _write_identification(out: str, results, data) -> None:
                        header="time [s],r_g/T_mp [1/(N m)],r_g/T_ms [1/(N m)],"
                               "nu/T_mp [1/(N m)],nu/T_ms [1/(N m)]")
         (tmp / "models.json").write_text(json.dumps(to_jsonable(data), indent=1))
-        save_figure(plot_identified_plant(results, np.logspace(-1, np.log10(200), 400)),
+        save_figure(plot_identified_plant(results, np.logspace(-1, np.log10(200), 400)).figure,
                     tmp / "fig2_identified_plant")
         if dest.exists():
             shutil.rmtree(dest)
@@ -148,7 +152,7 @@ def _write_identification(out: str, results, data) -> None:
         raise
 
 
-@main.command("rig")
+@click.command("rig")
 @click.option("--excite", type=click.Choice(["T_mp", "T_ms"]), default="T_mp",
               show_default=True, help="The servo torque to excite.")
 @click.option("--excitation", type=click.Choice(EXCITATIONS), default="multisine",
@@ -177,8 +181,8 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
 
     The model has spindle Coulomb friction and sensor noise; the records it writes are what
     `empact frf-estimate` reads."""
-    from ..identification.rig import RigSettings, run_rig
-    from ..params import atomic_write_text
+    from .._io import atomic_write_text
+    from ..experiments.rig import RigSettings, run_rig
 
     try:
         lo, hi = (float(v) for v in band.split(":"))

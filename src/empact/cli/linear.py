@@ -1,18 +1,20 @@
-"""``empact modes`` and ``empact frf``: the linear models of Sec. 2.1-2.2."""
+"""``empact modes``, ``empact frf`` and ``empact calibrate``: the linear models of
+Sec. 2.1-2.2."""
 from __future__ import annotations
 
 import click
 import numpy as np
 
-from ..actuation import actuation_model
-from ..driveline import driveline_model, uncoupled_frequencies
-from ..params import DAMPING_LEVELS
-from . import echo_json, get_params, json_option, main, params_option, InputError
+from ..linear.actuation import actuation_model
+from ..linear.calibration import calibrate, load_targets
+from ..linear.driveline import driveline_model, uncoupled_frequencies
+from ..params import DAMPING_LEVELS, Params, save_params
+from ._common import InputError, echo_json, get_params, json_option, params_option
 
 MODELS = {"actuation": actuation_model, "driveline": driveline_model}
 
 
-@main.command("modes")
+@click.command("modes")
 @click.argument("model", type=click.Choice(list(MODELS)))
 @click.option("--ratio", "r_g", type=float, default=1.0, show_default=True,
               help="Geometric ratio r_g.")
@@ -53,7 +55,7 @@ def frequency_grid(fmin: float, fmax: float, n: int) -> np.ndarray:
     return np.logspace(np.log10(fmin), np.log10(fmax), n)
 
 
-@main.command("frf")
+@click.command("frf")
 @click.argument("model", type=click.Choice(list(MODELS)))
 @click.option("--input", "inputs", multiple=True, default=None,
               help="Input name (repeatable; default all), e.g. T_mp.")
@@ -81,9 +83,10 @@ def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: 
     resp = lm.frequency_response(2 * np.pi * f, list(inputs) or None, list(outputs) or None,
                                  label=f"{damping} damping" if model == "actuation" else "")
     if plot:
-        from ..plotting import plot_bode, save_single
+        from ..plotting import plot_bode
+
         pairs = [(o, i) for i in resp.inputs for o in resp.outputs]
-        save_single(plot_bode([resp], pairs, title=f"{lm.name}"), plot)
+        plot_bode([resp], pairs, title=f"{lm.name}").save(plot)
     if as_json:
         echo_json({"model": model, "ratio": r_g, "damping": damping, "inputs": resp.inputs,
                    "outputs": resp.outputs, "frequencies_hz": resp.frequencies_hz,
@@ -98,3 +101,25 @@ def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: 
             click.echo(f"{f[k]:10.4g} " + " ".join(f"{mag[a, b, k]:22.3f}"
                                                    for b in range(len(resp.inputs))
                                                    for a in range(len(resp.outputs))))
+
+
+@click.command("calibrate")
+@click.argument("targets", type=click.Path(dir_okay=False))
+@params_option
+@click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
+              help="Where to write the calibrated parameter file (TOML).")
+def calibrate_cmd(targets: str, params_file: str | None, out: str) -> None:
+    """Fit the free parameters named in TARGETS to its target eigenfrequencies."""
+    params: Params = get_params(params_file)
+    tgts, free = load_targets(targets)
+    res = calibrate(params, tgts, free)
+    click.echo(f"{'target':34s} {'target [Hz]':>11s} {'model [Hz]':>11s} {'error':>9s}", err=True)
+    for t, f, e in zip(res.targets, res.achieved_hz, res.relative_error):
+        click.echo(f"{t.label:34s} {t.frequency_hz:11.4g} {f:11.4g} {100 * e:+8.3f}%", err=True)
+    for name, a, b in zip(res.free, res.initial, res.final):
+        click.echo(f"  {name:22s} {a:12.5g} -> {b:12.5g}", err=True)
+    click.echo(f"optimiser: {res.message}", err=True)
+    header = (f"Calibrated by `empact calibrate {targets}` (max |error| "
+              f"{100 * abs(res.relative_error).max():.3f} %).")
+    save_params(res.params, out, header=header)
+    click.echo(out)

@@ -11,10 +11,13 @@ from pathlib import Path
 import click
 import numpy as np
 
-from . import InputError, echo_json, get_params, json_option, main, params_option, to_jsonable
+from .._validate import check_number
+from ..geometry import check_ratio
+from ._common import (InputError, echo_json, get_params, json_option, operating_point,
+                      params_option, to_jsonable)
 
 
-@main.command("simulate")
+@click.command("simulate")
 @click.argument("scenario", required=False, type=click.Path(dir_okay=False))
 @click.option("--example", "example", default=None, help="Run a shipped example scenario.")
 @click.option("--list-examples", "list_ex", is_flag=True, help="List the shipped scenarios.")
@@ -32,7 +35,8 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
 
     Exit status 1 when the run stopped early (the output is kept and marked incomplete).
     """
-    from ..simulate import csv_text, example_path, list_examples, load_scenario, run_scenario
+    from ..nonlinear.scenario import example_path, list_examples, load_scenario
+    from ..nonlinear.simulate import csv_text, run_scenario
 
     if list_ex:
         for name, desc in list_examples().items():
@@ -43,18 +47,18 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     path = example_path(example) if example else scenario
     sc = load_scenario(path)
     if duration is not None:
-        sc = sc.with_duration(duration)
+        sc = sc.with_duration(check_number("--duration", duration, 0.0, 3600.0, lo_open=True,
+                                           unit="s"))
     params = get_params(params_file)
     res = run_scenario(sc, params, progress=not quiet)
-    from ..plotting import save_figure
-    from ..plotting_nonlinear import plot_simulation
+    from ..plotting import plot_simulation, save_figure
 
     dest = Path(out)
     dest.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(dir=dest, prefix=f".{sc.name}.tmp-"))
     try:
         (tmp / f"{sc.name}.csv").write_text(csv_text(res, states))
-        save_figure(plot_simulation(res), tmp / sc.name)
+        save_figure(plot_simulation(res).figure, tmp / sc.name)
         for f in tmp.iterdir():
             os.replace(f, dest / f.name)
     finally:
@@ -90,7 +94,7 @@ def _add(options):
     return deco
 
 
-@main.command("linearize")
+@click.command("linearize")
 @click.option("--ratio", "r_g", type=float, required=True, help="Geometric ratio r_g [-].")
 @click.option("--slip", "nu", type=float, required=True, help="Slip nu [-] (0.004 is 0.4 %).")
 @click.option("--clamp", "F_s", type=float, required=True, help="Clamping force F_s [N].")
@@ -106,13 +110,14 @@ def _add(options):
 def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load, kinematics,
                   params_file) -> None:
     """Exact linear plant (T_mp, T_ms) -> (r_g, nu) at an operating point: A, B, C, D."""
-    from ..linearize import PLANT_INPUTS, PLANT_OUTPUTS, linearize
-    from ..nonlinear import nonlinear_model
-    from ..trim import trim
+    from ..nonlinear.linearize import PLANT_INPUTS, PLANT_OUTPUTS, linearize
+    from ..nonlinear.model import nonlinear_model
+    from ..nonlinear.trim import trim
 
     params = get_params(params_file)
+    point = operating_point(params, trim=True, ratio=r_g, slip=nu, clamp=F_s, speed=omega_p)
     model = nonlinear_model(params, **_options(drive, load, damping, kinematics))
-    op = trim(model, r_g, omega_p, nu=nu, F_s=F_s)
+    op = trim(model, point.r_g, point.omega_p, nu=point.nu, F_s=point.F_s)
     sys_ = linearize(op, None if all_io else PLANT_INPUTS, None if all_io else PLANT_OUTPUTS)
     data = {"A": sys_.A, "B": sys_.B, "C": sys_.C, "D": sys_.D,
             "inputs": list(sys_.input_labels), "outputs": list(sys_.output_labels),
@@ -125,7 +130,8 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
         if out is None:
             click.echo(text)
             return
-        from ..params import atomic_write_text
+        from .._io import atomic_write_text
+
         atomic_write_text(out, text + "\n")
     else:
         if out is None:
@@ -160,7 +166,7 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
     click.echo(str(out), err=True)
 
 
-@main.command("nmp")
+@click.command("nmp")
 @click.option("--ratios", "ratios", default="0.5,1,2", show_default=True,
               help="Comma-separated ratios r_g.")
 @click.option("--slip", "nu", type=float, default=0.004, show_default=True, help="Slip [-].")
@@ -172,7 +178,7 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
               help="Largest zero frequency reported [Hz].")
 @click.option("--slip-signal", "slip_signal", type=click.Choice(["eq2", "speed"]), default="eq2",
               show_default=True, help="Slip of eq. 2, or from the shaft speeds at the "
-              "operating ratio (see empact.nmp).")
+              "operating ratio (see empact.nonlinear.nmp).")
 @click.option("--plot", "plot", type=click.Path(dir_okay=False), default=None,
               help="Write the figure (format from the suffix).")
 @_add(model_options)
@@ -181,7 +187,7 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
 def nmp_cmd(ratios, nu, F_s, omega_p, f_max, slip_signal, plot, damping, drive, load,
             kinematics, params_file, as_json) -> None:
     """Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio (Sec 2.3)."""
-    from ..nmp import nmp_analysis
+    from ..nonlinear.nmp import nmp_analysis
 
     try:
         r = [float(x) for x in ratios.split(",") if x.strip()]
@@ -190,12 +196,15 @@ def nmp_cmd(ratios, nu, F_s, omega_p, f_max, slip_signal, plot, damping, drive, 
     if not r:
         raise InputError("--ratios: give at least one ratio")
     params = get_params(params_file)
-    res = nmp_analysis(params, r, nu=nu, F_s=F_s, omega_p=omega_p, f_max=f_max,
-                       slip=slip_signal, **_options(drive, load, damping, kinematics))
+    base = operating_point(params, trim=True, slip=nu, clamp=F_s, speed=omega_p)
+    check_ratio(r, params.variator, "--ratios")
+    check_number("--fmax", f_max, 0.0, lo_open=True, unit="Hz")
+    res = nmp_analysis(params, r, base=base, f_max=f_max, slip=slip_signal,
+                       **_options(drive, load, damping, kinematics))
     if plot:
-        from ..plotting import save_single
-        from ..plotting_nonlinear import plot_nmp
-        save_single(plot_nmp(res), plot)
+        from ..plotting import plot_nmp
+
+        plot_nmp(res).save(plot)
     g = res.geometry
     if as_json:
         echo_json({"ratios": res.r_g, "delta_x_m": g.delta_x, "delta_m": g.delta,

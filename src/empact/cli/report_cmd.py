@@ -4,10 +4,10 @@ from __future__ import annotations
 import click
 
 from ..report import build_report
-from . import get_params, main, params_option
+from ._common import get_params, params_option
 
 
-@main.command("reproduce")
+@click.command("reproduce")
 @click.option("--out", "out", default="report", show_default=True,
               type=click.Path(file_okay=False), help="Report folder (replaced when complete).")
 @params_option

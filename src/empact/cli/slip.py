@@ -15,11 +15,11 @@ from typing import Callable
 import click
 import numpy as np
 
-from ..params import Params
-from ..slip import (OUTPUTS, INPUTS, SlipOperatingPoint, VARIABLES, belt_root_locus,
-                    pole_sweep, slip_frequency_responses, slip_model, stability_map, zero_locus)
+from ..params import OperatingPoint, Params
+from ..slip import (INPUTS, OUTPUTS, VARIABLES, belt_root_locus, pole_sweep,
+                    slip_frequency_responses, slip_model, stability_map, zero_locus)
 from ..traction import TractionModel, load_traction, traction_curves, traction_from_params
-from . import InputError, _Group, echo_json, get_params, json_option, main, params_option
+from ._common import ErrorGroup, InputError, echo_json, get_params, json_option, params_option
 
 #: option name -> operating-point variable
 OPTION_VARIABLE = {"ratio": "r_g", "slip": "nu", "clamp": "F_s", "speed": "omega_p"}
@@ -86,7 +86,7 @@ def _setup(params_file: str | None, traction_file: str | None) \
 
 
 def _grid(params: Params, raw: dict[str, str | None], *, max_sweeps: int,
-          exact: int | None = None) -> tuple[SlipOperatingPoint, dict[str, np.ndarray]]:
+          exact: int | None = None) -> tuple[OperatingPoint, dict[str, np.ndarray]]:
     """Base operating point and the swept variables ``{variable: values}``."""
     values = {OPTION_VARIABLE[o]: parse_values(t, o) for o, t in raw.items()}
     sweeps = {v: a for v, a in values.items() if a is not None and a.size > 1}
@@ -98,7 +98,7 @@ def _grid(params: Params, raw: dict[str, str | None], *, max_sweeps: int,
         raise InputError(f"give at most {max_sweeps} of --ratio/--slip/--clamp/--speed as a list "
                          f"or range (got {', '.join('--' + VARIABLE_OPTION[v] for v in sweeps)})")
     fixed = {v: float(a[0]) for v, a in values.items() if a is not None and a.size == 1}
-    base = SlipOperatingPoint.from_params(params, **fixed)
+    base = OperatingPoint.from_params(params, **fixed)
     for v, a in sweeps.items():  # validate the swept values with the base (clear message)
         for x in a:
             base.replace(**{v: float(x)})
@@ -109,13 +109,11 @@ def _pairs(z: np.ndarray) -> list[list[float]]:
     return [[float(c.real), float(c.imag)] for c in np.asarray(z, complex).ravel()]
 
 
-def _save(fig, path: str) -> None:
-    from ..plotting import save_single
-
-    save_single(fig, path)
+def _save(plot, path: str) -> None:
+    plot.save(path)
 
 
-@main.group("slip", cls=_Group)
+@click.group("slip", cls=ErrorGroup)
 def slip_group() -> None:
     """Slip dynamics: traction, poles, root locus, FRFs, zeros, stability map (Figs. 9-13)."""
 
@@ -170,7 +168,7 @@ def poles(ratio, slip, clamp, speed, traction_file, params_file, as_json, plot) 
                        "max_real": max_re, "min_damping": float(sw.min_damping[k]),
                        "stable": bool(max_re <= 1e-6)})
     if plot:
-        from ..plotting_slip import plot_pole_sweep
+        from ..plotting import plot_pole_sweep
         _save(plot_pole_sweep(sw), plot)
     if as_json:
         echo_json({"operating_point": base.as_dict(), "variable": name if sweeps else None,
@@ -207,7 +205,7 @@ def rootlocus(ratio, slip, cb_min, cb_max, params_file, as_json, plot) -> None:
     params = get_params(params_file)
     rl = belt_root_locus(params, ratio, slip, c_b_range=(cb_min, cb_max))
     if plot:
-        from ..plotting_slip import plot_belt_root_locus
+        from ..plotting import plot_belt_root_locus
         _save(plot_belt_root_locus(rl), plot)
     if as_json:
         echo_json({"ratio": ratio, "slip": slip, "c_b": rl.locus.parameter,
@@ -253,7 +251,7 @@ def frf(ratio, slip, clamp, speed, traction_file, params_file, inp, out, fmin, f
     resp = slip_frequency_responses(params, ops, 2 * np.pi * f, traction=tr, input=inp,
                                     output=out)
     if plot:
-        from ..plotting_slip import plot_slip_bode
+        from ..plotting import plot_slip_bode
         _save(plot_slip_bode(resp, title=f"{inp} -> {out}"), plot)
     if as_json:
         echo_json({"operating_point": base.as_dict(), "input": inp, "output": out,
@@ -289,7 +287,7 @@ def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, plot) 
     ratios = sweeps.get("r_g", np.array([base.r_g]))
     zl = zero_locus(params, ratios, base, tr)
     if plot:
-        from ..plotting_slip import plot_zero_locus
+        from ..plotting import plot_zero_locus
         _save(plot_zero_locus(zl), plot)
     coupled_hz = np.sort(np.abs(zl.coupled), axis=1)[:, ::2] / (2 * np.pi)
     if as_json:
@@ -330,7 +328,7 @@ def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk
     sm = stability_map(params, x_name, x, y_name, y, base=base,  # type: ignore[arg-type]
                        traction=tr, method=method, chunk_size=chunk, workers=workers)
     if plot:
-        from ..plotting_slip import plot_stability_map
+        from ..plotting import plot_stability_map
         _save(plot_stability_map(sm), plot)
     if as_json:
         echo_json({"operating_point": base.as_dict(), "x": {"name": x_name, "values": x},
@@ -363,7 +361,7 @@ def traction(ratio, slip, traction_file, params_file, as_json, plot) -> None:
     nu = parse_values(slip, "slip")
     curves = traction_curves(tr, r, nu, label="(tabulated)" if traction_file else "")
     if plot:
-        from ..plotting_slip import plot_traction
+        from ..plotting import plot_traction
         _save(plot_traction(curves), plot)
     nu_pk, mu_pk = curves.peak()
     if as_json:

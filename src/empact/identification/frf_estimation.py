@@ -16,7 +16,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal as sig
+
+from .._lazy import lazy_module
+
+sig = lazy_module("scipy.signal")
 
 __all__ = ["FRFEstimate", "estimate_frf"]
 

@@ -16,9 +16,12 @@ import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import control
 import numpy as np
 import scipy.linalg as sla
+
+from .._lazy import lazy_module
+
+control = lazy_module("control")
 
 __all__ = ["RealizationResult", "realize_steps"]
 

@@ -1,0 +1,134 @@
+"""Fig. 2 of the paper: the (T_mp, T_ms) -> (r_g, nu) plant by approximate realisation.
+
+As in the paper (Sec. 3, after Klaassen et al.), the nonlinear model is trimmed at an
+operating point, each servo torque is stepped by a small amount on its own, and the step
+responses of ratio and slip (deviations, divided by the step size) are realised as a
+continuous state-space model with `realize_steps`.  The exact linearisation at the same point
+(`empact.nonlinear.linearize.plant`) is the reference the identified model is compared with.
+
+The slip responds strongly to the servo torques: at the default point a 1e-3 N m step already
+makes the slip response about 10 % nonlinear, so the default steps are 1e-4 N m and the model
+is integrated with a tight tolerance.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from .._validate import check_number
+from ..errors import ParameterError
+from ..identification.realization import RealizationResult, realize_steps
+from ..nonlinear.linearize import plant, trim_point
+from ..nonlinear.model import nonlinear_model
+from ..nonlinear.simulate import simulate
+from ..params import OperatingPoint
+
+__all__ = ["StepExperiment", "PlantIdentification", "step_experiment", "identify_plant"]
+
+INPUTS = ("T_mp", "T_ms")
+OUTPUTS = ("r_g", "nu")
+
+
+@dataclass(frozen=True, eq=False)
+class StepExperiment:
+    """Step responses of the nonlinear model around a trimmed point.
+
+    Attributes
+    ----------
+    t : sample times [s], shape (n_t,)
+    steps : responses per unit step, shape (n_t, 2, 2): outputs (r_g [-], nu [-]) per input
+        (T_mp, T_ms) [1/(N m)]
+    amplitudes : step sizes [N m], shape (2,)
+    op : the trimmed operating point (`empact.nonlinear.trim.TrimResult`)
+    """
+
+    t: np.ndarray
+    steps: np.ndarray
+    amplitudes: np.ndarray
+    op: object
+
+
+@dataclass(frozen=True, eq=False)
+class PlantIdentification:
+    """Identified and exact plant at one operating point.
+
+    Attributes
+    ----------
+    experiment : the step experiment
+    realization : `RealizationResult` (identified model ``realization.sys``)
+    exact : the exact linearisation, a named `control.StateSpace`
+    """
+
+    experiment: StepExperiment
+    realization: RealizationResult
+    exact: object
+
+    @property
+    def r_g(self) -> float:
+        """Ratio of the operating point [-]."""
+        return float(self.experiment.op.r_g)
+
+
+def step_experiment(params, op: OperatingPoint | None = None, *,
+                    amplitudes: Sequence[float] = (1e-4, 1e-4), duration: float = 6.0,
+                    sample_rate: float = 500.0, rtol: float = 1e-8, model=None
+                    ) -> StepExperiment:
+    """Step each servo torque by its amplitude [N m] and record r_g and nu.
+
+    Parameters
+    ----------
+    params : Params
+    op : operating point (ratio [-], slip [-], clamping force [N], primary speed [rad/s];
+        default ``params.operating``)
+    amplitudes : step sizes of T_mp and T_ms [N m], non-zero
+    duration : record length [s]
+    sample_rate : [Hz]
+    rtol : integrator tolerance (see `empact.nonlinear.simulate.simulate`)
+    model : an `EmpactModel` with torque inputs (default: `nonlinear_model(params)`)
+    """
+    amps = np.asarray(amplitudes, float)
+    if amps.shape != (2,) or np.any(~np.isfinite(amps)) or np.any(amps == 0):
+        raise ParameterError(f"amplitudes = {list(amplitudes)!r}: need two non-zero step sizes "
+                             "[N m]")
+    duration = check_number("duration", duration, 0.0, lo_open=True, unit="s")
+    sample_rate = check_number("sample_rate", sample_rate, 0.0, lo_open=True, unit="Hz")
+    op = params.operating if op is None else op
+    model = nonlinear_model(params) if model is None else model
+    trimmed = trim_point(model, op)
+    cols = []
+    for j, name in enumerate(INPUTS):
+        u = trimmed.u.copy()
+        u[model.inputs.index(name)] += amps[j]
+        res = simulate(model, trimmed.x, {}, duration, u0=u, sample_rate=sample_rate, rtol=rtol,
+                       name=f"step {name}")
+        if not res.complete:
+            raise ParameterError(f"step in {name} at r_g = {op.r_g:g}: {res.message}")
+        cols.append(np.column_stack([res.output(o) - getattr(trimmed, o) for o in OUTPUTS])
+                    / amps[j])
+    return StepExperiment(t=res.t, steps=np.stack(cols, axis=-1), amplitudes=amps, op=trimmed)
+
+
+def identify_plant(params, op: OperatingPoint | None = None, *, order: int | None = None,
+                   min_fit: float = 98.0, n_block_rows: int = 100, n_block_cols: int = 1200,
+                   **experiment) -> PlantIdentification:
+    """Identify the (T_mp, T_ms) -> (r_g, nu) plant at one point (Fig. 2).
+
+    Parameters
+    ----------
+    params : Params
+    op : operating point (default ``params.operating``)
+    order : model order (default: the smallest reaching `min_fit`)
+    min_fit : worst-channel step fit to reach [%] when `order` is None
+    n_block_rows, n_block_cols : Hankel size
+    **experiment : passed to `step_experiment`
+    """
+    op = params.operating if op is None else op
+    exp = step_experiment(params, op, **experiment)
+    real = realize_steps(exp.t, exp.steps, order, n_block_rows=n_block_rows,
+                         n_block_cols=min(n_block_cols, len(exp.t) - n_block_rows),
+                         min_fit=None if order is not None else min_fit,
+                         inputs=INPUTS, outputs=OUTPUTS)
+    exact, _ = plant(params, op)
+    return PlantIdentification(experiment=exp, realization=real, exact=exact)

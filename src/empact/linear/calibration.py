@@ -1,0 +1,203 @@
+"""Calibration: fit chosen parameters to target eigenfrequencies (bounded least squares).
+
+A targets file (TOML) names the free parameters and lists the targets::
+
+    free = ["driveline.J_p", "driveline.k_tc"]      # dotted parameter names
+
+    [[target]]
+    model = "driveline"        # "actuation" or "driveline"
+    ratio = 1.0                # geometric ratio r_g
+    mode = 2                   # 1-based, counting rigid-body modes (the paper's numbering)
+    frequency_hz = 4.14
+    source = "paper Table 2"   # optional
+    weight = 1.0               # optional
+
+    [[target]]
+    model = "driveline"
+    uncoupled = "primary"      # belt removed: "primary" or "secondary" side
+    frequency_hz = 24.6
+
+The fit works on the logarithm of each free parameter (all are positive), bounded by the
+parameter's allowed range, and minimises ``sum weight * (f_model / f_target - 1)^2``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any, Sequence
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from .actuation import actuation_model
+from .driveline import driveline_model, uncoupled_frequencies
+from ..params import _SECTIONS, DampingLevel, Params, read_toml
+from ..errors import ParameterError
+
+__all__ = ["Target", "CalibrationResult", "load_targets", "calibrate", "model_frequencies"]
+
+MODELS = ("actuation", "driveline")
+
+
+@dataclass(frozen=True)
+class Target:
+    """One target eigenfrequency.
+
+    Attributes
+    ----------
+    model : "actuation" or "driveline"
+    frequency_hz : target frequency [Hz]
+    ratio : geometric ratio r_g (mode targets)
+    mode : 1-based mode number including rigid-body modes (mode targets)
+    uncoupled : "primary" or "secondary" (driveline with the belt removed)
+    weight : weight of the squared relative residual
+    source : where the number comes from
+    """
+
+    model: str
+    frequency_hz: float
+    ratio: float | None = None
+    mode: int | None = None
+    uncoupled: str | None = None
+    weight: float = 1.0
+    source: str = ""
+
+    @property
+    def label(self) -> str:
+        """Short description, e.g. ``driveline r_g=1 mode 2``."""
+        if self.uncoupled:
+            return f"{self.model} uncoupled {self.uncoupled}"
+        return f"{self.model} r_g={self.ratio:g} mode {self.mode}"
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """Result of `calibrate`.
+
+    Attributes
+    ----------
+    params : the calibrated parameter set
+    targets : the targets
+    achieved_hz : model frequencies at the solution [Hz], shape (n_targets,)
+    relative_error : ``achieved / target - 1``, shape (n_targets,)
+    free : names of the fitted parameters
+    initial, final : their values before and after
+    success, message : from the optimiser
+    """
+
+    params: Params
+    targets: tuple[Target, ...]
+    achieved_hz: np.ndarray
+    relative_error: np.ndarray
+    free: tuple[str, ...]
+    initial: np.ndarray
+    final: np.ndarray
+    success: bool
+    message: str
+
+
+def _field_meta(dotted: str) -> dict[str, Any]:
+    parts = dotted.split(".")
+    kind = DampingLevel if parts[0] == "damping" and len(parts) == 3 else _SECTIONS.get(parts[0])
+    for f in fields(kind) if kind is not None else ():
+        if f.name == parts[-1] and "unit" in f.metadata:
+            return dict(f.metadata)
+    raise ParameterError(f"free parameter {dotted!r}: not a parameter name (use section.key, "
+                         "e.g. driveline.k_tc)")
+
+
+def _check_target(raw: dict[str, Any], where: str) -> Target:
+    allowed = {f.name for f in fields(Target)}
+    unknown = set(raw) - allowed
+    if unknown:
+        raise ParameterError(f"{where}: unknown key {sorted(unknown)[0]!r} (allowed: "
+                             f"{', '.join(sorted(allowed))})")
+    try:
+        t = Target(**raw)
+    except TypeError as exc:
+        raise ParameterError(f"{where}: {exc}") from None
+    if t.model not in MODELS:
+        raise ParameterError(f"{where}: model = {t.model!r}: must be one of {', '.join(MODELS)}")
+    if not isinstance(t.frequency_hz, (int, float)) or isinstance(t.frequency_hz, bool) \
+            or not t.frequency_hz > 0:
+        raise ParameterError(f"{where}: frequency_hz = {t.frequency_hz!r}: must be > 0 [Hz]")
+    if t.uncoupled is not None:
+        if t.model != "driveline" or t.uncoupled not in ("primary", "secondary"):
+            raise ParameterError(f"{where}: uncoupled = {t.uncoupled!r}: only for the driveline, "
+                                 "'primary' or 'secondary'")
+    elif not (isinstance(t.mode, int) and t.mode >= 1 and isinstance(t.ratio, (int, float))):
+        raise ParameterError(f"{where}: a mode target needs ratio (a number) and mode "
+                             f"(integer >= 1), got ratio = {t.ratio!r}, mode = {t.mode!r}")
+    if not isinstance(t.weight, (int, float)) or not t.weight > 0:
+        raise ParameterError(f"{where}: weight = {t.weight!r}: must be > 0")
+    return t
+
+
+def load_targets(path: str) -> tuple[tuple[Target, ...], tuple[str, ...]]:
+    """Read a targets file; returns ``(targets, free)``.  Errors name the entry and key."""
+    data = read_toml(path, "targets")
+    unknown = set(data) - {"free", "target"}
+    if unknown:
+        raise ParameterError(f"{path}: unknown key {sorted(unknown)[0]!r} (allowed: free, target)")
+    free = data.get("free")
+    if not isinstance(free, list) or not free or not all(isinstance(x, str) for x in free):
+        raise ParameterError(f"{path}: free = {free!r}: must be a non-empty list of parameter "
+                             "names")
+    for name in free:
+        _field_meta(name)
+    raw = data.get("target")
+    if not isinstance(raw, list) or not raw:
+        raise ParameterError(f"{path}: needs at least one [[target]] table")
+    targets = tuple(_check_target(dict(t), f"{path}: target {i + 1}") for i, t in enumerate(raw))
+    return targets, tuple(free)
+
+
+def model_frequencies(params: Params, targets: Sequence[Target]) -> np.ndarray:
+    """The model's frequency for every target [Hz], shape (n_targets,)."""
+    cache: dict[tuple[str, float], np.ndarray] = {}
+    out = np.empty(len(targets))
+    for i, t in enumerate(targets):
+        if t.uncoupled:
+            out[i] = uncoupled_frequencies(params)[t.uncoupled]
+            continue
+        key = (t.model, float(t.ratio))
+        if key not in cache:
+            build = actuation_model if t.model == "actuation" else driveline_model
+            cache[key] = build(params, t.ratio).modes().frequencies_hz
+        f = cache[key]
+        if t.mode > len(f):
+            raise ParameterError(f"target {t.label}: the {t.model} model has {len(f)} modes")
+        out[i] = f[t.mode - 1]
+    return out
+
+
+def calibrate(params: Params, targets: Sequence[Target], free: Sequence[str]) -> CalibrationResult:
+    """Fit the `free` parameters of `params` to the target frequencies.
+
+    Bounded least squares (`scipy.optimize.least_squares`, trust-region reflective) on the
+    logarithms of the free parameters; bounds are the parameters' allowed ranges.
+    """
+    targets, free = tuple(targets), tuple(free)
+    x0 = np.log([params.get(name) for name in free])
+    lo, hi = [], []
+    for name in free:
+        meta = _field_meta(name)
+        lo.append(math.log(meta["lo"]) if meta["lo"] > 0 else -np.inf)
+        hi.append(math.log(meta["hi"]) if math.isfinite(meta["hi"]) else np.inf)
+    f_t = np.array([t.frequency_hz for t in targets])
+    w = np.sqrt([t.weight for t in targets])
+
+    def build(x: np.ndarray) -> Params:
+        return params.from_dotted(dict(zip(free, np.exp(x))))
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        return w * (model_frequencies(build(x), targets) / f_t - 1)
+
+    sol = least_squares(residual, x0, bounds=(lo, hi), x_scale=1.0, xtol=1e-12, ftol=1e-12,
+                        gtol=1e-12, max_nfev=2000)
+    fitted = build(sol.x)
+    achieved = model_frequencies(fitted, targets)
+    return CalibrationResult(params=fitted, targets=targets, achieved_hz=achieved,
+                             relative_error=achieved / f_t - 1, free=free,
+                             initial=np.exp(x0), final=np.exp(sol.x), success=bool(sol.success),
+                             message=str(sol.message))

@@ -1,0 +1,358 @@
+"""Linear time-invariant tools shared by every model: frequency response, zeros, damping,
+named state-space objects, and root loci over any parameter.
+
+* `FrequencyResponse` - a response ``H[i, j, k]`` from input j to output i at ``omega[k]``,
+  with signal names; `frequency_response` computes ``C (j w I - A)^-1 B + D`` vectorised
+  over frequency (the one implementation for state-space models; the lumped models of
+  `empact.linear` evaluate their second-order form directly).
+* `transmission_zeros` - finite invariant zeros of a square system (Rosenbrock pencil).
+* `damping_ratio`, `oscillatory` - damping ratio ``-Re(p) / |p|`` and the oscillatory
+  poles (or zeros) as natural frequency [Hz] and damping ratio.
+* `statespace` - a named `control.StateSpace` (python-control is imported on first use).
+* `root_locus`, `track_branches`, `match_branches` - eigenvalues of ``A(p)`` along a scalar
+  parameter with continuous branches.  python-control draws a root locus over a feedback gain
+  only; here the parameter may enter ``A`` in any way:
+
+  - steps are uniform in ``p`` (``spacing="linear"``) or in ``log(p)`` (``"log"``, for
+    parameters spanning decades, such as a damping constant); the step is halved while any
+    pole moves more than ``max_move`` times its own magnitude plus an absolute floor, and
+    grown again when the poles move little, so that break-away points are resolved;
+  - between steps the eigenvalues are matched to the previous ones by a minimum-cost
+    assignment (`scipy.optimize.linear_sum_assignment` on ``|lambda_new - lambda_old|``), so
+    column ``j`` of `RootLocus.poles` is one continuous branch.
+
+  End points at ``p = 0`` or ``p -> inf`` usually need a separate, exact computation (see
+  `empact.slip.belt_root_locus`).
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from typing import Callable, Literal, Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import eigvals as generalized_eigvals
+from scipy.optimize import linear_sum_assignment
+
+from ._lazy import lazy_module
+
+control = lazy_module("control")
+
+__all__ = ["FrequencyResponse", "frequency_response", "system_response", "transmission_zeros",
+           "channel_zeros",
+           "damping_ratio", "oscillatory", "statespace", "unwrapped_phase_deg", "RootLocus",
+           "root_locus", "match_branches", "track_branches"]
+
+Spacing = Literal["linear", "log"]
+
+
+# --------------------------------------------------------------------------------------------
+# Frequency response
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class FrequencyResponse:
+    """A frequency response ``H[i, j, k]`` from input j to output i at ``omega[k]``.
+
+    Attributes
+    ----------
+    omega : frequencies [rad/s], shape (n_f,)
+    H : complex response, shape (n_out, n_in, n_f), in output units per input unit
+    inputs, outputs : signal names
+    label : free text (e.g. the damping level)
+    """
+
+    omega: NDArray[np.float64]
+    H: NDArray[np.complex128]
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    label: str = ""
+
+    @property
+    def frequencies_hz(self) -> NDArray[np.float64]:
+        """Frequencies [Hz]."""
+        return self.omega / (2 * np.pi)
+
+    def response(self, output: str, input: str) -> NDArray[np.complex128]:
+        """The response of one named output to one named input, shape (n_f,)."""
+        return self.H[index(self.outputs, output, "output"), index(self.inputs, input, "input")]
+
+    def magnitude_db(self) -> NDArray[np.float64]:
+        """``20 log10 |H|`` [dB]."""
+        return 20 * np.log10(np.abs(self.H))
+
+    def phase_deg(self) -> NDArray[np.float64]:
+        """Phase [deg], unwrapped along frequency and shifted by a multiple of 360 deg so that
+        it starts in (-180, 180] at the lowest frequency."""
+        return unwrapped_phase_deg(self.H)
+
+
+def unwrapped_phase_deg(H: ArrayLike) -> NDArray[np.float64]:
+    """Phase of `H` [deg] unwrapped along the last axis, starting in (-180, 180]."""
+    ph = np.degrees(np.unwrap(np.angle(np.asarray(H)), axis=-1))
+    first = ph[..., :1]
+    shift = 360.0 * np.ceil((first - 180.0) / 360.0)
+    return ph - shift
+
+
+def index(names: Sequence[str], name: str, what: str) -> int:
+    """Position of `name` in `names`; a one-line `ValueError` naming the choices otherwise."""
+    try:
+        return list(names).index(name)
+    except ValueError:
+        raise ValueError(f"unknown {what} {name!r}: choose from {', '.join(names)}") from None
+
+
+def frequency_response(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike,
+                       omega: ArrayLike, inputs: Sequence[str], outputs: Sequence[str],
+                       label: str = "") -> FrequencyResponse:
+    """``H(j w) = C (j w I - A)^-1 B + D`` at every `omega` [rad/s], one batched solve.
+
+    Parameters
+    ----------
+    A, B, C, D : state-space matrices, shapes (n, n), (n, m), (p, n), (p, m)
+    omega : frequencies [rad/s], shape (n_f,); none may be a pole on the imaginary axis
+    inputs, outputs : signal names (m and p of them)
+    label : free text for the result
+    """
+    A, B, C, D = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C, D))
+    w = np.atleast_1d(np.asarray(omega, float))
+    n = A.shape[0]
+    Z = 1j * w[:, None, None] * np.eye(n)[None] - A[None]
+    X = np.linalg.solve(Z, np.broadcast_to(B, (len(w),) + B.shape))
+    H = np.einsum("on,fni->oif", C, X) + D[:, :, None]
+    return FrequencyResponse(omega=w, H=H, inputs=tuple(inputs), outputs=tuple(outputs),
+                             label=label)
+
+
+def system_response(sys, omega: ArrayLike, label: str = "") -> FrequencyResponse:
+    """`frequency_response` of a `control.StateSpace` (signal names from the system)."""
+    return frequency_response(sys.A, sys.B, sys.C, sys.D, omega, tuple(sys.input_labels),
+                              tuple(sys.output_labels), label=label)
+
+
+# --------------------------------------------------------------------------------------------
+# Zeros, damping, named systems
+# --------------------------------------------------------------------------------------------
+def transmission_zeros(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, *,
+                       scale: ArrayLike | None = None, max_abs: float = 1e12) \
+        -> NDArray[np.complex128]:
+    """Finite invariant zeros of a square system [rad/s], sorted by magnitude.
+
+    The finite generalised eigenvalues of the Rosenbrock pencil ``[[A, B], [C, D]] - s [[I, 0],
+    [0, 0]]``, after a diagonal state scaling ``x = S x~`` (`scale`, for states of very
+    different units) and a normalisation of B and C; zeros above `max_abs` [rad/s] count as
+    infinite.
+    """
+    A, B, C, D = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C, D))
+    n, m, p = A.shape[0], B.shape[1], C.shape[0]
+    if m != p:
+        raise ValueError(f"transmission_zeros: {p} outputs and {m} inputs; need a square system")
+    S = np.ones(n) if scale is None else np.asarray(scale, float)
+    A = A * S[None, :] / S[:, None]
+    B = B / S[:, None]
+    C = C * S[None, :]
+    bs = max(float(np.max(np.abs(B))), 1e-300)
+    cs = max(float(np.max(np.abs(C))), 1e-300)
+    L = np.block([[A, B / bs], [C / cs, D / (bs * cs)]])
+    M = np.zeros((n + m, n + m))
+    M[:n, :n] = np.eye(n)
+    w, beta = generalized_eigvals(L, M, homogeneous_eigvals=True)
+    finite = np.abs(beta) > 1e-12 * np.abs(w)
+    z = w[finite] / beta[finite]
+    z = z[np.isfinite(z) & (np.abs(z) < max_abs)]
+    return z[np.argsort(np.abs(z), kind="stable")]
+
+
+def channel_zeros(sys, input: str, output: str, *, scale: ArrayLike | None = None,
+                  max_abs: float = 1e12) -> NDArray[np.complex128]:
+    """`transmission_zeros` of one named input -> output channel of a `control.StateSpace`."""
+    i = index(sys.input_labels, input, "input")
+    o = index(sys.output_labels, output, "output")
+    return transmission_zeros(sys.A, sys.B[:, [i]], sys.C[[o]], sys.D[[o]][:, [i]],
+                              scale=scale, max_abs=max_abs)
+
+
+def damping_ratio(p: ArrayLike) -> NDArray[np.float64]:
+    """Damping ratio ``-Re(p) / |p|`` [-] of poles (or zeros) `p`; 1 for ``p = 0``."""
+    p = np.asarray(p, complex)
+    mag = np.abs(p)
+    return np.where(mag > 0, -p.real / np.where(mag > 0, mag, 1.0), 1.0)
+
+
+def oscillatory(poles: ArrayLike, tol: float = 1e-3) \
+        -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Natural frequencies ``|p| / (2 pi)`` [Hz] and damping ratios [-] of the poles (or
+    zeros) with ``Im(p) > tol`` [rad/s], ascending in frequency.
+
+    The default `tol` (1e-3 rad/s) is far above the rounding of structural zeros and far
+    below any oscillatory mode of the CVT.
+    """
+    p = np.asarray(poles, complex).ravel()
+    p = p[p.imag > tol]
+    p = p[np.argsort(np.abs(p), kind="stable")]
+    return np.abs(p) / (2 * np.pi), damping_ratio(p)
+
+
+def statespace(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, *,
+               inputs: Sequence[str], outputs: Sequence[str], states: Sequence[str],
+               name: str = "sys"):
+    """A named `control.StateSpace` (the name made python-control safe)."""
+    return control.ss(np.asarray(A, float), np.asarray(B, float), np.asarray(C, float),
+                      np.asarray(D, float), inputs=list(inputs), outputs=list(outputs),
+                      states=list(states), name=re.sub(r"[^A-Za-z0-9_]+", "_", name).strip("_"))
+
+
+# --------------------------------------------------------------------------------------------
+# Root loci
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class RootLocus:
+    """Eigenvalues of ``A(p)`` along a parameter, one continuous branch per column.
+
+    Attributes
+    ----------
+    parameter : parameter values, shape (n_steps,), monotone from ``p_start`` to ``p_stop``
+    poles : eigenvalues [rad/s], shape (n_steps, n); column ``j`` is branch ``j``
+    name : parameter name (with unit, for display)
+    """
+
+    parameter: NDArray[np.float64]
+    poles: NDArray[np.complex128]
+    name: str = "p"
+
+    @property
+    def start(self) -> NDArray[np.complex128]:
+        """Poles at the first parameter value, shape (n,)."""
+        return self.poles[0]
+
+    @property
+    def stop(self) -> NDArray[np.complex128]:
+        """Poles at the last parameter value, shape (n,)."""
+        return self.poles[-1]
+
+
+def match_branches(previous: ArrayLike, current: ArrayLike) -> NDArray[np.complex128]:
+    """Reorder `current` eigenvalues so that entry j continues ``previous[j]`` (shape (n,)).
+
+    Minimum total distance ``sum |current[perm[j]] - previous[j]|`` (Hungarian algorithm).
+    """
+    prev = np.asarray(previous, complex)
+    cur = np.asarray(current, complex)
+    if prev.shape != cur.shape or prev.ndim != 1:
+        raise ValueError(f"eigenvalue vectors of shapes {prev.shape} and {cur.shape}: need two "
+                         "equal 1-d shapes")
+    cost = np.abs(prev[:, None] - cur[None, :])
+    rows, cols = linear_sum_assignment(cost)
+    out = np.empty_like(cur)
+    out[rows] = cur[cols]
+    return out
+
+
+def track_branches(eigs: ArrayLike) -> NDArray[np.complex128]:
+    """Match eigenvalues along the first axis (shape (n_steps, n)) into continuous branches."""
+    e = np.array(eigs, dtype=complex)
+    if e.ndim != 2:
+        raise ValueError(f"eigenvalues of shape {e.shape}: need (n_steps, n)")
+    for k in range(1, len(e)):
+        e[k] = match_branches(e[k - 1], e[k])
+    return e
+
+
+def root_locus(A_of_p: Callable[[float], ArrayLike], p_start: float, p_stop: float, *,
+               spacing: Spacing = "linear", n_initial: int = 60, max_move: float = 0.05,
+               abs_floor: float | None = None, min_step_fraction: float = 1e-6,
+               max_points: int = 20000, name: str = "p") -> RootLocus:
+    """Eigenvalues of ``A_of_p(p)`` from `p_start` to `p_stop`, tracked branch by branch.
+
+    Parameters
+    ----------
+    A_of_p : callable
+        ``p -> A``, a square real or complex matrix, shape (n, n), for a scalar parameter.
+    p_start, p_stop : float
+        Ends of the parameter range (either order).  With ``spacing="log"`` both must be
+        positive (map an end point at 0 or infinity separately).
+    spacing : {"linear", "log"}
+        Steps uniform in ``p`` or in ``log(p)``.
+    n_initial : int
+        The largest step is ``1 / n_initial`` of the range (in the spacing's variable), so the
+        locus has at least ``n_initial + 1`` points.
+    max_move : float
+        A step is accepted when every pole moves at most ``max_move * |lambda| + abs_floor``.
+    abs_floor : float, optional
+        Absolute part of the tolerance [units of the eigenvalues]; default 1 % of the median
+        nonzero eigenvalue magnitude at `p_start` (so that poles near 0 do not force tiny steps).
+    min_step_fraction : float
+        Smallest step, as a fraction of the largest; a step this small is accepted anyway (at a
+        break-away point the poles move like a square root of the parameter).
+    max_points : int
+        Hard limit on the number of points.
+    name : str
+        Parameter name for the result.
+
+    Returns
+    -------
+    RootLocus
+        ``parameter`` shape (n_steps,), ``poles`` shape (n_steps, n).
+
+    Examples
+    --------
+    A mass on a spring with damping c: poles ``(-c +- sqrt(c^2 - 4)) / 2``.
+
+    >>> loc = root_locus(lambda c: [[0, 1], [-1, -c]], 0.0, 4.0)
+    >>> bool(np.allclose(sorted(loc.stop.real), [-2 - 3**0.5, -2 + 3**0.5]))
+    True
+    """
+    if spacing not in ("linear", "log"):
+        raise ValueError(f"spacing = {spacing!r}: choose 'linear' or 'log'")
+    for label, v in (("p_start", p_start), ("p_stop", p_stop)):
+        if not math.isfinite(v):
+            raise ValueError(f"{label} = {v!r}: must be finite (map an infinite end point "
+                             "separately)")
+        if spacing == "log" and v <= 0:
+            raise ValueError(f"{label} = {v!r}: must be > 0 with spacing='log'")
+    if p_start == p_stop:
+        raise ValueError(f"p_start = p_stop = {p_start!r}: the range is empty")
+    if n_initial < 2:
+        raise ValueError(f"n_initial = {n_initial}: must be >= 2")
+    if not 0 < max_move < 1:
+        raise ValueError(f"max_move = {max_move!r}: allowed range is (0, 1)")
+
+    to_t = np.log if spacing == "log" else (lambda x: x)
+    to_p = np.exp if spacing == "log" else (lambda x: x)
+    t0, t1 = float(to_t(p_start)), float(to_t(p_stop))
+    h_max = (t1 - t0) / n_initial  # signed
+    h_min = abs(h_max) * min_step_fraction
+
+    def eig(t: float) -> NDArray[np.complex128]:
+        return np.linalg.eigvals(np.asarray(A_of_p(float(to_p(t)))))
+
+    prev = eig(t0)
+    if abs_floor is None:
+        mags = np.abs(prev)
+        nz = mags[mags > 1e-9 * max(mags.max(), 1e-300)]
+        abs_floor = 0.01 * float(np.median(nz)) if nz.size else 1e-6
+    params, poles = [float(to_p(t0))], [prev]
+    t, h = t0, h_max
+    while (t1 - t) * np.sign(h_max) > 0:
+        if len(params) >= max_points:
+            raise RuntimeError(f"root_locus: more than max_points = {max_points} points; "
+                               "increase max_move or max_points")
+        t_try = t + h
+        if (t1 - t_try) * np.sign(h_max) < 0:
+            t_try = t1
+        cur = match_branches(prev, eig(t_try))
+        ratio = float(np.max(np.abs(cur - prev) / (max_move * np.abs(prev) + abs_floor)))
+        if ratio > 1 and abs(h) > h_min:
+            h = np.sign(h_max) * max(abs(h) / 2, h_min)
+            continue
+        t, prev = t_try, cur
+        params.append(float(to_p(t)))
+        poles.append(cur)
+        if ratio < 0.3:
+            h = np.sign(h_max) * min(abs(h) * 1.5, abs(h_max))
+    params[-1] = float(p_stop)
+    return RootLocus(parameter=np.array(params), poles=np.array(poles), name=name)

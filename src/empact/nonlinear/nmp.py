@@ -1,0 +1,160 @@
+"""Non-minimum-phase behaviour of the actuation (paper Sec. 2.3; model notes Sec. 5).
+
+Two parts:
+
+* **Geometry.**  ``Delta_x = x_p - x_s = a sin(phi) tan(beta)`` (eq. 5) and the belt-length
+  change for an equal translation ``delta`` of both sheaves (primary closing, secondary
+  opening), exact from eq. 6 and to first order ``4 phi delta / tan(beta)``: negative below
+  r_g = 1 (the belt slackens, F_s falls, the slip rises), positive above.
+* **Zeros.**  The finite zeros of the T_mp -> nu channel of the exactly linearised model
+  (`empact.nonlinear.linearize`) over the ratio; the paper states a right-half-plane zero at r_g = 0.5
+  and none at r_g = 2.  `nmp_analysis` reports what the model gives, for either sheave
+  kinematics (`empact.nonlinear.model.ModelOptions.kinematics`) and for either slip signal:
+  ``slip="eq2"``, the slip of eq. 2 on the current radii, or ``slip="speed"``, the slip a
+  speed measurement gives at the operating ratio, ``1 - omega_s / (r_g0 omega_p)``, whose
+  linearisation is ``nu~ - (1 - nu0) r_g~ / r_g0`` (eq. 2 without its direct dependence on the
+  ratio; the paper's Fig. 12 slip is linearised at constant r_g in the same way).
+
+A zero counts as right-half-plane when its real part exceeds 1e-3 of its magnitude (damping
+ratio below -0.001): lightly damped zeros on the imaginary axis stay out of the count.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validate import check_choice, check_number
+from ..geometry import belt_length, check_ratio, radii, wrap_angle
+from ..lti import channel_zeros, statespace
+from ..params import OperatingPoint, Params
+from .linearize import plant
+from .model import nonlinear_model
+
+__all__ = ["BeltLengthChange", "belt_length_change", "NmpResult", "nmp_analysis", "SLIPS"]
+
+SLIPS = ("eq2", "speed")
+
+
+@dataclass(frozen=True)
+class BeltLengthChange:
+    """Sec. 2.3 geometry over ratios (arrays of shape (n_r,)).
+
+    Attributes
+    ----------
+    r_g : ratios [-]
+    phi : wrapped-angle term [rad] (eq. 4)
+    delta_x : ``x_p - x_s = a sin(phi) tan(beta)`` [m] (eq. 5)
+    delta : the equal sheave translation used [m]
+    dL_exact : ``L(R_p + delta/tan(beta), R_s - delta/tan(beta)) - L(R_p, R_s)`` [m] (eq. 6)
+    dL_first_order : ``4 phi delta / tan(beta)`` [m]
+    """
+
+    r_g: NDArray[np.float64]
+    phi: NDArray[np.float64]
+    delta_x: NDArray[np.float64]
+    delta: float
+    dL_exact: NDArray[np.float64]
+    dL_first_order: NDArray[np.float64]
+
+
+def belt_length_change(params: Params, r_g: ArrayLike, delta: float = 1e-5) -> BeltLengthChange:
+    """Delta_x (eq. 5) and the belt-length change for an equal translation `delta` [m]."""
+    v = params.variator
+    check_number("delta", delta, 0.0, 1e-3, lo_open=True, hi_open=True, unit="m")
+    r = np.atleast_1d(check_ratio(r_g, v))
+    R_p, R_s = radii(r, v.L_belt, v.a)
+    tb = np.tan(v.beta)
+    phi = wrap_angle(R_p, R_s, v.a)
+    dL = belt_length(R_p + delta / tb, R_s - delta / tb, v.a) - belt_length(R_p, R_s, v.a)
+    return BeltLengthChange(r_g=r, phi=phi, delta_x=v.a * np.sin(phi) * tb, delta=float(delta),
+                            dL_exact=dL, dL_first_order=4 * phi * delta / tb)
+
+
+@dataclass(frozen=True)
+class NmpResult:
+    """Zeros of T_mp -> nu over the ratio, and the Sec. 2.3 geometry.
+
+    Attributes
+    ----------
+    r_g : ratios [-], shape (n_r,)
+    zeros : tuple of arrays
+        Finite zeros [rad/s] (complex) of T_mp -> nu at each ratio, below `f_max`.
+    rhp_zeros : tuple of arrays
+        Those with a real part above 1e-3 of their magnitude (zeros at the origin, below
+        1e-3 rad/s, are not counted).
+    n_rhp : array of int, shape (n_r,)
+    n_rhp_real : array of int, shape (n_r,)
+        Real right-half-plane zeros (imaginary part below 1e-6 of the magnitude).
+    slip : "eq2" or "speed" (see the module docstring)
+    geometry : BeltLengthChange
+    operating : dict
+        nu, F_s [N], omega_p [rad/s], model options.
+    f_max : float
+        Zeros above this frequency [Hz] are left out.
+    """
+
+    r_g: NDArray[np.float64]
+    zeros: tuple[NDArray[np.complex128], ...]
+    rhp_zeros: tuple[NDArray[np.complex128], ...]
+    n_rhp: NDArray[np.int64]
+    n_rhp_real: NDArray[np.int64]
+    slip: str
+    geometry: BeltLengthChange
+    operating: dict
+    f_max: float
+
+    def summary(self) -> list[dict]:
+        """One row per ratio: RHP zeros [Hz] as (real, imag) pairs."""
+        return [{"r_g": float(r), "n_rhp": int(n), "n_rhp_real": int(nr),
+                 "rhp_zeros_hz": [(float(z.real / 2 / np.pi), float(z.imag / 2 / np.pi))
+                                  for z in rz]}
+                for r, n, nr, rz in zip(self.r_g, self.n_rhp, self.n_rhp_real, self.rhp_zeros)]
+
+
+def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
+                 base: OperatingPoint | None = None, f_max: float = 200.0,
+                 slip: str = "eq2", **options) -> NmpResult:
+    """Zeros of the exactly linearised T_mp -> nu transfer over `ratios`.
+
+    Parameters
+    ----------
+    params : Params
+    ratios : array, shape (n_r,)
+        Geometric ratios [-].
+    base : OperatingPoint, optional
+        Slip (on the rising branch of the traction curve, so the plant is stable), clamping
+        force and primary speed of the points (default: ``params.operating``); its ratio is
+        replaced by each of `ratios`.
+    f_max : float
+        Keep zeros below this frequency [Hz], > 0.
+    slip : {"eq2", "speed"}
+        The slip signal (see the module docstring).
+    **options
+        `empact.nonlinear.model.ModelOptions` (default: moderate damping, torque-controlled
+        drive and load, ``kinematics="actuation"``).
+    """
+    check_choice("slip", slip, SLIPS)
+    f_max = check_number("f_max", f_max, 0.0, lo_open=True, unit="Hz")
+    base = params.operating if base is None else base
+    r = np.atleast_1d(np.asarray(ratios, float))
+    model = nonlinear_model(params, **options)
+    zs, rhp = [], []
+    for rg in r:
+        sys, op = plant(params, base.replace(r_g=float(rg)), model=model)
+        if slip == "speed":  # nu~ - (1 - nu0) r_g~ / r_g0: eq. 2 at the operating ratio
+            w = np.array([-(1 - op.nu) / op.r_g, 1.0])
+            sys = statespace(sys.A, sys.B, w @ sys.C, w @ sys.D, inputs=sys.input_labels,
+                             outputs=["nu"], states=sys.state_labels)
+        z = channel_zeros(sys, "T_mp", "nu", max_abs=1e7)
+        z = z[np.abs(z) < 2 * np.pi * f_max]
+        zs.append(z)
+        rhp.append(z[(z.real > 1e-3 * np.abs(z)) & (np.abs(z) > 1e-3)])
+    real = [int(np.sum(np.abs(z.imag) < 1e-6 * np.abs(z))) for z in rhp]
+    return NmpResult(r_g=r, zeros=tuple(zs), rhp_zeros=tuple(rhp),
+                     n_rhp=np.array([len(z) for z in rhp]), n_rhp_real=np.array(real), slip=slip,
+                     geometry=belt_length_change(params, r), f_max=f_max,
+                     operating={"nu": base.nu, "F_s": base.F_s, "omega_p": base.omega_p,
+                                "options": {k: getattr(model.options, k)
+                                            for k in model.options.__dataclass_fields__}})

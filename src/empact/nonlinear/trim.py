@@ -1,0 +1,252 @@
+"""Steady operating points (trim) of the nonlinear model.
+
+A trimmed point is an equilibrium of the model's state (the driveline is in the rotating frame:
+constant shaft speeds, constant twists), with every derivative zero.  It is requested by the
+ratio ``r_g``, the primary speed ``omega_p`` [rad/s] and exactly two of slip ``nu``, clamping
+force ``F_s`` [N] and load torque ``T_l`` [N m]; the third follows from the traction balance
+``T_b = 2 mu(nu, r_g) F_s R_s / cos(beta) = T_l`` (eq. 1).
+
+The point is built in closed form plus two scalar root finds (the radii of the stretched belt,
+and ``mu(nu) = mu_required`` on the rising branch of the traction curve), then checked: the
+normalised residual of ``dx/dt`` must be below ``1e-8``, else `TrimError`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import brentq, minimize_scalar
+
+from .._validate import check_number
+from ..errors import TrimError
+from ..geometry import belt_length, check_ratio, radii, wrap_angle
+from ..traction import traction_from_params
+from . import _kernel as K
+from .model import EmpactModel
+
+__all__ = ["TrimError", "TrimResult", "trim", "traction_peak"]
+
+RESIDUAL_TOL = 1e-8
+
+
+@dataclass(frozen=True, eq=False)
+class TrimResult:
+    """A trimmed operating point.
+
+    Attributes
+    ----------
+    model : EmpactModel
+    x : array, shape (n,)
+        State, ordered as ``model.states``.
+    u : array, shape (4,)
+        Inputs, ordered as ``model.inputs``.
+    r_g, nu : float
+        Ratio and slip [-].
+    F_s, F_p : float
+        Secondary and primary clamping forces [N].
+    omega_p, omega_s : float
+        Pulley speeds [rad/s].
+    T_b, T_d, T_l : float
+        Traction torque on the secondary, drive and load torques [N m].
+    T_mp, T_ms : float
+        Servo holding torques [N m].
+    mu : float
+        Traction coefficient [-].
+    residual : float
+        Largest normalised ``|dx/dt|`` at `x` [-].
+    """
+
+    model: EmpactModel
+    x: NDArray[np.float64]
+    u: NDArray[np.float64]
+    r_g: float
+    nu: float
+    F_s: float
+    F_p: float
+    omega_p: float
+    omega_s: float
+    T_b: float
+    T_d: float
+    T_l: float
+    T_mp: float
+    T_ms: float
+    mu: float
+    residual: float
+
+    def as_dict(self) -> dict[str, float]:
+        """The scalar fields by name (SI)."""
+        return {k: getattr(self, k) for k in ("r_g", "nu", "F_s", "F_p", "omega_p", "omega_s",
+                                              "T_b", "T_d", "T_l", "T_mp", "T_ms", "mu")}
+
+
+def traction_peak(model: EmpactModel, r_g: float) -> tuple[float, float]:
+    """Slip at the peak of the traction curve and the peak value ``(nu_peak, mu_peak)``."""
+    res = minimize_scalar(lambda nu: -K.traction_mu(nu, r_g, model.p), bounds=(0.0, 0.99),
+                          method="bounded", options={"xatol": 1e-12})
+    return float(res.x), float(-res.fun)
+
+
+def _belt_radii(model: EmpactModel, r_g: float, F_s: float, request: str) -> tuple[float, ...]:
+    """Radii of the stretched belt carrying clamping force F_s at ratio r_g."""
+    v, k = model.params.variator, model.params.actuation.k_belt
+    tb = np.tan(v.beta)
+
+    def f(R_s: float) -> float:
+        phi = float(wrap_angle(r_g * R_s, R_s, v.a))
+        return float(belt_length(r_g * R_s, R_s, v.a)) - v.L_belt \
+            - F_s * tb / (k * (np.pi - 2 * phi))
+
+    _, R_s0 = radii(r_g, v.L_belt, v.a)
+    R_s0 = float(R_s0)
+    try:
+        R_s = brentq(f, 0.98 * R_s0, 1.02 * R_s0, xtol=1e-15, rtol=1e-15)
+    except ValueError:
+        raise TrimError(f"{request}: no belt geometry carries F_s = {F_s:g} N at r_g = "
+                        f"{r_g:g} (belt stretch too large for k_belt = {k:g} N/m)") from None
+    R_p = r_g * R_s
+    phi = float(np.arcsin((R_p - R_s) / v.a))
+    e = F_s * tb / (k * (np.pi - 2 * phi))
+    return R_p, R_s, phi, e
+
+
+def trim(model: EmpactModel, r_g: float, omega_p: float, *, nu: float | None = None,
+         F_s: float | None = None, T_l: float | None = None) -> TrimResult:
+    """Steady operating point of `model`.
+
+    Parameters
+    ----------
+    model : EmpactModel
+    r_g : float
+        Geometric ratio [-], inside the variator's range.
+    omega_p : float
+        Primary pulley speed [rad/s], > 0.
+    nu, F_s, T_l : float, optional
+        Exactly two of: slip [-] in (-1, 1), secondary clamping force [N] > 0, load torque
+        [N m].  With ``belt="locked"`` give `F_s` (and optionally `T_l`, default 0); `nu` must
+        then be 0 or omitted.
+
+    Returns
+    -------
+    TrimResult
+
+    Raises
+    ------
+    TrimError
+        Naming the request, when no steady point exists (load beyond the traction capacity,
+        slip that cannot carry the load, slack belt) or the residual check fails.
+    """
+    r_g = float(check_ratio(check_number("r_g", r_g), model.params.variator))
+    omega_p = check_number("omega_p", omega_p, 0.0, lo_open=True, unit="rad/s")
+    if nu is not None:
+        lo, hi = traction_from_params(model.params).nu_range
+        nu = check_number("nu", nu, lo, hi, note="the valid slip range of the traction curve")
+    if F_s is not None:
+        F_s = check_number("F_s", F_s, 0.0, lo_open=True, unit="N")
+    if T_l is not None:
+        T_l = check_number("T_l", T_l, unit="N m")
+    request = (f"trim request (r_g = {r_g:g}, omega_p = {omega_p:g} rad/s, nu = {nu}, "
+               f"F_s = {F_s}, T_l = {T_l})")
+    locked = model.options.belt == "locked"
+    cosb = np.cos(model.params.variator.beta)
+    if locked:
+        if F_s is None or (nu not in (None, 0, 0.0)):
+            raise TrimError(f"{request}: with belt = 'locked' give F_s (and T_l); the slip is 0")
+        nu, T_l = 0.0, 0.0 if T_l is None else float(T_l)
+    elif sum(v is not None for v in (nu, F_s, T_l)) != 2:
+        raise TrimError(f"{request}: give exactly two of nu, F_s, T_l")
+
+    if F_s is not None:
+        R_p, R_s, phi, e = _belt_radii(model, r_g, F_s, request)
+    if not locked:
+        if nu is not None and F_s is not None:
+            T_l = 2 * K.traction_mu(nu, r_g, model.p) * F_s * R_s / cosb
+        elif nu is not None:  # nu and T_l: find F_s (R_s depends weakly on F_s: fixed point)
+            mu = K.traction_mu(nu, r_g, model.p)
+            if mu * T_l <= 0:
+                raise TrimError(f"{request}: mu(nu) = {mu:.4g} cannot carry T_l = {T_l:g} N m "
+                                f"with a positive clamping force")
+            R_s = float(radii(r_g, model.params.variator.L_belt, model.params.variator.a)[1])
+            for _ in range(20):
+                F_s = T_l * cosb / (2 * mu * R_s)
+                R_p, R_s_new, phi, e = _belt_radii(model, r_g, F_s, request)
+                done = abs(R_s_new - R_s) < 1e-15
+                R_s = R_s_new
+                if done:
+                    break
+            F_s = T_l * cosb / (2 * mu * R_s)
+            R_p, R_s, phi, e = _belt_radii(model, r_g, F_s, request)
+        else:  # F_s and T_l: find nu on the rising branch of the traction curve
+            need = T_l * cosb / (2 * F_s * R_s)
+            nu_pk, mu_pk = traction_peak(model, r_g)
+            if abs(need) > mu_pk:
+                raise TrimError(f"{request}: T_l = {T_l:g} N m needs mu = {abs(need):.4g}, above "
+                                f"the traction peak {mu_pk:.4g} at F_s = {F_s:g} N (slip would "
+                                f"run away)")
+            if need == 0:
+                nu = 0.0
+            else:
+                sgn = np.sign(need)
+                nu = sgn * brentq(lambda n: K.traction_mu(n, r_g, model.p) - abs(need), 0.0,
+                                  nu_pk, xtol=1e-15, rtol=1e-14)
+    x, u, named = _assemble(model, r_g, omega_p, float(nu), float(F_s), float(T_l),
+                            R_p, R_s, phi, e)
+    residual = _residual(model, x, u, named)
+    if not residual < RESIDUAL_TOL:
+        raise TrimError(f"{request}: steady-state residual {residual:.3g} above "
+                        f"{RESIDUAL_TOL:g} (no equilibrium found)")
+    y = model.output_dict(x, u)
+    return TrimResult(model=model, x=x, u=u, r_g=y["r_g"], nu=y["nu"], F_s=y["F_s"],
+                      F_p=y["F_p"], omega_p=omega_p, omega_s=y["omega_s"], T_b=y["T_b"],
+                      T_d=y["T_d_act"], T_l=y["T_l_act"], T_mp=y["T_mp_act"],
+                      T_ms=named["T_ms"], mu=y["mu"], residual=residual)
+
+
+def _assemble(model: EmpactModel, r_g, omega_p, nu, F_s, T_l, R_p, R_s, phi, e):
+    v, a, d = model.params.variator, model.params.actuation, model.params.driveline
+    tb = np.tan(v.beta)
+    N = a.k_belt * e
+    F_p = N * (np.pi + 2 * phi) / tb
+    q5 = (R_p - v.R_min) * tb
+    sig = model.p[K.P_SIG]  # sense of q6 (ModelOptions.kinematics)
+    q6 = sig * (model.p[K.P_RS0] - R_s) * tb
+    q3 = (-F_p / a.k_tp - q5) / a.s
+    q4 = q3 + (sig * F_s / a.k_ts - q6) / a.s
+    T_c = a.i_e * a.s * sig * F_s
+    q2 = a.i_c * (T_c / a.k_c + q4 / a.i_e)
+    T_w = -a.i_e * a.s * (F_p + sig * F_s)
+    q1 = a.i_w * (T_w / a.k_w + q3 / a.i_e)
+    T_mp, T_ms = T_w / a.i_w, T_c / a.i_c
+    omega_s = (1 - nu) * r_g * omega_p
+    T_d = r_g * T_l
+    x = np.zeros(model.n)
+    x[:6] = q1, q2, q3, q4, q5, q6
+    x[12], x[13] = T_d / d.k_tc, T_l / d.k_ds
+    x[14:18] = omega_p, omega_p, omega_s, omega_s
+    ix = model.ix
+    if ix[0] >= 0:
+        x[ix[0]] = T_l / (R_s * d.k_belt)
+    u = np.array([T_mp, T_ms, T_d, T_l])
+    if ix[1] >= 0:
+        x[ix[1]], u[2] = T_d, omega_p
+    if ix[2] >= 0:
+        x[ix[2]], u[3] = T_l, omega_s
+    if ix[3] >= 0:
+        x[ix[3]], u[0] = T_mp, r_g  # the integral carries the holding torque
+    return x, u, {"T_ms": T_ms, "F_p": F_p, "T_d": T_d}
+
+
+def _residual(model: EmpactModel, x, u, named) -> float:
+    """Largest ``|dx_i/dt|`` normalised by the size of the forces on each body."""
+    a, d = model.params.actuation, model.params.driveline
+    dx = model.rhs(0.0, x, u)
+    F = abs(named["F_p"]) + abs(model.output_dict(x, u)["F_s"]) + 1.0
+    torque_act = a.s * F
+    torque_dl = abs(named["T_d"]) + abs(u[3]) + 1.0
+    scale = np.ones(model.n)
+    scale[:6] = 1.0  # velocities: exactly zero at trim
+    scale[6:12] = [torque_act / a.J_mp, torque_act / a.J_ms, torque_act / a.J_sp,
+                   torque_act / a.J_ss, F / a.m_p, F / a.m_s]
+    scale[12:14] = 1.0  # speed differences [rad/s]
+    scale[14:18] = [torque_dl / d.J_d, torque_dl / d.J_p, torque_dl / d.J_s, torque_dl / d.J_l]
+    return float(np.max(np.abs(dx) / scale))

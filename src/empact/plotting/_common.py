@@ -1,0 +1,126 @@
+"""Shared plotting machinery (private): the `Plot` result, axes handling, one style, saving.
+
+Every plotting function of `empact.plotting` takes result objects and optional axes (``ax``
+or ``axes``, to draw into a figure of the caller's), draws inside `STYLE`, and returns a
+`Plot` with the figure, the axes and the artists it made.  Figures are built without pyplot
+(no global state); `save_figure` writes PNG and SVG atomically.
+"""
+from __future__ import annotations
+
+import functools
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import matplotlib as mpl
+import numpy as np
+from matplotlib.figure import Figure
+
+from .._io import atomic_file
+from .._validate import check_choice
+
+__all__ = ["Plot", "STYLE", "STYLES", "new_axes", "save_figure", "save_plot", "symbol", "styled",
+           "FORMATS"]
+
+#: Line styles cycled over overlaid responses.
+STYLES = ("-", "-.", "--", ":", (0, (5, 1, 1, 1)))
+
+#: The one figure style (matplotlib rcParams), applied to every plotting function.
+STYLE = {"font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9, "xtick.labelsize": 8,
+         "ytick.labelsize": 8, "legend.fontsize": 7, "figure.titlesize": 10,
+         "axes.grid": True, "grid.linewidth": 0.3, "lines.linewidth": 1.2,
+         "svg.fonttype": "none", "legend.framealpha": 0.85}
+
+#: File formats `save_figure` writes.
+FORMATS = ("png", "svg", "pdf")
+
+
+@dataclass
+class Plot:
+    """What a plotting function drew.
+
+    Attributes
+    ----------
+    figure : matplotlib.figure.Figure
+    axes : numpy.ndarray of Axes, shape (nrows, ncols)
+    artists : list of the artists drawn (lines, collections, images)
+    """
+
+    figure: Figure
+    axes: np.ndarray
+    artists: list[Any] = field(default_factory=list)
+
+    def save(self, path: str | os.PathLike[str], dpi: int = 150) -> Path:
+        """Save to one file whose format follows its suffix (atomic)."""
+        return save_plot(self.figure, path, dpi=dpi)
+
+
+def styled(fn: Callable[..., Plot]) -> Callable[..., Plot]:
+    """Decorator: draw inside ``matplotlib.rc_context(STYLE)``."""
+    @functools.wraps(fn)
+    def wrapper(*args: Any, **kwargs: Any) -> Plot:
+        with mpl.rc_context(STYLE):
+            return fn(*args, **kwargs)
+    return wrapper
+
+
+def new_axes(axes: Any, nrows: int = 1, ncols: int = 1, size: tuple[float, float] = (7.0, 4.0),
+             **kw: Any) -> tuple[Figure, np.ndarray]:
+    """The caller's `axes` (one Axes or an array of shape (nrows, ncols)) with their figure,
+    or a new figure (constrained layout) and axes of that shape."""
+    if axes is None:
+        fig = Figure(figsize=size, layout="constrained")
+        return fig, fig.subplots(nrows, ncols, squeeze=False, **kw)
+    arr = np.asarray(axes, dtype=object).reshape(-1)
+    if arr.size != nrows * ncols:
+        raise ValueError(f"need {nrows} x {ncols} axes, got {arr.size}")
+    return arr[0].get_figure(), arr.reshape(nrows, ncols)
+
+
+def save_figure(fig: Figure, stem: str | os.PathLike[str],
+                formats: Sequence[str] = ("png", "svg"), dpi: int = 150) -> list[Path]:
+    """Save `fig` as ``stem.<fmt>`` for each format, each written atomically."""
+    stem = Path(stem)
+    paths = []
+    for fmt in formats:
+        check_choice("format", fmt, FORMATS)
+        path = stem.with_name(f"{stem.name}.{fmt}")
+        with atomic_file(path) as tmp:
+            fig.savefig(tmp, format=fmt, dpi=dpi)
+        paths.append(path)
+    return paths
+
+
+def save_plot(fig: Figure, path: str | os.PathLike[str], dpi: int = 150) -> Path:
+    """Save `fig` to one file whose format follows its suffix (.png, .svg, .pdf), atomically."""
+    path = Path(path)
+    fmt = check_choice("plot file suffix", path.suffix.lstrip(".").lower(), FORMATS)
+    return save_figure(fig, path.with_suffix(""), formats=(fmt,), dpi=dpi)[0]
+
+
+_GREEK = {"theta": r"\theta", "omega": r"\omega", "nu": r"\nu", "mu": r"\mu", "phi": r"\phi",
+          "beta": r"\beta", "tau": r"\tau", "kappa": r"\kappa", "Delta": r"\Delta"}
+
+
+def symbol(name: str) -> str:
+    """A signal name as mathtext: ``T_mp`` -> ``$T_\\mathrm{mp}$``, ``omega_p`` ->
+    ``$\\omega_\\mathrm{p}$``, ``nu`` -> ``$\\nu$``; ``_ref`` / ``_act`` become a superscript,
+    ``_dot`` a dot; words (``belt_elongation``) stay words."""
+    dot = name.endswith("_dot")
+    core = name[:-4] if dot else name
+    m = re.fullmatch(r"([A-Za-z]+)(?:_([A-Za-z0-9]+))?(?:_([A-Za-z0-9]+))?", core)
+    if not m or (m.group(1) not in _GREEK and len(m.group(1)) > 2):
+        return name.replace("_", " ")
+    base, sub, extra = m.groups()
+    if sub in ("ref", "act") and extra is None:
+        sub, extra = None, sub
+    text = _GREEK.get(base, base)
+    if dot:
+        text = rf"\dot{{{text}}}"
+    if sub:
+        text += rf"_\mathrm{{{sub}}}"
+    if extra:
+        text += rf"^\mathrm{{{extra}}}"
+    return f"${text}$"

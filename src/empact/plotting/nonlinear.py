@@ -1,0 +1,133 @@
+"""Figures of the nonlinear model's results (NMP analysis, simulations, exact plant
+magnitudes).
+
+Drawn from result objects only (`empact.nonlinear.nmp.NmpResult`,
+`empact.nonlinear.simulate.SimulationResult`, `empact.lti.FrequencyResponse`); every function
+draws on the given axes or a new figure and returns a `Plot`.
+"""
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..lti import FrequencyResponse
+from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS
+from ..nonlinear.nmp import NmpResult
+from ..nonlinear.simulate import SimulationResult
+from ._common import STYLES, Plot, new_axes, styled, symbol
+
+__all__ = ["plot_nmp", "plot_simulation", "plot_plant_magnitude"]
+
+
+@styled
+def plot_nmp(result: NmpResult, title: str = "", axes: Any = None) -> Plot:
+    """Left: Delta_x and the belt-length change over the ratio; right: zeros of T_mp -> nu.
+
+    The zeros are drawn in the complex plane [Hz], one colour per ratio; right-half-plane
+    zeros filled.
+    """
+    fig, axs = new_axes(axes, 1, 2, size=(11, 4.2))
+    g = result.geometry
+    ax = axs[0, 0]
+    artists = []
+    artists += ax.semilogx(g.r_g, 1e3 * g.delta_x, "-o",
+                           label=r"$\Delta_x = x_p - x_s$ (eq. 5) [mm]")
+    artists += ax.semilogx(g.r_g, 1e6 * g.dL_exact, "-s",
+                           label=rf"$\Delta L$ exact, $\delta$ = {1e6 * g.delta:g} µm [µm]")
+    artists += ax.semilogx(g.r_g, 1e6 * g.dL_first_order, "--",
+                           label=r"$\Delta L = 4 \phi \delta / \tan\beta$ [µm]")
+    ax.axhline(0, color="k", lw=0.6)
+    ax.axvline(1, color="k", lw=0.4, ls=":")
+    ax.set_xlabel(r"geometric ratio $r_g$ [-]")
+    ax.set_ylabel("length [mm or µm, see legend]")
+    ax.legend(loc="best")
+    ax.grid(True, which="both")
+    ax = axs[0, 1]
+    colors = [f"C{k % 10}" for k in range(len(result.r_g))]
+    for r, z, c in zip(result.r_g, result.zeros, colors):
+        zh = z / (2 * np.pi)
+        rhp = z.real > 1e-6 * np.abs(z)
+        artists += ax.plot(zh.real[~rhp], zh.imag[~rhp], "o", mfc="none", color=c, ms=5,
+                           label=f"$r_g$ = {r:.3g}: {int(rhp.sum())} RHP")
+        artists += ax.plot(zh.real[rhp], zh.imag[rhp], "o", color=c, ms=6)
+    ax.axvline(0, color="k", lw=0.6)
+    ax.set_xscale("symlog", linthresh=1.0)
+    ax.set_xlabel("real part of zero / 2π [Hz] (symmetric log scale)")
+    ax.set_ylabel("imaginary part of zero / 2π [Hz]")
+    ax.set_ylim(-5, result.f_max)
+    ax.set_title(r"zeros of $T_\mathrm{mp} \rightarrow \nu$ (filled: right half-plane)")
+    ax.legend(fontsize=6, ncol=2, loc="upper left")
+    if title:
+        fig.suptitle(title)
+    return Plot(fig, axs, artists)
+
+
+@styled
+def plot_simulation(result: SimulationResult,
+                    signals: Sequence[tuple[str, ...]] = (("r_g", "r_g_ref"), ("nu",),
+                                                           ("F_s", "F_p"),
+                                                           ("omega_p", "omega_s"),
+                                                           ("T_b", "T_l_act", "T_d_act"),
+                                                           ("T_mp_act",)),
+                    title: str = "", axes: Any = None) -> Plot:
+    """Time histories, one panel per group of signal names (missing names are skipped).
+
+    Each panel's y label gives the unit of its signals (`empact.nonlinear.model` units; slip
+    in %).  `axes`: shape (ceil(groups / 2), 2); default a new figure.
+    """
+    known = set(result.outputs) | set(result.states) | set(result.inputs)
+    groups = [[s for s in grp if s in known] for grp in signals]
+    groups = [g for g in groups if g]
+    ncol = 2
+    nrow = (len(groups) + 1) // 2
+    fig, axs = new_axes(axes, nrow, ncol, size=(11, 2.4 * nrow + 0.8), sharex=True)
+    units = {**STATE_UNITS, **INPUT_UNITS, **OUTPUT_UNITS}
+    artists = []
+    for k, grp in enumerate(groups):
+        ax = axs[k // ncol, k % ncol]
+        for j, name in enumerate(grp):
+            y = result.output(name)
+            unit = units.get(name, "")
+            if name == "nu":
+                y, unit = 100 * y, "%"
+            elif unit == "N" and np.nanmax(np.abs(y)) > 1e3:
+                y, unit = y / 1e3, "kN"
+            artists += ax.plot(result.t, y, ls=STYLES[j % len(STYLES)], label=symbol(name))
+        ax.set_ylabel(f"[{unit}]" if unit else "[-]")
+        ax.legend(loc="best")
+    for ax in axs[-1]:
+        ax.set_xlabel("time [s]")
+    for k in range(len(groups), nrow * ncol):
+        axs[k // ncol, k % ncol].set_visible(False)
+    status = "" if result.complete else "  [INCOMPLETE]"
+    fig.suptitle((title or f"simulation {result.scenario}") + status)
+    return Plot(fig, axs, artists)
+
+
+@styled
+def plot_plant_magnitude(responses: Sequence[FrequencyResponse], title: str = "",
+                         axes: Any = None) -> Plot:
+    """Magnitudes of (T_mp, T_ms) -> (r_g, nu), one line style per response (Fig. 2).
+
+    `axes`: shape (n_out, n_in) of the responses; default a new figure.
+    """
+    n_out, n_in = len(responses[0].outputs), len(responses[0].inputs)
+    fig, axs = new_axes(axes, n_out, n_in, size=(10, 6), sharex=True)
+    artists = []
+    for k, resp in enumerate(responses):
+        for i, out in enumerate(resp.outputs):
+            for j, inp in enumerate(resp.inputs):
+                ax = axs[i, j]
+                artists += ax.loglog(resp.frequencies_hz, np.abs(resp.H[i, j]),
+                                     ls=STYLES[k % len(STYLES)], label=resp.label)
+                ax.set_title(f"{symbol(inp)} $\\rightarrow$ {symbol(out)}")
+                ax.grid(True, which="both")
+                if j == 0:
+                    ax.set_ylabel(f"|{symbol(out)} / T| [{OUTPUT_UNITS.get(out, '-')}/(N m)]")
+    for ax in axs[-1]:
+        ax.set_xlabel("frequency [Hz]")
+    axs[0, 0].legend(loc="best")
+    if title:
+        fig.suptitle(title)
+    return Plot(fig, axs, artists)

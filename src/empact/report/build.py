@@ -1,0 +1,92 @@
+"""Building the report: compute every section, render, write one HTML page with a table of
+contents and a verdict summary, and move the folder into place when complete."""
+from __future__ import annotations
+
+import html
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Sequence
+
+from tqdm import tqdm
+
+from .._io import atomic_folder
+from ..params import Params, dumps_params
+from ..reproduction.claims import Claim, claims_table
+from .context import Context, Section
+from .sections import SECTIONS
+
+__all__ = ["build_report", "STYLE_CSS"]
+
+STYLE_CSS = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222;
+line-height:1.4}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;
+padding:3px 8px;text-align:right}caption{text-align:left;font-weight:bold;margin-bottom:4px}
+img{max-width:100%}figcaption{font-size:90%;color:#444}.ok{color:#060}.bad{color:#a00}
+nav ol{columns:2}.summary td{text-align:left}.summary td.v{white-space:nowrap}
+ul.claims li{margin:2px 0}.why{color:#555;font-size:90%}section{margin-top:2em}"""
+
+
+def _summary(done: Sequence[tuple[Section, Sequence[Claim]]]) -> str:
+    rows = []
+    for sec, claims in done:
+        for c in claims:
+            mark = '<b class="ok">shown</b>' if c.shown else '<b class="bad">NOT shown</b>'
+            why = html.escape(c.explanation if not c.shown else c.computed)
+            rows.append(f'<tr><td><a href="#{sec.anchor}">{html.escape(c.source)}</a></td>'
+                        f"<td>{html.escape(c.claim)}</td><td class='v'>{mark}</td>"
+                        f"<td>{why}</td></tr>")
+    n = sum(len(c) for _, c in done)
+    bad = sum(not x.shown for _, c in done for x in c)
+    return (f'<h2 id="summary">Verdicts</h2><p>{n} claims checked: {n - bad} shown, '
+            f'{bad} NOT shown (<a href="claims.json">claims.json</a>).</p>'
+            '<table class="summary"><thead><tr><th>source</th><th>claim</th><th>verdict</th>'
+            "<th>computed / why not</th></tr></thead><tbody>" + "\n".join(rows)
+            + "</tbody></table>\n")
+
+
+def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool = True,
+                 sections: Sequence[Section] | None = None,
+                 formats: Sequence[str] = ("png", "svg")) -> Path:
+    """Compute every section and write ``out/index.html`` with its figures and tables.
+
+    Parameters
+    ----------
+    params : the parameter set
+    out : the report folder; written in a temporary sibling and moved into place when complete
+    progress : a progress bar on stderr
+    sections : the sections (default: all, `empact.report.sections.SECTIONS`)
+    formats : figure formats (``"png"``, ``"svg"``, ``"pdf"``); the page shows the PNG
+
+    Returns
+    -------
+    pathlib.Path
+        The report folder.
+    """
+    todo = list(SECTIONS if sections is None else sections)
+    with atomic_folder(out) as tmp:
+        ctx = Context(params=params, out=tmp, formats=tuple(formats))
+        parts, done = [], []
+        for sec in tqdm(todo, desc="report", unit="section", disable=not progress,
+                        file=sys.stderr):
+            result = sec.compute(params)
+            body = sec.render(ctx, result)
+            done.append((sec, tuple(result.claims)))
+            parts.append(f'<section id="{sec.anchor}"><h2>{html.escape(sec.title)}</h2>\n'
+                         f"{body}</section>")
+        toc = "".join(f'<li><a href="#{s.anchor}">{html.escape(s.title)}</a></li>'
+                      for s in todo)
+        page = ("<!doctype html><html lang='en'><head><meta charset='utf-8'>"
+                "<title>empact report</title>"
+                f"<style>{STYLE_CSS}</style></head><body><h1>Dynamic analysis of the Empact CVT: "
+                "reproduced with empact</h1>\n<p>Reference: “Dynamic analysis of the Empact CVT: "
+                "ratio and slip dependent, non-minimum phase dynamics”. Every number below is "
+                "computed from the parameter set in <a href='params.toml'>params.toml</a>.</p>\n"
+                f'<nav><h2 id="contents">Contents</h2><ol><li><a href="#summary">Verdicts</a>'
+                f"</li>{toc}</ol></nav>\n" + _summary(done) + "\n".join(parts)
+                + "</body></html>\n")
+        claims = [dict(section=s.anchor, **c) for s, cs in done for c in claims_table(cs)]
+        (tmp / "claims.json").write_text(json.dumps(claims, indent=1, default=float))
+        (tmp / "params.toml").write_text(dumps_params(params))
+        (tmp / "index.html").write_text(page)
+    return Path(out).resolve()

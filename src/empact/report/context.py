@@ -1,0 +1,104 @@
+"""What a report section gets and how it writes: `Section`, `Context` (private to the report).
+
+A section is a title, an anchor, a ``compute(params)`` function from `empact.reproduction`
+(its result carries ``claims``) and a ``render(ctx, result)`` function that draws the figures
+with `empact.plotting`, writes tables and returns an HTML fragment.
+"""
+from __future__ import annotations
+
+import csv
+import html
+import io
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from .._io import atomic_write_text
+from ..params import Params
+from ..plotting import Plot, save_figure
+from ..reproduction.claims import Claim
+
+__all__ = ["Section", "Context", "fmt_cell"]
+
+
+@dataclass(frozen=True)
+class Section:
+    """One report section.
+
+    Attributes
+    ----------
+    title : heading
+    anchor : HTML id (also the table-of-contents link)
+    compute : ``params -> result`` with a ``claims`` attribute (`empact.reproduction`)
+    render : ``(Context, result) -> html``
+    """
+
+    title: str
+    anchor: str
+    compute: Callable[[Params], Any]
+    render: Callable[["Context", Any], str]
+
+
+def fmt_cell(value: object) -> str:
+    """A table cell: floats with 4 significant digits, everything else as text (escaped)."""
+    if isinstance(value, (float, np.floating)):
+        return f"{value:.4g}"
+    return html.escape(str(value))
+
+
+@dataclass
+class Context:
+    """The parameters, the output folder and the figure formats of a report build.
+
+    `figures` collects the figure files written (for the build's completeness check).
+    """
+
+    params: Params
+    out: Path
+    formats: tuple[str, ...] = ("png", "svg")
+    figures: list[Path] = field(default_factory=list)
+
+    def figure(self, plot: Plot, stem: str, caption: str) -> str:
+        """Save a plot in the build's formats; return its HTML (caption is HTML)."""
+        self.figures += save_figure(plot.figure, self.out / stem, self.formats)
+        shown = "png" if "png" in self.formats else self.formats[0]
+        others = " ".join(f'<a href="{stem}.{fmt}">{fmt.upper()}</a>' for fmt in self.formats
+                          if fmt != shown)
+        return (f'<figure id="{stem}"><img src="{stem}.{shown}" alt="{html.escape(stem)}">'
+                f'<figcaption>{caption}{f" ({others})" if others else ""}</figcaption>'
+                f"</figure>\n")
+
+    def table(self, stem: str, header: Sequence[str], rows: Sequence[Sequence[object]],
+              caption: str) -> str:
+        """Write a CSV table; return it as an HTML table (caption is HTML)."""
+        buf = io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        writer.writerow(header)
+        writer.writerows(rows)
+        atomic_write_text(self.out / f"{stem}.csv", buf.getvalue())
+        head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
+        body = "".join("<tr>" + "".join(f"<td>{fmt_cell(c)}</td>" for c in row) + "</tr>\n"
+                       for row in rows)
+        return (f'<table id="{stem}"><caption>{caption} (<a href="{stem}.csv">CSV</a>)'
+                f"</caption><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>\n")
+
+    @staticmethod
+    def verdict(claims: Sequence[Claim]) -> str:
+        """HTML mark for a group of claims: shown when all are."""
+        ok = all(c.shown for c in claims)
+        return '<b class="ok">shown</b>' if ok else '<b class="bad">NOT shown</b>'
+
+    @staticmethod
+    def claims(claims: Sequence[Claim]) -> str:
+        """The claims as an HTML list: claim, computed, verdict, explanation."""
+        items = []
+        for c in claims:
+            mark = '<b class="ok">shown</b>' if c.shown else '<b class="bad">NOT shown</b>'
+            why = f' <span class="why">{html.escape(c.explanation)}</span>' \
+                if c.explanation and not c.shown else ""
+            reading = f" <i>[{html.escape(c.reading)}]</i>" if c.reading else ""
+            items.append(f'<li id="claim-{html.escape(c.key)}">{html.escape(c.claim)}{reading}: '
+                         f"{html.escape(c.computed)} &mdash; {mark}{why}</li>")
+        return f'<ul class="claims">{"".join(items)}</ul>\n'

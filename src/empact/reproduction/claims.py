@@ -1,0 +1,63 @@
+"""Claims of the paper, checked: the record every reproduction function returns.
+
+A `Claim` states what the paper says (with its section), what empact computed (numbers with
+units), the verdict and why.  The report renders claims (its verdict summary, the lists under
+each figure) and the tests assert on them; ``claims.json`` in the report folder holds them all
+for scripts.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any, Iterable, Mapping
+
+__all__ = ["Claim", "claims_table"]
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One checked statement of the paper.
+
+    Attributes
+    ----------
+    key : stable identifier, e.g. ``"table2.max_error"`` (tests and scripts use it)
+    source : where the paper says it, e.g. ``"Sec. 2.2, Fig. 9"``
+    claim : what the paper says (or what empact checks on its behalf), one sentence
+    computed : what empact computed, with numbers and units
+    shown : the verdict: True when the computed result shows the claim
+    explanation : why the verdict is what it is (always given when not shown)
+    reading : which reading of the paper or which model the result belongs to (e.g.
+        ``"machine (equal translation)"``, ``"Sec. 2.1 as published"``); empty when there is
+        only one
+    values : the numbers behind `computed`, by name (SI unless the name says otherwise)
+    """
+
+    key: str
+    source: str
+    claim: str
+    computed: str
+    shown: bool
+    explanation: str = ""
+    reading: str = ""
+    values: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "shown", bool(self.shown))
+        if not self.shown and not self.explanation:
+            raise ValueError(f"claim {self.key!r} is not shown and has no explanation")
+
+    @property
+    def verdict(self) -> str:
+        """``"shown"`` or ``"NOT shown"``."""
+        return "shown" if self.shown else "NOT shown"
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain dictionary (for JSON)."""
+        d = asdict(self)
+        d["values"] = dict(self.values)
+        d["verdict"] = self.verdict
+        return d
+
+
+def claims_table(claims: Iterable[Claim]) -> list[dict[str, Any]]:
+    """The claims as plain dictionaries, in order."""
+    return [c.as_dict() for c in claims]

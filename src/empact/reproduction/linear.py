@@ -1,0 +1,200 @@
+"""The paper's Sec. 2.1 and 2.2 reproduced: Tables 1-2 and Figs. 4-6 and 8, with their claims.
+
+Each function computes the result objects a figure or table is drawn from and checks the
+paper's statements about them (`Claim` records).  Compute only: `empact.report` renders.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import paper
+from ..linear.actuation import actuation_model
+from ..linear.driveline import driveline_model, uncoupled_frequencies
+from ..linear.lumped import Modes
+from ..lti import FrequencyResponse
+from ..params import DAMPING_LEVELS, Params
+from .claims import Claim
+
+__all__ = ["RATIOS", "Table1", "Table2", "ModeFigure", "Fig6", "table1", "table2", "fig4_5",
+           "fig6", "fig8"]
+
+#: The ratios of the paper's tables.
+RATIOS = (0.5, 1.0, 2.0)
+
+
+@dataclass(frozen=True)
+class Table1:
+    """Actuation eigenfrequencies [Hz] by ratio (``frequencies_hz[r]``, shape (6,))."""
+
+    frequencies_hz: dict[float, np.ndarray]
+    claims: tuple[Claim, ...]
+
+
+def table1(params: Params) -> Table1:
+    """Table 1: undamped actuation eigenfrequencies at r_g = 0.5, 1, 2."""
+    freqs = {r: actuation_model(params, r).modes().frequencies_hz for r in RATIOS}
+    ref = np.array(paper.ACTUATION_R1_HZ)
+    achieved = freqs[1.0][1:4]
+    err = np.abs(achieved / ref - 1)
+    claim = Claim(
+        key="table1.r1", source="Sec. 2.1 (Table 1)",
+        claim="actuation eigenfrequencies 10.7, 17.3 and 47.9 Hz at r_g = 1; modes 5 and 6 at "
+              "very high frequency",
+        computed=f"{', '.join(f'{x:.2f}' for x in achieved)} Hz (largest relative error "
+                 f"{100 * err.max():.2f} %, target 1 %); modes 5 and 6 at {freqs[1.0][4]:.0f} "
+                 f"and {freqs[1.0][5]:.0f} Hz",
+        shown=bool(err.max() < 0.01 and freqs[1.0][4] > 500),
+        explanation="The paper's Table 1 is missing from its text; the targets are the numbers "
+                    "in its prose. 'Very high frequency' is checked as above 500 Hz.",
+        values={"frequencies_hz": achieved.tolist(), "max_rel_error": float(err.max()),
+                "mode5_hz": float(freqs[1.0][4]), "mode6_hz": float(freqs[1.0][5])})
+    return Table1(freqs, (claim,))
+
+
+@dataclass(frozen=True)
+class Table2:
+    """Driveline eigenfrequencies [Hz] by ratio and the uncoupled sides.
+
+    Attributes
+    ----------
+    frequencies_hz : ``{r_g: array (4,)}``
+    uncoupled_hz : ``{"primary": f, "secondary": f}``
+    claims : the checks
+    """
+
+    frequencies_hz: dict[float, np.ndarray]
+    uncoupled_hz: dict[str, float]
+    claims: tuple[Claim, ...]
+
+
+def table2(params: Params) -> Table2:
+    """Table 2: undamped driveline eigenfrequencies, and the uncoupled sides of Sec. 2.2."""
+    freqs = {r: driveline_model(params, r).modes().frequencies_hz for r in RATIOS}
+    worst = max(abs(freqs[r][j] / ref - 1) for r in RATIOS
+                for j, ref in enumerate(paper.TABLE2_HZ[r]) if ref)
+    unc = uncoupled_frequencies(params)
+    worst_u = max(abs(unc[s] / paper.UNCOUPLED_HZ[s] - 1) for s in ("primary", "secondary"))
+    claims = (
+        Claim(key="table2.modes", source="Sec. 2.2 (Table 2)",
+              claim="driveline eigenfrequencies at r_g = 0.5, 1, 2 as in Table 2",
+              computed=f"largest relative error {100 * worst:.2f} % (target 1 %)",
+              shown=worst < 0.01, explanation="All nine non-zero values compared.",
+              values={"max_rel_error": float(worst)}),
+        Claim(key="table2.uncoupled", source="Sec. 2.2 (slip dynamics)",
+              claim="with the belt removed, one side at 15.5 Hz and the other at 24.6 Hz",
+              computed=f"primary side {unc['primary']:.3f} Hz, secondary side "
+                       f"{unc['secondary']:.3f} Hz (largest error {100 * worst_u:.2f} %)",
+              shown=worst_u < 0.01,
+              explanation="The paper's text calls 15.5 Hz the primary side and 24.6 Hz the "
+                          "secondary side, but no parameter set of the Fig. 7 model reproduces "
+                          "Table 2 with those labels, while the swapped reading fits all of "
+                          "Table 2 and agrees with the paper's own root-locus story (the "
+                          "24.6 Hz pair ends at the 22.5 Hz torque-converter mode).",
+              reading="labels swapped (primary 24.6 Hz, secondary 15.5 Hz)",
+              values={"primary_hz": unc["primary"], "secondary_hz": unc["secondary"]}),
+    )
+    return Table2(freqs, unc, claims)
+
+
+@dataclass(frozen=True)
+class ModeFigure:
+    """Undamped modes at one ratio (Figs. 4-5 for the actuation, Fig. 8 for the driveline)."""
+
+    modes: Modes
+    claims: tuple[Claim, ...]
+
+
+def _checks(key: str, source: str, checks: dict[str, tuple[bool, str]]) -> tuple[Claim, ...]:
+    """One claim per check: ``{claim text: (shown, computed)}``."""
+    return tuple(Claim(key=f"{key}.{i + 1}", source=source, claim=text, computed=computed,
+                       shown=ok, explanation="" if ok else "The computed mode shape or energy "
+                       "does not have this character.")
+                 for i, (text, (ok, computed)) in enumerate(checks.items()))
+
+
+def fig4_5(params: Params) -> ModeFigure:
+    """Figs. 4 and 5: actuation mode shapes and modal energy at r_g = 1."""
+    modes = actuation_model(params, 1.0).modes()
+    e = np.abs(modes.energy_fraction)
+    V = modes.normalised_shapes
+    rigid_ok = bool(modes.n_rigid == 1 and np.allclose(V[6:, 0], 0, atol=1e-9)
+                    and np.allclose(V[:6, 0], 1, atol=1e-9))
+    checks = {
+        "one rigid-body mode with q~1..q~6 equal and q~7 = q~8 = 0":
+            (rigid_ok, f"{modes.n_rigid} rigid-body mode(s); q~1..q~8 = "
+                       + ", ".join(f"{x:.2f}" for x in V[:, 0])),
+        "mode 2: q1 and q3 in the same direction":
+            (bool(V[0, 1] * V[2, 1] > 0), f"q~1 = {V[0, 1]:.3f}, q~3 = {V[2, 1]:.3f}"),
+        "mode 3: q1 and q3 opposite":
+            (bool(V[0, 2] * V[2, 2] < 0), f"q~1 = {V[0, 2]:.3f}, q~3 = {V[2, 2]:.3f}"),
+        "mode 4: the chain holds most of the potential energy":
+            (bool(e[3, 1] >= 0.5), f"chain energy fraction {e[3, 1]:.3f} (>= 0.5)"),
+        "mode 5: in-phase pulley translation, belt not strained":
+            (bool(e[4, 2] <= 0.05), f"belt energy fraction {e[4, 2]:.3f} (<= 0.05)"),
+        "mode 6: out-of-phase pulley translation, belt strained":
+            (bool(e[5, 2] >= 0.2), f"belt energy fraction {e[5, 2]:.3f} (>= 0.2)"),
+    }
+    return ModeFigure(modes, _checks("fig4_5", "Sec. 2.1, Figs. 4-5", checks))
+
+
+@dataclass(frozen=True)
+class Fig6:
+    """Servo torque -> servo angle responses at three damping levels (Fig. 6).
+
+    Attributes
+    ----------
+    responses : one `FrequencyResponse` per level ("none", "moderate", "large")
+    slopes : ``{pair: (low, high)}`` log-log slopes of the large-damping responses
+    f1_hz : first elastic mode [Hz] (the slopes are taken at f1 / 20 and 30 f1)
+    claims : the checks
+    """
+
+    responses: tuple[FrequencyResponse, ...]
+    slopes: dict[str, tuple[float, float]]
+    f1_hz: float
+    claims: tuple[Claim, ...]
+
+
+def fig6(params: Params) -> Fig6:
+    """Fig. 6: T_mp -> theta_mp and T_ms -> theta_ms with none / moderate / large damping."""
+    f = np.logspace(-1, 3.5, 800)
+    resps = tuple(actuation_model(params, 1.0, lvl).frequency_response(
+        2 * np.pi * f, ["T_mp", "T_ms"], ["theta_mp", "theta_ms"], label=f"{lvl} damping")
+        for lvl in DAMPING_LEVELS)
+    large = resps[-1]
+    f1 = float(actuation_model(params, 1.0).modes().frequencies_hz[1])
+    slopes = {}
+    for out, inp in (("theta_mp", "T_mp"), ("theta_ms", "T_ms")):
+        mag = np.log10(np.abs(large.response(out, inp)))
+        s = np.gradient(mag, np.log10(f))
+        slopes[f"{inp} -> {out}"] = (float(s[np.argmin(abs(f - f1 / 20))]),
+                                     float(s[np.argmin(abs(f - 30 * f1))]))
+    ok = all(abs(lo + 1) < 0.1 and abs(hi + 2) < 0.1 for lo, hi in slopes.values())
+    txt = "; ".join(f"{p}: {lo:.2f} at {f1 / 20:.2f} Hz, {hi:.2f} at {30 * f1:.0f} Hz"
+                    for p, (lo, hi) in slopes.items())
+    claim = Claim(key="fig6.slopes", source="Sec. 2.1, Fig. 6",
+                  claim="with large damping both servo responses show a -1 slope at low and a "
+                        "-2 slope at high frequency",
+                  computed=f"slopes (decades/decade, within 0.1): {txt}", shown=ok,
+                  explanation="Slopes of the large-damping magnitude at f1 / 20 and 30 f1.",
+                  values={k: list(v) for k, v in slopes.items()})
+    return Fig6(resps, slopes, f1, (claim,))
+
+
+def fig8(params: Params) -> ModeFigure:
+    """Fig. 8: driveline mode shapes and modal energy at r_g = 1."""
+    modes = driveline_model(params, 1.0).modes()
+    e = np.abs(modes.energy_fraction)
+    names = modes.springs
+    checks = {
+        "mode 2 mainly driveshaft": (bool(e[1].argmax() == 2),
+                                     f"largest energy: {names[e[1].argmax()]} ({e[1].max():.2f})"),
+        "mode 3 mainly torque converter": (bool(e[2].argmax() == 0),
+                                           f"largest energy: {names[e[2].argmax()]} "
+                                           f"({e[2].max():.2f})"),
+        "mode 4 mainly pushbelt": (bool(e[3].argmax() == 1),
+                                   f"largest energy: {names[e[3].argmax()]} ({e[3].max():.2f})"),
+    }
+    return ModeFigure(modes, _checks("fig8", "Sec. 2.2, Fig. 8", checks))

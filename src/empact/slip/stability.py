@@ -1,0 +1,176 @@
+"""Stability of the variator coupling over a grid of operating points.
+
+`stability_map` evaluates the largest pole real part and the smallest damping ratio of the slip
+model over two operating-point variables: the system matrices of a chunk of points are built
+stacked and all their eigenvalues come from one `numpy.linalg.eigvals` call.  With the exact
+5 x 5 reduction (`empact.slip.model.reduced_matrices`) no rule is needed for telling the three
+structural zeros apart; on the full 8 x 8 matrices `stability_measures` drops the three
+eigenvalues of smallest magnitude.  (A compiled polynomial-root path was tried and removed: its
+compile and cache load cost more than a whole map, see ``bench/RESULTS.md``.)
+"""
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validate import check_choice, check_int
+from ..errors import ParameterError
+from ..lti import damping_ratio
+from ..params import OperatingPoint, Params
+from ..traction import TractionModel, traction_from_params
+from .coupling import VARIABLES, linearisation_terms
+from .loci import Variable, grid_values
+from .model import N_STRUCTURAL_ZEROS, assemble_A, assemble_reduced, mass_stiffness
+
+__all__ = ["StabilityMap", "stability_map", "stability_measures", "dynamic_poles"]
+
+MapMethod = Literal["reduced", "full"]
+METHODS = ("reduced", "full")
+
+
+def dynamic_poles(eigs: ArrayLike) -> NDArray[np.complex128]:
+    """Drop the `N_STRUCTURAL_ZEROS` eigenvalues of smallest magnitude (last axis)."""
+    e = np.asarray(eigs, complex)
+    order = np.argsort(np.abs(e), axis=-1)[..., N_STRUCTURAL_ZEROS:]
+    return np.take_along_axis(e, order, axis=-1)
+
+
+def stability_measures(eigs: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Largest real part [1/s] and smallest damping ratio [-] of the non-structural poles.
+
+    Parameters
+    ----------
+    eigs : eigenvalues of slip models, shape S + (8,)
+
+    Returns
+    -------
+    max_real : shape S;  min_damping : shape S, ``min(-Re(p) / |p|)`` (a real stable pole
+        counts as 1, a real unstable one as -1)
+    """
+    return _measures(dynamic_poles(eigs))
+
+
+def _measures(p: NDArray[np.complex128]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Largest real part and smallest damping ratio of poles `p` (last axis)."""
+    return p.real.max(axis=-1), damping_ratio(p).min(axis=-1)
+
+
+@dataclass(frozen=True)
+class StabilityMap:
+    """Largest pole real part and smallest damping ratio over a grid of two variables.
+
+    Attributes
+    ----------
+    x_name, y_name : the two variables (from `VARIABLES`)
+    x : shape (nx,);  y : shape (ny,)   [units of the variables]
+    base : operating point of the other two variables
+    max_real : largest real part of the non-structural poles [1/s], shape (ny, nx)
+    min_damping : smallest damping ratio [-], shape (ny, nx)
+    tol : real parts above ``tol`` [1/s] count as unstable
+    method : the method that computed the map ("reduced" or "full")
+    """
+
+    x_name: str
+    y_name: str
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    base: OperatingPoint
+    max_real: NDArray[np.float64]
+    min_damping: NDArray[np.float64]
+    tol: float
+    method: str = "reduced"
+
+    @property
+    def unstable(self) -> NDArray[np.bool_]:
+        """Points with a pole in the right half-plane, shape (ny, nx)."""
+        return self.max_real > self.tol
+
+    @property
+    def unstable_fraction(self) -> float:
+        """Fraction of grid points that are unstable [-]."""
+        return float(self.unstable.mean())
+
+
+def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variable,
+                  y: ArrayLike, *, base: OperatingPoint | None = None,
+                  traction: TractionModel | None = None, method: MapMethod = "reduced",
+                  chunk_size: int = 4096, workers: int | None = None,
+                  tol: float = 1e-6) -> StabilityMap:
+    """Stability of the slip model over a grid of two operating-point variables.
+
+    The grid (``len(y) * len(x)`` points) is processed in chunks of `chunk_size` points: for
+    each chunk the system matrices are built stacked and all their eigenvalues come from one
+    `numpy.linalg.eigvals` call; memory stays O(chunk_size) beyond the two result arrays.
+
+    Parameters
+    ----------
+    params : the parameter set
+    x_name, y_name : two different variables of "nu", "F_s", "omega_p", "r_g"
+    x, y : their values, shapes (nx,), (ny,)
+    base : the other two variables (default: the ``[operating]`` point of `params`)
+    traction : traction model (default `traction_from_params(params)`)
+    method : {"reduced", "full"}
+        ``"reduced"`` (default): the stacked matrices of `reduced_matrices`, shape
+        (chunk, 5, 5), whose eigenvalues are exactly the five non-structural ones.
+        ``"full"``: the stacked ``A`` of `state_matrices`, shape (chunk, 8, 8), with the three
+        eigenvalues of smallest magnitude dropped as the structural zeros (about twice as
+        slow).  Both give the same map to rounding.
+    chunk_size : points per eigenvalue call (>= 1)
+    workers : threads working on chunks in parallel (>= 1; default: one per CPU core; numpy's
+        eigenvalue routine releases the GIL)
+    tol : real parts above this [1/s] count as unstable (absorbs rounding only)
+
+    Returns
+    -------
+    StabilityMap
+        ``max_real`` and ``min_damping`` of shape (ny, nx).
+    """
+    xv, yv = grid_values(x_name, x), grid_values(y_name, y)
+    if x_name == y_name:
+        raise ParameterError(f"stability map over {x_name!r} twice: choose two different "
+                             f"variables of {', '.join(VARIABLES)}")
+    check_choice("method", method, METHODS)
+    chunk_size = check_int("chunk_size", chunk_size, 1)
+    workers = check_int("workers", (os.cpu_count() or 1) if workers is None else workers, 1)
+    base = OperatingPoint.from_params(params) if base is None else base
+    fixed = base.as_dict()
+    # Every variable is valid or not on its own: checking the two axes checks the whole grid,
+    # so a bad value is reported at once, before any chunk is computed.
+    for name, values in ((x_name, xv), (y_name, yv)):
+        linearisation_terms(params, **{**fixed, name: values}, traction=traction)
+    tr = traction_from_params(params) if traction is None else traction
+    J, K = mass_stiffness(params)
+    nx = xv.size
+    n = nx * yv.size
+    max_real = np.empty(n)
+    min_damp = np.empty(n)
+
+    def work(start: int) -> None:
+        idx = np.arange(start, min(start + chunk_size, n))
+        op = dict(fixed)
+        op[x_name], op[y_name] = xv[idx % nx], yv[idx // nx]
+        t = linearisation_terms(params, op["r_g"], op["nu"], op["F_s"], op["omega_p"], tr)
+        r, rho, c_s = (np.broadcast_to(t[k], idx.shape) for k in ("r_g", "rho", "c_s"))
+        if method == "full":
+            eig = np.linalg.eigvals(assemble_A(J, K, r, rho, c_s))
+            max_real[idx], min_damp[idx] = stability_measures(eig)
+        else:
+            eig = np.linalg.eigvals(assemble_reduced(J, K, r, rho, c_s))
+            max_real[idx], min_damp[idx] = _measures(eig)
+
+    starts = range(0, n, chunk_size)
+    if workers == 1:
+        for s0 in starts:
+            work(s0)
+    else:
+        with ThreadPoolExecutor(workers) as pool:
+            list(pool.map(work, starts))
+    shape = (yv.size, nx)
+    return StabilityMap(x_name=x_name, y_name=y_name, x=xv, y=yv, base=base,
+                        max_real=max_real.reshape(shape), min_damping=min_damp.reshape(shape),
+                        tol=float(tol), method=method)

@@ -1,0 +1,50 @@
+"""Atomic output (`empact._io`) and lazy imports (`empact._lazy`)."""
+import os
+import stat
+import subprocess
+import sys
+
+import pytest
+
+from empact._io import atomic_file, atomic_folder, atomic_write_text, umask
+
+
+def _mode(p):
+    return stat.S_IMODE(os.stat(p).st_mode)
+
+
+def test_atomic_file_is_complete_or_absent(tmp_path):
+    path = tmp_path / "a.txt"
+    atomic_write_text(path, "one")
+    with pytest.raises(RuntimeError):
+        with atomic_file(path) as tmp:
+            tmp.write_text("half")
+            raise RuntimeError("interrupted")
+    assert path.read_text() == "one"  # the old content survives a failed write
+    assert [p.name for p in tmp_path.iterdir()] == ["a.txt"]  # no temporary left
+    assert _mode(path) == 0o666 & ~umask()  # an ordinary file, not mkstemp's 0600
+
+
+def test_atomic_folder_merges_and_cleans_up(tmp_path):
+    dest = tmp_path / "out"
+    with pytest.raises(RuntimeError):
+        with atomic_folder(dest) as tmp:
+            (tmp / "x.csv").write_text("1")
+            raise RuntimeError("interrupted")
+    assert not dest.exists() and list(tmp_path.iterdir()) == []
+    with atomic_folder(dest) as tmp:
+        (tmp / "x.csv").write_text("1")
+    (dest / "mine.txt").write_text("keep")
+    with atomic_folder(dest) as tmp:
+        (tmp / "x.csv").write_text("2")
+    assert (dest / "x.csv").read_text() == "2" and (dest / "mine.txt").read_text() == "keep"
+    assert _mode(dest) == 0o777 & ~umask() and _mode(dest / "x.csv") == 0o666 & ~umask()
+
+
+def test_lazy_module_defers_the_import():
+    code = ("import sys; from empact._lazy import lazy_module; c = lazy_module('control'); "
+            "a = 'matplotlib.pyplot' in sys.modules; c.ss; "
+            "print(a, 'matplotlib.pyplot' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["False", "True"]

@@ -1,0 +1,101 @@
+"""The package layout: no import circles, no function-level imports outside the command line,
+and a command line that starts without the heavy dependencies."""
+import ast
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import empact
+
+PKG = Path(empact.__file__).parent
+
+
+def _modules():
+    for path in sorted(PKG.rglob("*.py")):
+        rel = path.relative_to(PKG.parent).with_suffix("")
+        name = ".".join(rel.parts)
+        yield (name[:-9] if name.endswith(".__init__") else name), path
+
+
+def _resolve(name: str, node: ast.ImportFrom, is_pkg: bool) -> str:
+    if not node.level:
+        return node.module or ""
+    parts = name.split(".")
+    base = parts if is_pkg else parts[:-1]
+    base = base[:len(base) - node.level + 1]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def _graph():
+    graph = {}
+    for name, path in _modules():
+        tree = ast.parse(path.read_text())
+        deps = set()
+        for node in tree.body:  # module-level imports only
+            if isinstance(node, ast.Import):
+                deps |= {a.name for a in node.names if a.name.startswith("empact")}
+            elif isinstance(node, ast.ImportFrom):
+                mod = _resolve(name, node, path.name == "__init__.py")
+                if mod.startswith("empact"):
+                    deps.add(mod)
+                    deps |= {f"{mod}.{a.name}" for a in node.names}
+        graph[name] = deps
+    names = set(graph)
+    return {k: {d for d in v if d in names and d != k} for k, v in graph.items()}
+
+
+def test_no_import_circles():
+    graph = _graph()
+    # a package's __init__ re-exporting its submodules is not a circle of concepts: drop the
+    # edges from a package to its own submodules and from submodules to their own package
+    for k in graph:
+        graph[k] = {d for d in graph[k] if not d.startswith(k + ".") and not k.startswith(d + ".")}
+    seen, stack, cycles = {}, [], []
+
+    def visit(n):
+        seen[n] = 1
+        stack.append(n)
+        for d in graph[n]:
+            if seen.get(d) == 1:
+                cycles.append(stack[stack.index(d):] + [d])
+            elif d not in seen:
+                visit(d)
+        stack.pop()
+        seen[n] = 2
+
+    for n in sorted(graph):
+        if n not in seen:
+            visit(n)
+    assert cycles == []
+
+
+def test_no_function_level_imports_outside_the_cli():
+    bad = []
+    for name, path in _modules():
+        if name.startswith("empact.cli"):
+            continue  # the command line loads each command's dependencies when it runs
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                for sub in ast.walk(node):
+                    if isinstance(sub, (ast.Import, ast.ImportFrom)):
+                        bad.append(f"{name}:{sub.lineno}")
+    assert bad == []
+
+
+def _loaded(*args):
+    code = ("import sys, json; from empact.cli import main\n"
+            "try:\n    main(%r, standalone_mode=False)\nexcept SystemExit:\n    pass\n"
+            "print(json.dumps(sorted(sys.modules)))" % (list(args),))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    return set(json.loads(out.strip().splitlines()[-1]))
+
+
+def test_cli_start_up_imports_only_what_the_command_needs():
+    heavy = {"matplotlib.pyplot", "scipy.stats", "control", "numba", "matplotlib",
+             "scipy.signal", "scipy.optimize"}
+    for args in (["--help"], ["params", "show"]):
+        assert _loaded(*args) & heavy == set(), args
+    # a figure-free analysis command loads neither pyplot nor scipy.stats
+    assert _loaded("modes", "driveline") & {"matplotlib.pyplot", "scipy.stats"} == set()

@@ -1,0 +1,83 @@
+"""Figures (`empact.plotting`): every function draws into the caller's axes and returns a
+`Plot` with its artists; one style; atomic saving."""
+import inspect
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from empact import plotting
+from empact.linear.actuation import actuation_model
+from empact.nonlinear.nmp import nmp_analysis
+from empact.nonlinear.scenario import example_path, load_scenario
+from empact.nonlinear.simulate import run_scenario
+from empact.params import OperatingPoint
+from empact.slip import belt_root_locus, pole_sweep, slip_frequency_responses, stability_map, \
+    zero_locus
+from empact.traction import traction_curves, traction_from_params
+
+
+@pytest.fixture(scope="module")
+def results(params):
+    op = OperatingPoint(r_g=1.0, nu=0.01, F_s=1e4, omega_p=300.0)
+    modes = actuation_model(params, 1.0).modes()
+    resp = actuation_model(params, 1.0, "moderate").frequency_response(
+        2 * np.pi * np.logspace(0, 2, 50), ["T_mp"], ["theta_mp"], label="moderate")
+    sc = load_scenario(example_path("servo-torque-steps")).with_duration(0.05)
+    return {
+        "modes": modes, "resp": resp,
+        "locus": belt_root_locus(params, 1.0, c_b_range=(1e-2, 1e2)),
+        "curves": traction_curves(traction_from_params(params), [0.5, 1.0], [0.0, 0.01, 0.05]),
+        "sweep": pole_sweep(params, "nu", [0.01, 0.02], op),
+        "slip_resp": slip_frequency_responses(params, [op], 2 * np.pi * np.array([1.0, 10.0])),
+        "zeros": zero_locus(params, [0.5, 1.0, 2.0], op),
+        "map": stability_map(params, "nu", [0.01, 0.05], "r_g", [0.8, 1.2], base=op),
+        "nmp": nmp_analysis(params, [0.5, 2.0]),
+        "sim": run_scenario(sc, params),
+    }
+
+
+CASES = [
+    ("plot_mode_shapes", lambda r: (r["modes"],), {}, (1, 1)),
+    ("plot_modal_energy", lambda r: (r["modes"],), {}, (1, 1)),
+    ("plot_bode", lambda r: ([r["resp"]], [("theta_mp", "T_mp")]), {}, (2, 1)),
+    ("plot_belt_root_locus", lambda r: (r["locus"],), {}, (1, 1)),
+    ("plot_traction", lambda r: (r["curves"],), {}, (1, 2)),
+    ("plot_pole_sweep", lambda r: (r["sweep"],), {}, (1, 1)),
+    ("plot_slip_bode", lambda r: (r["slip_resp"],), {}, (2, 1)),
+    ("plot_zero_locus", lambda r: (r["zeros"],), {}, (1, 2)),
+    ("plot_stability_map", lambda r: (r["map"],), {}, (1, 1)),
+    ("plot_nmp", lambda r: (r["nmp"],), {}, (1, 2)),
+    ("plot_simulation", lambda r: (r["sim"],), {}, (3, 2)),
+]
+
+
+@pytest.mark.parametrize("name, args, kw, shape", CASES, ids=[c[0] for c in CASES])
+def test_draws_into_given_axes_and_returns_artists(results, name, args, kw, shape):
+    fn = getattr(plotting, name)
+    fig = Figure()
+    axes = fig.subplots(*shape, squeeze=False)
+    key = "ax" if "ax" in inspect.signature(fn).parameters else "axes"
+    plot = fn(*args(results), **kw, **{key: axes[0, 0] if shape == (1, 1) else axes})
+    assert isinstance(plot, plotting.Plot) and plot.figure is fig
+    assert len(plot.artists) > 0
+    # every drawn axes has a y label, and the bottom one of each column an x label
+    for ax in fig.axes:
+        if ax.get_visible() and ax.has_data() and ax.get_label() != "<colorbar>":
+            assert ax.get_ylabel(), (name, ax.get_title())
+            spec = ax.get_subplotspec()
+            if spec is None or spec.is_last_row() or not axes[-1, spec.colspan.start].get_visible():
+                assert ax.get_xlabel(), (name, ax.get_title())
+    new = fn(*args(results), **kw)  # and without axes: a new figure of its own
+    assert new.figure is not fig and new.axes.shape == shape
+
+
+def test_symbols_and_save(tmp_path, results):
+    assert plotting.symbol("T_mp") == r"$T_\mathrm{mp}$"
+    assert plotting.symbol("omega_p") == r"$\omega_\mathrm{p}$"
+    assert plotting.symbol("nu") == r"$\nu$"
+    plot = plotting.plot_modal_energy(results["modes"])
+    path = plot.save(tmp_path / "e.svg")
+    assert path.stat().st_size > 1000 and list(tmp_path.iterdir()) == [path]
+    with pytest.raises(ValueError, match="plot file suffix = 'gif'"):
+        plot.save(tmp_path / "e.gif")

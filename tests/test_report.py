@@ -1,0 +1,34 @@
+"""The report (`empact.report`) on a reduced section set: page structure, contents, verdict
+summary, claims.json, tables and figures (the full build is in test_cli.py)."""
+import json
+import re
+
+from empact.report import SECTIONS, build_report
+
+
+def test_reduced_report_structure(tmp_path, params):
+    sections = [s for s in SECTIONS if s.anchor in ("table1", "table2", "fig10")]
+    out = build_report(params, tmp_path / "rep", progress=False, sections=sections,
+                       formats=("png",))
+    page = (out / "index.html").read_text()
+    # contents with anchors to every section, and a verdict summary before the sections
+    for s in sections:
+        assert f'href="#{s.anchor}"' in page and f'<section id="{s.anchor}">' in page
+    assert page.index('id="summary"') < page.index('<section id="table1">')
+    claims = json.loads((out / "claims.json").read_text())
+    n = sum(len(s.compute(params).claims) for s in sections)
+    assert len(claims) == n
+    assert re.search(rf"{n} claims checked: {n} shown, 0 NOT shown", page)
+    assert (out / "fig10_traction.png").exists() and not (out / "fig10_traction.svg").exists()
+    assert (out / "table2.csv").read_text().startswith("r_g,mode,paper [Hz]")
+    assert (out / "params.toml").exists()
+
+
+def test_rebuild_keeps_foreign_files(tmp_path, params):
+    sections = [s for s in SECTIONS if s.anchor == "table1"]
+    out = tmp_path / "rep"
+    build_report(params, out, progress=False, sections=sections, formats=("png",))
+    (out / "notes.txt").write_text("mine")
+    build_report(params, out, progress=False, sections=sections, formats=("png",))
+    assert (out / "notes.txt").read_text() == "mine"  # only empact's own files are replaced
+    assert [p.name for p in tmp_path.iterdir()] == ["rep"]  # no temporary folder left

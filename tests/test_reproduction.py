@@ -1,0 +1,43 @@
+"""The paper's claims as data (`empact.reproduction`): every claim the report checks, with its
+verdict; the deviations from the paper are pinned by key."""
+import pytest
+
+from empact.report.sections import SECTIONS
+from empact.reproduction.claims import Claim
+
+#: Claims the model does not reproduce, with the reason in the claim's explanation (README,
+#: "Paper inconsistencies"); an unexpected failure or pass changes this set.
+KNOWN_DEVIATIONS = {
+    # Sec. 2.3 / Sec. 3: with the Sec. 2.1 kinematics a right-half-plane zero of T_mp -> nu
+    # appears at every ratio, r_g = 2 included
+    "nmp.none_at_2",
+    # Sec. 3 on Fig. 2: the actuation modes of the nonlinear model carry the linear model's
+    # damping, and the 48 Hz zeros lie just below their pole, not above it
+    "fig2.damping", "fig2.zeros_48hz",
+    # Sec. 4 / Fig. 14: the servo angle falls with -1.73 rather than -1 between 1 and 2 Hz
+    "fig14.slope.T_mp",
+}
+
+
+@pytest.fixture(scope="session")
+def claims(params):
+    return {s.anchor: s.compute(params).claims for s in SECTIONS}
+
+
+def test_every_section_checks_claims(claims):
+    assert all(isinstance(c, Claim) for cs in claims.values() for c in cs)
+    keys = [c.key for cs in claims.values() for c in cs]
+    assert len(keys) == len(set(keys))  # unique keys
+    assert all(claims[s.anchor] or s.anchor == "exact-plant" for s in SECTIONS)
+
+
+def test_only_the_known_deviations_are_not_shown(claims):
+    failed = {c.key for cs in claims.values() for c in cs if not c.shown}
+    assert failed == KNOWN_DEVIATIONS
+    # every NOT-shown claim says why
+    assert all(c.explanation for cs in claims.values() for c in cs if not c.shown)
+
+
+def test_claim_needs_an_explanation_when_not_shown():
+    with pytest.raises(ValueError, match="no explanation"):
+        Claim(key="x", source="s", claim="c", computed="v", shown=False)
