@@ -24,13 +24,15 @@ def test_partial_file_overrides_defaults(tmp_path, params):
 
 
 @pytest.mark.parametrize("text, match", [
-    ("[driveline]\nJ_p = -0.01\n", r"driveline\.J_p = -0\.01: allowed range is \(0, inf\)"),
+    ("[driveline]\nJ_p = -0.01\n", r"p.toml: driveline\.J_p = -0\.01: allowed range is "
+                                   r"\(1e-06, 100\] \[kg m\^2\]"),
     ("[operating]\nr_g = 5.0\n", r"operating\.r_g = 5\.0: outside the geometric ratio range"),
     ("[driveline]\nJ_x = 1.0\n", r"unknown key 'driveline\.J_x'"),
     ("[gearbox]\nk = 1.0\n", r"unknown key 'gearbox'"),
     ("[driveline]\nJ_p = \"heavy\"\n", r"driveline\.J_p = 'heavy': must be a number"),
     ("[driveline]\nJ_p = true\n", r"driveline\.J_p = true: must be a number"),
-    ("[variator]\nbeta = 1.2\n", r"variator\.beta = 1\.2: allowed range is \(0, 0\.785398\]"),
+    ("[variator]\nbeta = 1.2\n", r"variator\.beta = 1\.2: allowed range is \[0\.0174533, "
+                                 r"0\.523599\] \[rad\]"),
     ("[traction]\nD_med = 1.5\n", r"traction\.D_med = 1\.5"),
     ("driveline = 3\n", r"'driveline' must be a table"),
     ("[driveline\n", r"not valid TOML"),

@@ -32,3 +32,40 @@ def test_rebuild_keeps_foreign_files(tmp_path, params):
     build_report(params, out, progress=False, sections=sections, formats=("png",))
     assert (out / "notes.txt").read_text() == "mine"  # only empact's own files are replaced
     assert [p.name for p in tmp_path.iterdir()] == ["rep"]  # no temporary folder left
+
+
+CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                  "--no-first-run", "--disable-background-networking",
+                  "--disable-component-update", "--disable-sync"]
+
+
+def _chromium():
+    import shutil
+
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    assert exe, "Chromium is missing: `make test` installs it (apt-get install -y chromium)"
+    return exe
+
+
+def test_report_renders_in_a_real_browser_with_every_image(tmp_path, params):
+    """Headless Chromium loads the page; the page's own check counts images that failed."""
+    import subprocess
+
+    sections = [s for s in SECTIONS if s.anchor in ("table1", "fig4-5", "fig10")]
+    out = build_report(params, tmp_path / "rep", progress=False, sections=sections,
+                       formats=("png", "svg"))
+    (out / "fig10_traction.png").unlink()  # one missing image must be noticed ...
+    dom = subprocess.run([_chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'ud'}",
+                          "--virtual-time-budget=10000", "--dump-dom",
+                          (out / "index.html").as_uri()],
+                         capture_output=True, text=True, timeout=120).stdout
+    images = int(re.search(r'data-images="(\d+)"', dom).group(1))
+    broken = int(re.search(r'data-broken-images="(\d+)"', dom).group(1))
+    assert images == 3 and broken == 1, (images, broken)
+    build_report(params, out, progress=False, sections=sections, formats=("png",))
+    dom = subprocess.run([_chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'ud2'}",
+                          "--virtual-time-budget=10000", "--dump-dom",
+                          (out / "index.html").as_uri()],
+                         capture_output=True, text=True, timeout=120).stdout
+    # ... and after a rebuild every image loads
+    assert re.search(r'data-images="3"', dom) and re.search(r'data-broken-images="0"', dom)

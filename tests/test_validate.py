@@ -16,7 +16,7 @@ from empact.errors import ParameterError
      r"^p.toml: beta = 2: allowed range is \(0, 0.785\] \[rad\]$"),
     (lambda: check_number("x", "abc"), r"^x = 'abc': must be a number in \(-inf, inf\)$"),
     (lambda: check_number("x", True), r"^x = true: must be a number"),
-    (lambda: check_number("x", math.nan), r"^x = nan: allowed range"),
+    (lambda: check_number("x", math.nan), r"^x = nan: must be a finite number in"),
     (lambda: check_number("x", 10**400), r"^x = 10000000\.\.\.\(401 digits\): too large"),
     (lambda: check_number("w", 0.0, 0.0, lo_open=True, note="why"),
      r"^w = 0: allowed range is \(0, inf\) \(why\)$"),

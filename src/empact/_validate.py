@@ -79,7 +79,10 @@ def check_number(name: str, value: Any, lo: float = -math.inf, hi: float = math.
     except OverflowError:
         raise ParameterError(f"{_prefix(name, where)} = {fmt(value)}: too large for a number; "
                              f"allowed range is {rng}{tail}") from None
-    if not math.isfinite(x) or not _in(x, lo, hi, lo_open, hi_open):
+    if not math.isfinite(x):
+        raise ParameterError(f"{_prefix(name, where)} = {fmt(x)}: must be a finite number in "
+                             f"{rng}{tail}")
+    if not _in(x, lo, hi, lo_open, hi_open):
         raise ParameterError(f"{_prefix(name, where)} = {fmt(x)}: allowed range is {rng}{tail}")
     return x
 

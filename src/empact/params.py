@@ -83,11 +83,13 @@ class VariatorParams(_Section):
     """Pushbelt variator geometry (paper eqs. 4-6)."""
 
     _name = "variator"
-    a: float = _p("m", "centre distance between the pulley shafts")
-    beta: float = _p("rad", "pulley wedge angle", 0.0, math.pi / 4)
-    L_belt: float = _p("m", "belt length (running circumference)")
-    R_min: float = _p("m", "smallest running radius; also R0, the radius at zero sheave translation")
-    R_max: float = _p("m", "largest running radius")
+    a: float = _p("m", "centre distance between the pulley shafts", 0.02, 1.0)
+    beta: float = _p("rad", "pulley wedge angle (half the V angle; pushbelts: about 11 deg)",
+                     math.radians(1), math.radians(30), lo_open=False)
+    L_belt: float = _p("m", "belt length (running circumference)", 0.1, 5.0)
+    R_min: float = _p("m", "smallest running radius; also R0, the radius at zero sheave "
+                           "translation", 0.002, 0.5)
+    R_max: float = _p("m", "largest running radius", 0.002, 0.5)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -107,21 +109,23 @@ class ActuationParams(_Section):
     """Linear actuation model (paper Sec. 2.1, Fig. 3)."""
 
     _name = "actuation"
-    J_mp: float = _p("kg m^2", "primary servo inertia (rotor and worm), coordinate q1")
-    J_ms: float = _p("kg m^2", "secondary servo inertia (rotor and chain sprocket), coordinate q2")
-    J_sp: float = _p("kg m^2", "primary sun gear with screw, ring/carrier/planets lumped, q3")
-    J_ss: float = _p("kg m^2", "secondary sun gear with screw input, q4")
-    m_p: float = _p("kg", "primary moving sheave with screw output, q5")
-    m_s: float = _p("kg", "secondary moving sheave with screw output, q6")
-    i_w: float = _p("-", "worm ratio (servo turns per ring turn)")
-    i_c: float = _p("-", "chain ratio (servo turns per ring turn)")
-    i_e: float = _p("-", "ring to sun ratio of the epicyclic sets (the paper: 2)")
-    s: float = _p("m/rad", "screw pitch (translation per radian)")
-    k_w: float = _p("N m/rad", "worm stiffness (spring 1)")
-    k_c: float = _p("N m/rad", "chain stiffness (spring 2)")
-    k_belt: float = _p("N/m", "longitudinal pushbelt stiffness (spring 3)")
-    k_tp: float = _p("N/m", "primary thrust bearing stiffness (spring 4)")
-    k_ts: float = _p("N/m", "secondary thrust bearing stiffness (spring 5)")
+    J_mp: float = _p("kg m^2", "primary servo inertia (rotor and worm), coordinate q1", 1e-8, 1.0)
+    J_ms: float = _p("kg m^2", "secondary servo inertia (rotor and chain sprocket), "
+                     "coordinate q2", 1e-8, 1.0)
+    J_sp: float = _p("kg m^2", "primary sun gear with screw, ring/carrier/planets lumped, q3",
+                     1e-7, 10.0)
+    J_ss: float = _p("kg m^2", "secondary sun gear with screw input, q4", 1e-7, 10.0)
+    m_p: float = _p("kg", "primary moving sheave with screw output, q5", 0.01, 100.0)
+    m_s: float = _p("kg", "secondary moving sheave with screw output, q6", 0.01, 100.0)
+    i_w: float = _p("-", "worm ratio (servo turns per ring turn)", 0.1, 1000.0)
+    i_c: float = _p("-", "chain ratio (servo turns per ring turn)", 0.01, 100.0)
+    i_e: float = _p("-", "ring to sun ratio of the epicyclic sets (the paper: 2)", 1.0, 10.0)
+    s: float = _p("m/rad", "screw pitch (translation per radian)", 1e-7, 1e-2)
+    k_w: float = _p("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
+    k_c: float = _p("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
+    k_belt: float = _p("N/m", "longitudinal pushbelt stiffness (spring 3)", 1e2, 1e11)
+    k_tp: float = _p("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
+    k_ts: float = _p("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
 
 
 @dataclass(frozen=True)
@@ -129,13 +133,18 @@ class DampingLevel(_Section):
     """One damping level of the actuation model (Fig. 6)."""
 
     _name = "damping"
-    alpha: float = _p("s", "proportional spring damping, C_spring = alpha K", lo_open=False)
-    c_mp: float = _p("N m s/rad", "viscous friction of the primary servo", lo_open=False)
-    c_ms: float = _p("N m s/rad", "viscous friction of the secondary servo", lo_open=False)
-    c_sp: float = _p("N m s/rad", "viscous friction of the primary screw", lo_open=False)
-    c_ss: float = _p("N m s/rad", "viscous friction of the secondary screw", lo_open=False)
+    alpha: float = _p("s", "proportional spring damping, C_spring = alpha K", 0.0, 0.1,
+                      lo_open=False)
+    c_mp: float = _p("N m s/rad", "viscous friction of the primary servo", 0.0, 100.0,
+                     lo_open=False)
+    c_ms: float = _p("N m s/rad", "viscous friction of the secondary servo", 0.0, 100.0,
+                     lo_open=False)
+    c_sp: float = _p("N m s/rad", "viscous friction of the primary screw", 0.0, 1e4,
+                     lo_open=False)
+    c_ss: float = _p("N m s/rad", "viscous friction of the secondary screw", 0.0, 1e4,
+                     lo_open=False)
     c_shafai: float = _p("N/m", "Shafai pulley damping: c_pulley = c_shafai / |omega| [N s/m]",
-                         lo_open=False)
+                         0.0, 1e10, lo_open=False)
 
 
 @dataclass(frozen=True)
@@ -149,7 +158,7 @@ class DampingParams:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "omega_pulley",
-                           check_number("damping.omega_pulley", self.omega_pulley, 0.0,
+                           check_number("damping.omega_pulley", self.omega_pulley, 0.0, 2000.0,
                                         lo_open=True, unit="rad/s"))
 
     def level(self, name: str) -> DampingLevel:
@@ -162,13 +171,14 @@ class DrivelineParams(_Section):
     """Test-bench driveline (paper Sec. 2.2, Fig. 7)."""
 
     _name = "driveline"
-    J_d: float = _p("kg m^2", "drive motor inertia, q1")
-    J_p: float = _p("kg m^2", "primary pulley with torque converter, q2")
-    J_s: float = _p("kg m^2", "secondary pulley, q3")
-    J_l: float = _p("kg m^2", "load motor inertia, q4")
-    k_tc: float = _p("N m/rad", "torque converter lock-up clutch stiffness")
-    k_belt: float = _p("N/m", "pushbelt stiffness as a chain element (elongation R_p q2 - R_s q3)")
-    k_ds: float = _p("N m/rad", "driveshaft stiffness")
+    J_d: float = _p("kg m^2", "drive motor inertia, q1", 1e-6, 1e3)
+    J_p: float = _p("kg m^2", "primary pulley with torque converter, q2", 1e-6, 1e2)
+    J_s: float = _p("kg m^2", "secondary pulley, q3", 1e-6, 1e2)
+    J_l: float = _p("kg m^2", "load motor inertia, q4", 1e-6, 1e3)
+    k_tc: float = _p("N m/rad", "torque converter lock-up clutch stiffness", 1e-2, 1e8)
+    k_belt: float = _p("N/m", "pushbelt stiffness as a chain element (elongation R_p q2 - R_s "
+                              "q3)", 1e2, 1e11)
+    k_ds: float = _p("N m/rad", "driveshaft stiffness", 1e-2, 1e8)
 
 
 @dataclass(frozen=True)
@@ -181,12 +191,12 @@ class TractionParams(_Section):
     """
 
     _name = "traction"
-    r_low: float = _p("-", "LOW ratio where the *_low coefficients hold")
-    r_med: float = _p("-", "MED ratio where the *_med coefficients hold")
-    r_od: float = _p("-", "OD ratio where the *_od coefficients hold")
-    B_low: float = _p("-", "stiffness factor at LOW")
-    B_med: float = _p("-", "stiffness factor at MED")
-    B_od: float = _p("-", "stiffness factor at OD")
+    r_low: float = _p("-", "LOW ratio where the *_low coefficients hold", 0.05, 20.0)
+    r_med: float = _p("-", "MED ratio where the *_med coefficients hold", 0.05, 20.0)
+    r_od: float = _p("-", "OD ratio where the *_od coefficients hold", 0.05, 20.0)
+    B_low: float = _p("-", "stiffness factor at LOW", 1.0, 1e6)
+    B_med: float = _p("-", "stiffness factor at MED", 1.0, 1e6)
+    B_od: float = _p("-", "stiffness factor at OD", 1.0, 1e6)
     C_low: float = _p("-", "shape factor at LOW", 1.0, 2.0, lo_open=False)
     C_med: float = _p("-", "shape factor at MED", 1.0, 2.0, lo_open=False)
     C_od: float = _p("-", "shape factor at OD", 1.0, 2.0, lo_open=False)
@@ -308,6 +318,8 @@ class Params:
         except KeyError as exc:
             raise ParameterError(f"{source}: missing section or key {exc.args[0]!r}") from None
         except TypeError as exc:  # missing fields of a section
+            raise ParameterError(f"{source}: {exc}") from None
+        except ParameterError as exc:  # name the file in every message
             raise ParameterError(f"{source}: {exc}") from None
 
     def from_dotted(self, values: Mapping[str, float]) -> "Params":

@@ -41,7 +41,8 @@ COMMANDS = {
 
 
 
-@click.group(cls=LazyGroup, lazy=COMMANDS, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group("empact", cls=LazyGroup, lazy=COMMANDS,
+             context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="empact")
 def main() -> None:
     """empact: dynamic analysis of electromechanically actuated pushbelt CVTs."""

@@ -1,26 +1,45 @@
-"""Shared pieces of the command line (private): the error-converting and lazy groups, JSON
-output, common options."""
+"""Shared pieces of the command line (private): the error-converting and lazy groups, one-line
+errors, output paths checked before work, JSON with schema and units, common options.
+
+Exit status: 0 success; 2 bad input (one line ``error: ...`` on stderr, nothing written);
+1 a computation that ran but did not succeed (a simulation that stopped early, a calibration
+that misses its targets), with one line saying why.
+"""
 from __future__ import annotations
 
 import importlib
 import json
 import math
-from typing import Any
+import os
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any, Callable, Mapping
 
 import click
 import numpy as np
 
-from .._validate import check_number
+from .._io import atomic_write_text
+from .._validate import check_values
 from ..errors import ParameterError
 from ..geometry import check_ratio
 from ..params import OperatingPoint, Params, load_params
 from ..traction import traction_from_params
 
-__all__ = ["InputError", "ErrorGroup", "LazyGroup", "to_jsonable", "echo_json",
-           "params_option", "json_option", "get_params", "operating_point", "OPTION_VARIABLE"]
+__all__ = ["InputError", "Failed", "ErrorGroup", "LazyGroup", "to_jsonable", "emit_json",
+           "params_option", "json_options", "force_option", "get_params", "operating_point",
+           "operating_values", "PLOT_SUFFIXES",
+           "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION"]
+
+#: suffixes of ``--plot`` files (the figure's format)
+PLOT_SUFFIXES = ("png", "svg", "pdf")
 
 #: operating-point option -> variable (the same four options on every command)
 OPTION_VARIABLE = {"ratio": "r_g", "slip": "nu", "clamp": "F_s", "speed": "omega_p"}
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
 
 
 class InputError(click.ClickException):
@@ -29,7 +48,16 @@ class InputError(click.ClickException):
     exit_code = 2
 
     def show(self, file: Any = None) -> None:
-        click.echo(f"error: {self.format_message()}", err=True)
+        click.echo(f"error: {_one_line(self.format_message())}", err=True)
+
+
+class Failed(click.ClickException):
+    """A computation that ran but did not succeed: one line on stderr, exit status 1."""
+
+    exit_code = 1
+
+    def show(self, file: Any = None) -> None:
+        click.echo(f"error: {_one_line(self.format_message())}", err=True)
 
 
 class ErrorGroup(click.Group):
@@ -39,8 +67,7 @@ class ErrorGroup(click.Group):
         try:
             return super().invoke(ctx)
         except (ParameterError, ValueError) as exc:
-            raise InputError(str(exc).splitlines()[0] if str(exc) else type(exc).__name__) \
-                from None
+            raise InputError(str(exc) or type(exc).__name__) from None
 
 
 class LazyGroup(ErrorGroup):
@@ -70,10 +97,32 @@ class LazyGroup(ErrorGroup):
             with formatter.section("Commands"):
                 formatter.write_dl(rows)
 
+    def main(self, args: Any = None, prog_name: str | None = None,
+             complete_var: str | None = None, standalone_mode: bool = True,
+             **extra: Any) -> Any:
+        """Run; every error is one line ``error: ...`` on stderr (click's usage errors too)."""
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, False, **extra)
+        try:
+            rv = super().main(args, prog_name, complete_var, False, **extra)
+        except click.UsageError as exc:
+            cmd = exc.ctx.command_path if exc.ctx is not None else "empact"
+            msg = _one_line(exc.format_message()).rstrip(".")
+            click.echo(f"error: {cmd}: {msg[:1].lower()}{msg[1:]} (see '{cmd} --help')",
+                       err=True)
+            sys.exit(2)
+        except click.ClickException as exc:
+            exc.show()
+            sys.exit(exc.exit_code)
+        except click.exceptions.Abort:
+            click.echo("error: aborted", err=True)
+            sys.exit(1)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
 
 def to_jsonable(obj: Any) -> Any:
     """numpy arrays and scalars to lists and floats; complex to ``[re, im]``; NaN to None."""
-    if isinstance(obj, dict):
+    if isinstance(obj, Mapping):
         return {str(k): to_jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
         return [to_jsonable(v) for v in obj]
@@ -90,45 +139,165 @@ def to_jsonable(obj: Any) -> Any:
     return obj
 
 
-def echo_json(data: Any) -> None:
-    """Print `data` as JSON on stdout."""
-    click.echo(json.dumps(to_jsonable(data), indent=1))
+#: Version of every JSON document the commands print (``schema.version``).
+JSON_VERSION = 1
+
+#: Units of every quantity key that appears in the commands' JSON (SI; complex numbers are
+#: ``[re, im]`` pairs; arrays keep the unit of their elements).
+UNITS = {
+    "r_g": "-", "nu": "-", "F_s": "N", "F_p": "N", "omega_p": "rad/s", "omega_s": "rad/s",
+    "T_b": "N m", "T_d": "N m", "T_l": "N m", "T_mp": "N m", "T_ms": "N m", "mu": "-",
+    "dmu": "-", "c_b": "N m s/rad", "c_s": "N m s/rad", "g_F": "m",
+    "frequencies_hz": "Hz", "uncoupled_hz": "Hz", "coupled_hz": "Hz", "zeros_hz": "Hz",
+    "fs_hz": "Hz", "magnitude_db": "dB (re 1 output unit per input unit)", "phase_deg": "deg",
+    "H": "output unit per input unit, complex as [re, im]",
+    "poles": "rad/s, complex as [re, im]", "zeros": "rad/s, complex as [re, im]",
+    "rhp_zeros": "rad/s, complex as [re, im]", "start": "rad/s, complex as [re, im]",
+    "end": "rad/s, complex as [re, im]", "branches": "rad/s, complex as [re, im]",
+    "max_real": "1/s", "min_damping": "-", "unstable_fraction": "-", "energy_fraction": "-",
+    "shapes": "SI of each coordinate (mass-normalised)", "normalised_shapes": "-",
+    "mass_matrix": "kg, kg m^2", "stiffness_matrix": "N/m, N m/rad", "coherence": "-",
+    "multiple_coherence": "-", "fit_percent": "%", "singular_values": "-",
+    "delta_x": "m", "delta": "m", "dL_exact": "m", "dL_first_order": "m",
+    "A": "SI (states, inputs and outputs in their units)", "B": "SI", "C": "SI", "D": "SI",
+    "values": "unit of the swept variable", "mu_peak": "-", "nu_peak": "-", "nu_range": "-",
+    "residual": "-", "coulomb_sp": "N m", "coulomb_ss": "N m", "coulomb_omega": "rad/s",
+    "drive_bandwidth": "Hz", "load_bandwidth": "Hz", "ratio_bandwidth": "Hz", "step": "N m",
+}
+
+
+def emit_json(data: Mapping[str, Any], schema: str, json_out: str | None = None) -> None:
+    """Print (or, with `json_out`, write atomically) one JSON object: ``schema`` (name and
+    version), ``units`` of every quantity key present, then `data`."""
+    keys: set[str] = set()
+
+    def collect(o: Any) -> None:
+        if isinstance(o, Mapping):
+            for k, v in o.items():
+                keys.add(str(k))
+                collect(v)
+        elif isinstance(o, (list, tuple)):
+            for v in o:
+                collect(v)
+
+    collect(data)
+    doc = {"schema": {"name": f"empact.{schema}", "version": JSON_VERSION},
+           "units": {k: UNITS[k] for k in sorted(keys) if k in UNITS}, **data}
+    text = json.dumps(to_jsonable(doc), indent=1)
+    if json_out is None:
+        click.echo(text)
+    else:
+        atomic_write_text(json_out, text + "\n")
 
 
 params_option = click.option("--params", "params_file", type=click.Path(dir_okay=False),
                              default=None, help="TOML parameter file (default: shipped set).")
-json_option = click.option("--json", "as_json", is_flag=True, help="Print JSON on stdout.")
+force_option = click.option("--force", is_flag=True,
+                            help="Replace existing output (in a folder: only empact's own "
+                                 "files).")
 
 
-def get_params(path: str | None):
-    """Load parameters (errors become `InputError` through the group)."""
-    return load_params(path)
+def json_options(fn: Callable) -> Callable:
+    """``--json`` (print JSON on stdout) and ``--json-out FILE`` (write it atomically)."""
+    fn = click.option("--json-out", "json_out", type=click.Path(dir_okay=False), default=None,
+                      help="Write the JSON to FILE (atomically) instead of stdout.")(fn)
+    return click.option("--json", "as_json", is_flag=True, help="Print JSON on stdout.")(fn)
 
+
+def get_params(path: str | None) -> Params:
+    """Load parameters and check their physical plausibility (`empact.plausibility`, imported
+    here: it builds the linear models, which ``empact --help`` should not load)."""
+    from ..plausibility import check_plausible
+
+    return check_plausible(load_params(path), str(path) if path else "default.toml")
+
+
+def _probe(folder: Path, what: str) -> None:
+    """Refuse unless a file can be created in `folder`."""
+    try:
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=".empact-probe-")
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise InputError(f"{what}: cannot write in {folder} ({exc.strerror})") from None
+
+
+def output_file(path: str | None, option: str, *, force: bool = False,
+                suffixes: tuple[str, ...] | None = None) -> Path | None:
+    """Check an output file before any work: its suffix is one of `suffixes` (if given), its
+    folder exists and is writable, it is not a folder, and it does not exist unless `force`."""
+    if path is None:
+        return None
+    p = Path(path)
+    what = f"{option} {path}"
+    if suffixes is not None and p.suffix.lstrip(".").lower() not in suffixes:
+        raise InputError(f"{what}: file suffix {p.suffix or 'none'!r} must be one of "
+                         f"{', '.join('.' + s for s in suffixes)}")
+    if p.is_dir():
+        raise InputError(f"{what}: is a folder, not a file")
+    if p.exists() and not force:
+        raise InputError(f"{what}: exists; give --force to replace it")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"{what}: folder {parent} does not exist")
+    _probe(parent, what)
+    return p
+
+
+def output_folder(path: str, option: str = "--out", *, force: bool = False) -> Path:
+    """Check an output folder before any work: not the current folder or one of its parents,
+    not a file, empty or new unless `force` (then only empact's own files are replaced), and
+    in a writable place."""
+    p = Path(path).resolve()
+    cwd = Path.cwd().resolve()
+    what = f"{option} {path}"
+    if p == cwd or p in cwd.parents:
+        raise InputError(f"{what}: the current folder and its parents are never output "
+                         "folders; name a new folder")
+    if p.exists() and not p.is_dir():
+        raise InputError(f"{what}: is a file, not a folder")
+    if p.is_dir() and any(p.iterdir()) and not force:
+        raise InputError(f"{what}: folder exists and is not empty; give --force to replace "
+                         "empact's own files in it")
+    existing = p
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise InputError(f"{what}: {existing} is a file")
+    _probe(existing, what)
+    return p
+
+
+
+def operating_values(params: Params, option: str, values: Any, *, trim: bool = False,
+                     traction: Any = None) -> np.ndarray:
+    """Values of one operating-point option (``ratio``, ``slip``, ``clamp``, ``speed``),
+    checked under the option's name (``--slip = 0.5: ...``).
+
+    The slip must lie in the traction curve's valid range (`traction`, default the analytic
+    curve of `params`); with `trim` (a point the nonlinear model is trimmed at) the clamping
+    force must be positive.
+    """
+    name = f"--{option}"
+    if option == "ratio":
+        return check_ratio(check_values(name, values, 0.0, lo_open=True), params.variator, name)
+    if option == "slip":
+        tr = traction_from_params(params) if traction is None else traction
+        lo, hi = tr.nu_range
+        return check_values(name, values, lo, hi,
+                            note="a fraction: 0.01 is 1 %; the traction curve's valid range")
+    if option == "clamp":
+        return check_values(name, values, 0.0, lo_open=trim, unit="N")
+    if option == "speed":
+        return check_values(name, values, 0.0, lo_open=True, unit="rad/s",
+                            note="the slip of eq. 2 is undefined at standstill")
+    raise KeyError(option)
 
 
 def operating_point(params: Params, *, trim: bool = False, **options: float | None) \
         -> OperatingPoint:
     """The ``[operating]`` point of `params` with the given options (``ratio``, ``slip``,
-    ``clamp``, ``speed``; None keeps the file's value), each checked under its option name.
-
-    With `trim` the point must be one the nonlinear model can be trimmed at: a slip inside the
-    traction curve's valid range and a positive clamping force.
-    """
-    values = {}
-    for opt, value in options.items():
-        if value is None:
-            continue
-        name = f"--{opt}"
-        if opt == "ratio":
-            values["r_g"] = float(check_ratio(check_number(name, value), params.variator, name))
-        elif opt == "slip":
-            lo, hi = traction_from_params(params).nu_range if trim else (-1.0, 1.0)
-            values["nu"] = check_number(name, value, lo, hi, lo_open=not trim,
-                                        hi_open=not trim, note="a fraction: 0.01 is 1 %")
-        elif opt == "clamp":
-            values["F_s"] = check_number(name, value, 0.0, lo_open=trim, unit="N")
-        elif opt == "speed":
-            values["omega_p"] = check_number(name, value, 0.0, lo_open=True, unit="rad/s")
-        else:
-            raise KeyError(opt)
+    ``clamp``, ``speed``; None keeps the file's value), each checked by `operating_values`."""
+    values = {OPTION_VARIABLE[opt]: float(operating_values(params, opt, v, trim=trim))
+              for opt, v in options.items() if v is not None}
     return params.operating.replace(**values)

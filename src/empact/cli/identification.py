@@ -1,15 +1,21 @@
-"""``empact frf-estimate``: FRFs with coherence from a user's measured records."""
+"""``empact frf-estimate``, ``empact identify`` and ``empact rig``: identification from
+measured records and from the nonlinear model."""
 from __future__ import annotations
 
 import click
 import numpy as np
 
+from .._validate import check_int, check_number
 from ..experiments.rig import EXCITATIONS
 from ..geometry import check_ratio
 from ..identification import METHODS, estimate_frf
 from ..identification.records import load_records, sample_rate
-from ._common import (InputError, echo_json, get_params, json_option, operating_point,
-                      params_option)
+from ._common import (PLOT_SUFFIXES, InputError, emit_json, force_option, get_params, json_options,
+                      operating_point, output_file, output_folder, params_option, to_jsonable)
+from .linear import plot_option
+
+#: Most samples of a virtual rig record (duration x sample rate).
+MAX_RIG_SAMPLES = 2_000_000
 
 
 @click.command("frf-estimate")
@@ -21,20 +27,26 @@ from ._common import (InputError, echo_json, get_params, json_option, operating_
 @click.option("--fs", type=float, default=None, help="Sample rate [Hz] (or give --time).")
 @click.option("--time", "time_col", default=None, help="Time column [s], uniformly sampled.")
 @click.option("--method", type=click.Choice(METHODS), default="H1", show_default=True)
-@click.option("--nperseg", type=int, default=None, help="Welch segment length [samples].")
-@json_option
-@click.option("--plot", type=click.Path(dir_okay=False), default=None,
-              help="Bode-plus-coherence figure (format from the suffix).")
+@click.option("--nperseg", type=int, default=None,
+              help="Welch segment length [samples] (default: min(n, 1024, max(64, n / 8))).")
+@json_options
+@plot_option
+@force_option
 def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], fs: float | None,
                  time_col: str | None, method: str, nperseg: int | None, as_json: bool,
-                 plot: str | None) -> None:
+                 json_out: str | None, plot: str | None, force: bool) -> None:
     """Estimate FRFs and coherence from the records in DATA (CSV with a header row)."""
     if (fs is None) == (time_col is None):
         raise InputError("give exactly one of --fs HZ and --time COLUMN")
-    if fs is not None and not (np.isfinite(fs) and fs > 0):
-        raise InputError(f"--fs {fs:g}: must be a positive sample rate [Hz]")
+    if fs is not None:
+        fs = check_number("--fs", fs, 0.0, 1e9, lo_open=True, unit="Hz")
+    output_file(plot, "--plot", force=force, suffixes=PLOT_SUFFIXES)
+    output_file(json_out, "--json-out", force=True)
     cols = list(dict.fromkeys(list(inputs) + list(outputs) + ([time_col] if time_col else [])))
     rec = load_records(data, cols)
+    n = len(next(iter(rec.values())))
+    if nperseg is not None:
+        nperseg = check_int("--nperseg", nperseg, 8, n)
     if time_col:
         fs = sample_rate(rec[time_col], time_col)
     est = estimate_frf(np.column_stack([rec[c] for c in inputs]),
@@ -44,13 +56,14 @@ def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], f
         from ..plotting import plot_frf_estimate
 
         plot_frf_estimate(est, title=str(data)).save(plot)
-    if as_json:
-        echo_json({"data": data, "fs_hz": fs, "method": est.method, "inputs": est.inputs,
+    if as_json or json_out:
+        emit_json({"data": data, "fs_hz": fs, "method": est.method, "inputs": est.inputs,
                    "outputs": est.outputs, "n_averages": est.n_averages,
                    "frequencies_hz": est.frequencies_hz,
                    "H": np.stack([est.H.real, est.H.imag], axis=-1),
                    "magnitude_db": 20 * np.log10(np.abs(est.H) + 1e-300),
-                   "coherence": est.coherence, "multiple_coherence": est.multiple_coherence})
+                   "coherence": est.coherence, "multiple_coherence": est.multiple_coherence},
+                  "frf_estimate", json_out)
     elif not plot:
         click.echo(f"{'f [Hz]':>10s} " + " ".join(f"{o + '/' + i + ' [dB]':>24s} {'coh':>5s}"
                                                   for i in est.inputs for o in est.outputs))
@@ -69,87 +82,77 @@ def _ratios(text: str) -> list[float]:
     except ValueError:
         raise InputError(f"--ratios {text!r}: give comma-separated numbers, e.g. 0.5,1,2") \
             from None
-    if not values:
-        raise InputError(f"--ratios {text!r}: give at least one ratio")
+    if not values or len(values) > 50:
+        raise InputError(f"--ratios {text!r}: give 1 to 50 ratios")
     return values
 
 
 @click.command("identify")
 @click.option("--ratios", default="0.5,1,2", show_default=True,
               help="Comma-separated geometric ratios.")
-@click.option("--slip", "nu", type=float, default=0.004, show_default=True,
-              help="Slip (fraction: 0.004 is 0.4 %).")
-@click.option("--clamp", "F_s", type=float, default=10e3, show_default=True, help="F_s [N].")
-@click.option("--speed", "omega_p", type=float, default=300.0, show_default=True,
-              help="Primary speed [rad/s].")
+@click.option("--slip", "nu", type=float, default=None,
+              help="Slip (fraction: 0.004 is 0.4 %; default: the parameter file's "
+                   "[operating]).")
+@click.option("--clamp", "F_s", type=float, default=None, help="F_s [N].")
+@click.option("--speed", "omega_p", type=float, default=None, help="Primary speed [rad/s].")
 @click.option("--order", type=int, default=None, help="Model order (default: by fit).")
 @click.option("--step", "step", type=float, default=1e-4, show_default=True,
               help="Servo torque step size [N m].")
 @params_option
-@json_option
+@json_options
 @click.option("--out", type=click.Path(file_okay=False), default=None,
-              help="Folder for the step responses (CSV), models (JSON) and the Fig. 2 plot.")
-def identify(ratios: str, nu: float, F_s: float, omega_p: float, order: int | None, step: float,
-             params_file: str | None, as_json: bool, out: str | None) -> None:
+              help="Folder for the step responses (CSV), models (JSON) and the Fig. 2 plot; "
+                   "new or empty unless --force.")
+@force_option
+def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | None,
+             order: int | None, step: float, params_file: str | None, as_json: bool,
+             json_out: str | None, out: str | None, force: bool) -> None:
     """Identify (T_mp, T_ms) -> (r_g, nu) from step responses of the nonlinear model (Fig 2)."""
+    from .._io import atomic_folder
     from ..experiments.plant_id import identify_plant
+    from ..plotting import plot_identified_plant, save_figure
 
-    if order is not None and order < 1:
-        raise InputError(f"--order {order}: must be a positive integer")
-    if not (np.isfinite(step) and step != 0):
-        raise InputError(f"--step {step:g}: must be a non-zero torque [N m]")
+    if order is not None:
+        order = check_int("--order", order, 1, 200)
+    step = check_number("--step", step, -1.0, 1.0, unit="N m")
+    if step == 0:
+        raise InputError("--step = 0: must be a non-zero torque step in [-1, 1] [N m]")
+    r_list = _ratios(ratios)
+    dest = None if out is None else output_folder(out, "--out", force=force)
+    output_file(json_out, "--json-out", force=True)
     params = get_params(params_file)
     base = operating_point(params, trim=True, slip=nu, clamp=F_s, speed=omega_p)
-    r_list = _ratios(ratios)
     check_ratio(r_list, params.variator, "--ratios")
     results = [identify_plant(params, base.replace(r_g=r), order=order, amplitudes=(step, step))
                for r in r_list]
-    data = [{"ratio": res.r_g, "operating_point": res.experiment.op.as_dict(),
-             "order": res.realization.order, "fit_percent": res.realization.fit,
-             "singular_values": res.realization.singular_values[:40],
-             "A": res.realization.sys.A, "B": res.realization.sys.B,
-             "C": res.realization.sys.C, "D": res.realization.sys.D,
-             "inputs": ["T_mp", "T_ms"], "outputs": ["r_g", "nu"]} for res in results]
-    if out:
-        _write_identification(out, results, data)
-    if as_json:
-        echo_json(data)
+    models = [{"r_g": res.r_g, "operating_point": res.experiment.op.as_dict(),
+               "order": res.realization.order, "fit_percent": res.realization.fit,
+               "singular_values": res.realization.singular_values[:40],
+               "A": res.realization.sys.A, "B": res.realization.sys.B,
+               "C": res.realization.sys.C, "D": res.realization.sys.D,
+               "inputs": ["T_mp", "T_ms"], "outputs": ["r_g", "nu"]} for res in results]
+    data = {"operating_point": base.as_dict(), "step": step, "models": models}
+    if dest is not None:
+        import json
+
+        with atomic_folder(dest) as tmp:
+            for res in results:
+                e = res.experiment
+                cols = np.column_stack([e.t, e.steps.reshape(len(e.t), -1)])
+                np.savetxt(tmp / f"steps_rg_{res.r_g:g}.csv", cols, delimiter=",", comments="",
+                           header="time [s],r_g/T_mp [1/(N m)],r_g/T_ms [1/(N m)],"
+                                  "nu/T_mp [1/(N m)],nu/T_ms [1/(N m)]")
+            (tmp / "models.json").write_text(json.dumps(to_jsonable(
+                {"schema": {"name": "empact.identify", "version": 1}, **data}), indent=1))
+            save_figure(plot_identified_plant(results, np.logspace(-1, np.log10(200), 400))
+                        .figure, tmp / "fig2_identified_plant")
+    if as_json or json_out:
+        emit_json(data, "identify", json_out)
     else:
-        for d in data:
+        for d in models:
             fit = np.asarray(d["fit_percent"])
-            click.echo(f"r_g = {d['ratio']:g}: order {d['order']}, step fits "
+            click.echo(f"r_g = {d['r_g']:g}: order {d['order']}, step fits "
                        f"{', '.join(f'{v:.2f}' for v in fit.ravel())} %")
-
-
-def _write_identification(out: str, results, data) -> None:
-    """Write step responses, models and the figure into `out` (atomically, as a folder)."""
-    import json
-    import shutil
-    import tempfile
-    from pathlib import Path
-
-    from ..plotting import plot_identified_plant, save_figure
-    from ._common import to_jsonable
-
-    dest = Path(out).resolve()
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(dir=dest.parent, prefix=f".{dest.name}.tmp-"))
-    try:
-        for res in results:
-            e = res.experiment
-            cols = np.column_stack([e.t, e.steps.reshape(len(e.t), -1)])
-            np.savetxt(tmp / f"steps_rg_{res.r_g:g}.csv", cols, delimiter=",", comments="",
-                       header="time [s],r_g/T_mp [1/(N m)],r_g/T_ms [1/(N m)],"
-                              "nu/T_mp [1/(N m)],nu/T_ms [1/(N m)]")
-        (tmp / "models.json").write_text(json.dumps(to_jsonable(data), indent=1))
-        save_figure(plot_identified_plant(results, np.logspace(-1, np.log10(200), 400)).figure,
-                    tmp / "fig2_identified_plant")
-        if dest.exists():
-            shutil.rmtree(dest)
-        tmp.rename(dest)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
 
 
 @click.command("rig")
@@ -174,9 +177,11 @@ def _write_identification(out: str, results, data) -> None:
 @params_option
 @click.option("--out", required=True, type=click.Path(dir_okay=False),
               help="CSV records (time, T_mp, T_ms, theta_mp, theta_ms, nu).")
+@force_option
+@click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
 def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p: float,
         rms: float, band: str, duration: float, fs: float, friction: float, seed: int,
-        params_file: str | None, out: str) -> None:
+        params_file: str | None, out: str, force: bool, quiet: bool) -> None:
     """Virtual test rig: excite a servo torque of the nonlinear model (Fig 14).
 
     The model has spindle Coulomb friction and sensor noise; the records it writes are what
@@ -188,11 +193,27 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
         lo, hi = (float(v) for v in band.split(":"))
     except ValueError:
         raise InputError(f"--band {band!r}: give LO:HI in Hz, e.g. 0.5:100") from None
-    settings = RigSettings(r_g=r_g, nu=nu, F_s=F_s, omega_p=omega_p, excite=excite,
+    fs = check_number("--fs", fs, 0.0, 1e5, lo_open=True, unit="Hz")
+    duration = check_number("--duration", duration, 0.0, 3600.0, lo_open=True, unit="s")
+    if duration * fs > MAX_RIG_SAMPLES:
+        raise InputError(f"--duration x --fs = {duration:g} s x {fs:g} Hz = "
+                         f"{duration * fs:.3g} samples; at most {MAX_RIG_SAMPLES}")
+    lo = check_number("--band (low end)", lo, 0.0, fs / 2, lo_open=True, hi_open=True,
+                      unit="Hz", note="below half the sample rate")
+    hi = check_number("--band (high end)", hi, lo, fs / 2, lo_open=True, hi_open=True,
+                      unit="Hz", note="above the low end, below half the sample rate")
+    rms = check_number("--rms", rms, 0.0, 100.0, lo_open=True, unit="N m")
+    friction = check_number("--friction", friction, 0.0, 100.0, unit="N m")
+    seed = check_int("--seed", seed, 0, 2**32 - 1)
+    output_file(out, "--out", force=force)
+    params = get_params(params_file)
+    op = operating_point(params, trim=True, ratio=r_g, slip=nu, clamp=F_s, speed=omega_p)
+    settings = RigSettings(r_g=op.r_g, nu=op.nu, F_s=op.F_s, omega_p=op.omega_p, excite=excite,
                            excitation=excitation, band=(lo, hi), rms=rms, duration=duration,
                            sample_rate=fs, coulomb=(friction, friction), seed=seed,
+                           period=min(2048, int(duration * fs)),
                            settle=0.0)  # the records are written whole
-    rec = run_rig(get_params(params_file), settings, progress=True)
+    rec = run_rig(params, settings, progress=not quiet)
     if not rec.complete:
         raise InputError(f"rig simulation incomplete, nothing written: {rec.message}")
     atomic_write_text(out, rec.to_csv())

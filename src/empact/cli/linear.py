@@ -5,35 +5,52 @@ from __future__ import annotations
 import click
 import numpy as np
 
+from .._validate import check_int, check_number
+from ..geometry import check_ratio
 from ..linear.actuation import actuation_model
 from ..linear.calibration import calibrate, load_targets
 from ..linear.driveline import driveline_model, uncoupled_frequencies
-from ..params import DAMPING_LEVELS, Params, save_params
-from ._common import InputError, echo_json, get_params, json_option, params_option
+from ..params import DAMPING_LEVELS, save_params
+from ._common import (PLOT_SUFFIXES, Failed, InputError, emit_json, force_option, get_params,
+                      json_options, output_file, params_option)
 
 MODELS = {"actuation": actuation_model, "driveline": driveline_model}
+#: Most frequencies one response may have.
+MAX_FREQUENCIES = 100_000
+
+
+def plot_option(fn):
+    """``--plot FILE`` (format from the suffix)."""
+    return click.option("--plot", "plot", type=click.Path(dir_okay=False), default=None,
+                        help="Write the figure (format from the suffix: .png, .svg, .pdf).")(fn)
+
+
+def ratio_option(default: float):
+    """``--ratio`` (r_g)."""
+    return click.option("--ratio", "r_g", type=float, default=default, show_default=True,
+                        help="Geometric ratio r_g [-].")
 
 
 @click.command("modes")
 @click.argument("model", type=click.Choice(list(MODELS)))
-@click.option("--ratio", "r_g", type=float, default=1.0, show_default=True,
-              help="Geometric ratio r_g.")
+@ratio_option(1.0)
 @params_option
-@json_option
-def modes(model: str, r_g: float, params_file: str | None, as_json: bool) -> None:
+@json_options
+def modes(model: str, r_g: float, params_file: str | None, as_json: bool,
+          json_out: str | None) -> None:
     """Undamped eigenfrequencies, mode shapes and modal energy of MODEL at a ratio."""
+    output_file(json_out, "--json-out", force=True)
     params = get_params(params_file)
-    lm = MODELS[model](params, r_g)
-    m = lm.modes()
-    if as_json:
-        data = {"model": model, "ratio": r_g, "coordinates": m.coordinates,
-                "springs": m.springs, "frequencies_hz": m.frequencies_hz,
-                "energy_fraction": m.energy_fraction, "shapes": m.shapes,
-                "normalised_shapes": m.normalised_shapes, "mass_matrix": m.mass_matrix,
-                "stiffness_matrix": m.stiffness_matrix}
+    r_g = float(check_ratio(check_number("--ratio", r_g), params.variator, "--ratio"))
+    m = MODELS[model](params, r_g).modes()
+    if as_json or json_out:
+        data = {"model": model, "r_g": r_g, "coordinates": m.coordinates, "springs": m.springs,
+                "frequencies_hz": m.frequencies_hz, "energy_fraction": m.energy_fraction,
+                "shapes": m.shapes, "normalised_shapes": m.normalised_shapes,
+                "mass_matrix": m.mass_matrix, "stiffness_matrix": m.stiffness_matrix}
         if model == "driveline":
             data["uncoupled_hz"] = uncoupled_frequencies(params)
-        echo_json(data)
+        emit_json(data, "modes", json_out)
         return
     click.echo(f"{model} model at r_g = {r_g:g}")
     click.echo(f"{'mode':>4s} {'f [Hz]':>10s}  energy fraction per spring "
@@ -48,10 +65,11 @@ def modes(model: str, r_g: float, params_file: str | None, as_json: bool) -> Non
 
 
 def frequency_grid(fmin: float, fmax: float, n: int) -> np.ndarray:
-    """Log-spaced frequencies [Hz]; bad ranges are input errors."""
-    if not (0 < fmin < fmax) or n < 2:
-        raise InputError(f"--fmin {fmin:g} / --fmax {fmax:g} / --n {n}: need 0 < fmin < fmax "
-                         "and n >= 2")
+    """Log-spaced frequencies [Hz] from ``--fmin``, ``--fmax``, ``--n`` (checked)."""
+    fmin = check_number("--fmin", fmin, 0.0, 1e6, lo_open=True, unit="Hz")
+    fmax = check_number("--fmax", fmax, fmin, 1e6, lo_open=True, unit="Hz",
+                        note="above --fmin")
+    n = check_int("--n", n, 2, MAX_FREQUENCIES)
     return np.logspace(np.log10(fmin), np.log10(fmax), n)
 
 
@@ -64,34 +82,41 @@ def frequency_grid(fmin: float, fmax: float, n: int) -> np.ndarray:
                    "append _dot for a velocity.")
 @click.option("--damping", type=click.Choice(DAMPING_LEVELS), default="moderate",
               show_default=True, help="Damping level (actuation model).")
-@click.option("--ratio", "r_g", type=float, default=1.0, show_default=True)
+@ratio_option(1.0)
 @click.option("--fmin", type=float, default=0.1, show_default=True, help="[Hz]")
 @click.option("--fmax", type=float, default=1000.0, show_default=True, help="[Hz]")
-@click.option("--n", "n", type=int, default=400, show_default=True, help="Number of frequencies.")
+@click.option("--n", "n", type=int, default=400, show_default=True,
+              help=f"Number of frequencies (2 to {MAX_FREQUENCIES}).")
 @params_option
-@json_option
-@click.option("--plot", "plot", type=click.Path(dir_okay=False), default=None,
-              help="Write a Bode plot (format from the suffix: .png, .svg, .pdf).")
+@json_options
+@plot_option
+@force_option
 def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: str, r_g: float,
         fmin: float, fmax: float, n: int, params_file: str | None, as_json: bool,
-        plot: str | None) -> None:
+        json_out: str | None, plot: str | None, force: bool) -> None:
     """Damped frequency response of MODEL, computed directly from M, C and K."""
+    output_file(plot, "--plot", force=force, suffixes=PLOT_SUFFIXES)
+    output_file(json_out, "--json-out", force=True)
     params = get_params(params_file)
     f = frequency_grid(fmin, fmax, n)
+    r_g = float(check_ratio(check_number("--ratio", r_g), params.variator, "--ratio"))
     lm = actuation_model(params, r_g, damping) if model == "actuation" \
         else driveline_model(params, r_g)
-    resp = lm.frequency_response(2 * np.pi * f, list(inputs) or None, list(outputs) or None,
-                                 label=f"{damping} damping" if model == "actuation" else "")
+    try:
+        resp = lm.frequency_response(2 * np.pi * f, list(inputs) or None, list(outputs) or None,
+                                     label=f"{damping} damping" if model == "actuation" else "")
+    except ValueError as exc:
+        raise InputError(f"--input / --output: {exc}") from None
     if plot:
         from ..plotting import plot_bode
 
         pairs = [(o, i) for i in resp.inputs for o in resp.outputs]
         plot_bode([resp], pairs, title=f"{lm.name}").save(plot)
-    if as_json:
-        echo_json({"model": model, "ratio": r_g, "damping": damping, "inputs": resp.inputs,
+    if as_json or json_out:
+        emit_json({"model": model, "r_g": r_g, "damping": damping, "inputs": resp.inputs,
                    "outputs": resp.outputs, "frequencies_hz": resp.frequencies_hz,
                    "magnitude_db": resp.magnitude_db(), "phase_deg": resp.phase_deg(),
-                   "H": np.stack([resp.H.real, resp.H.imag], axis=-1)})
+                   "H": np.stack([resp.H.real, resp.H.imag], axis=-1)}, "frf", json_out)
         return
     if not plot:
         mag = resp.magnitude_db()
@@ -108,9 +133,20 @@ def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: 
 @params_option
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
               help="Where to write the calibrated parameter file (TOML).")
-def calibrate_cmd(targets: str, params_file: str | None, out: str) -> None:
-    """Fit the free parameters named in TARGETS to its target eigenfrequencies."""
-    params: Params = get_params(params_file)
+@click.option("--tolerance", type=float, default=1.0, show_default=True,
+              help="Largest relative miss of any target [%]; beyond it nothing is written "
+                   "and the exit status is 1.")
+@force_option
+def calibrate_cmd(targets: str, params_file: str | None, out: str, tolerance: float,
+                  force: bool) -> None:
+    """Fit the free parameters named in TARGETS to its target eigenfrequencies.
+
+    Exit status 0 when every target is met within --tolerance (the file is written), 1 when
+    not (nothing written), 2 for bad input.
+    """
+    tol = check_number("--tolerance", tolerance, 0.0, 100.0, lo_open=True, unit="%")
+    output_file(out, "--out", force=force)
+    params = get_params(params_file)
     tgts, free = load_targets(targets)
     res = calibrate(params, tgts, free)
     click.echo(f"{'target':34s} {'target [Hz]':>11s} {'model [Hz]':>11s} {'error':>9s}", err=True)
@@ -119,7 +155,11 @@ def calibrate_cmd(targets: str, params_file: str | None, out: str) -> None:
     for name, a, b in zip(res.free, res.initial, res.final):
         click.echo(f"  {name:22s} {a:12.5g} -> {b:12.5g}", err=True)
     click.echo(f"optimiser: {res.message}", err=True)
-    header = (f"Calibrated by `empact calibrate {targets}` (max |error| "
-              f"{100 * abs(res.relative_error).max():.3f} %).")
+    worst = int(np.argmax(np.abs(res.relative_error)))
+    miss = 100 * abs(res.relative_error[worst])
+    if not miss <= tol:
+        raise Failed(f"calibration misses {res.targets[worst].label} by {miss:.3g} % "
+                     f"(--tolerance {tol:g} %); nothing written")
+    header = (f"Calibrated by `empact calibrate {targets}` (max |error| {miss:.3f} %).")
     save_params(res.params, out, header=header)
     click.echo(out)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from ..params import dumps_params
+from ..params import dumps_params, load_params
 from ._common import ErrorGroup, get_params
 
 
@@ -16,8 +16,11 @@ def params_group() -> None:
 @click.argument("file", required=False, type=click.Path(dir_okay=False))
 @click.option("--describe", is_flag=True, help="List every key with unit, range and meaning.")
 def show(file: str | None, describe: bool) -> None:
-    """Print the complete parameter set of FILE (default: the shipped set) as TOML."""
-    params = get_params(file)
+    """Print the complete parameter set of FILE (default: the shipped set) as TOML.
+
+    FILE's values are range-checked; ``empact params validate FILE`` also checks the models
+    they define."""
+    params = load_params(file)
     if describe:
         for name, section in params.to_dict().items():
             kind = type(getattr(params, name))
@@ -31,6 +34,7 @@ def show(file: str | None, describe: bool) -> None:
 @params_group.command("validate")
 @click.argument("file", type=click.Path(dir_okay=False))
 def validate(file: str) -> None:
-    """Check FILE; exit 0 and print 'ok' if every value is acceptable."""
+    """Check FILE as every command does (values, ranges and the models they define); exit 0
+    and print 'FILE: ok' if it is acceptable, else one line and exit 2."""
     get_params(file)
     click.echo(f"{file}: ok")

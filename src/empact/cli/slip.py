@@ -3,10 +3,10 @@
 Operating point options (SI, slip as a fraction): ``--ratio`` r_g [-], ``--slip`` nu [-]
 (0.04 is 4 %), ``--clamp`` F_s [N], ``--speed`` omega_p [rad/s]; unset options take the
 ``[operating]`` point of the parameter file.  Where a command sweeps, an option takes a list
-``a,b,c`` or a range ``start:stop:count`` (``count >= 2`` points, ends included).  ``--traction
-FILE`` replaces the analytic traction curve by a tabulated one (CSV ``r_g,nu,mu`` or TOML
-``[[curve]]``).  JSON output echoes the operating point; poles and zeros are ``[re, im]`` pairs
-in rad/s.
+``a,b,c`` or a range ``start:stop:count`` (``count >= 2`` points, ends included; at most
+`MAX_SWEEP` values per option and `MAX_MAP` points per map).  ``--traction FILE`` replaces
+the analytic traction curve by a tabulated one (CSV ``r_g,nu,mu`` or TOML ``[[curve]]``).
+JSON output has ``schema`` and ``units``; poles and zeros are ``[re, im]`` pairs in rad/s.
 """
 from __future__ import annotations
 
@@ -15,21 +15,27 @@ from typing import Callable
 import click
 import numpy as np
 
+from .._validate import check_int, check_number
 from ..params import OperatingPoint, Params
 from ..slip import (INPUTS, OUTPUTS, VARIABLES, belt_root_locus, pole_sweep,
                     slip_frequency_responses, slip_model, stability_map, zero_locus)
 from ..traction import TractionModel, load_traction, traction_curves, traction_from_params
-from ._common import ErrorGroup, InputError, echo_json, get_params, json_option, params_option
+from ._common import (OPTION_VARIABLE, PLOT_SUFFIXES, ErrorGroup, InputError, emit_json,
+                      force_option, get_params, json_options, operating_values, output_file,
+                      params_option)
+from .linear import frequency_grid, plot_option
 
-#: option name -> operating-point variable
-OPTION_VARIABLE = {"ratio": "r_g", "slip": "nu", "clamp": "F_s", "speed": "omega_p"}
 VARIABLE_OPTION = {v: k for k, v in OPTION_VARIABLE.items()}
+#: Most values one option may sweep (poles, responses, zeros are computed per value).
+MAX_SWEEP = 10_000
+#: Most points of a stability map (about 0.1 s per 40 000 points on two cores).
+MAX_MAP = 4_000_000
 
 
-def parse_values(text: str | None, option: str) -> np.ndarray | None:
+def parse_values(text: str | None, option: str, limit: int = MAX_SWEEP) -> np.ndarray | None:
     """``"a"`` -> [a]; ``"a,b,c"`` -> list; ``"start:stop:count"`` -> ``linspace``.
 
-    Raises `InputError` (one line, exit 2) for anything else.
+    Raises `InputError` (one line, exit 2) for anything else, or more than `limit` values.
     """
     if text is None:
         return None
@@ -46,9 +52,10 @@ def parse_values(text: str | None, option: str) -> np.ndarray | None:
         try:
             n = int(parts[2])
         except ValueError:
-            raise InputError(f"--{option} {text!r}: count must be an integer >= 2") from None
-        if n < 2:
-            raise InputError(f"--{option} {text!r}: count {n} must be >= 2")
+            raise InputError(f"--{option} {text!r}: count must be a whole number in "
+                             f"[2, {limit}]") from None
+        if not 2 <= n <= limit:
+            raise InputError(f"--{option} {text!r}: count {n} must be in [2, {limit}]")
         if not (np.isfinite(a) and np.isfinite(b)) or a == b:
             raise InputError(f"--{option} {text!r}: start and stop must be finite and differ")
         return np.linspace(a, b, n)
@@ -58,6 +65,8 @@ def parse_values(text: str | None, option: str) -> np.ndarray | None:
         raise InputError(f"--{option} {text!r}: not a number; {hint}") from None
     if not np.all(np.isfinite(values)):
         raise InputError(f"--{option} {text!r}: values must be finite")
+    if values.size > limit:
+        raise InputError(f"--{option}: {values.size} values; at most {limit}")
     return values
 
 
@@ -73,11 +82,6 @@ def op_options(fn: Callable) -> Callable:
     return params_option(fn)
 
 
-def plot_option(fn: Callable) -> Callable:
-    return click.option("--plot", "plot", type=click.Path(dir_okay=False), default=None,
-                        help="Write the figure (format from the suffix: .png, .svg, .pdf).")(fn)
-
-
 def _setup(params_file: str | None, traction_file: str | None) \
         -> tuple[Params, TractionModel]:
     params = get_params(params_file)
@@ -85,32 +89,35 @@ def _setup(params_file: str | None, traction_file: str | None) \
     return params, tr
 
 
-def _grid(params: Params, raw: dict[str, str | None], *, max_sweeps: int,
-          exact: int | None = None) -> tuple[OperatingPoint, dict[str, np.ndarray]]:
-    """Base operating point and the swept variables ``{variable: values}``."""
-    values = {OPTION_VARIABLE[o]: parse_values(t, o) for o, t in raw.items()}
-    sweeps = {v: a for v, a in values.items() if a is not None and a.size > 1}
+def _grid(params: Params, tr: TractionModel, raw: dict[str, str | None], *, max_sweeps: int,
+          exact: int | None = None, limit: int = MAX_SWEEP) \
+        -> tuple[OperatingPoint, dict[str, np.ndarray]]:
+    """Base operating point and the swept variables ``{variable: values}``, every value
+    checked under its option's name."""
+    values = {}
+    for opt, text in raw.items():
+        v = parse_values(text, opt, limit)
+        if v is not None:
+            values[OPTION_VARIABLE[opt]] = operating_values(params, opt, v, traction=tr)
+    sweeps = {v: a for v, a in values.items() if a.size > 1}
+    names = ", ".join("--" + VARIABLE_OPTION[v] for v in sweeps) or "none"
     if exact is not None and len(sweeps) != exact:
         raise InputError(f"give exactly {exact} of --ratio/--slip/--clamp/--speed as lists or "
-                         f"ranges (got {len(sweeps)}: "
-                         f"{', '.join('--' + VARIABLE_OPTION[v] for v in sweeps) or 'none'})")
+                         f"ranges (got {len(sweeps)}: {names})")
     if len(sweeps) > max_sweeps:
         raise InputError(f"give at most {max_sweeps} of --ratio/--slip/--clamp/--speed as a list "
-                         f"or range (got {', '.join('--' + VARIABLE_OPTION[v] for v in sweeps)})")
-    fixed = {v: float(a[0]) for v, a in values.items() if a is not None and a.size == 1}
-    base = OperatingPoint.from_params(params, **fixed)
-    for v, a in sweeps.items():  # validate the swept values with the base (clear message)
-        for x in a:
-            base.replace(**{v: float(x)})
-    return base, sweeps
+                         f"or range (got {names})")
+    fixed = {v: float(a[0]) for v, a in values.items() if a.size == 1}
+    return OperatingPoint.from_params(params, **fixed), sweeps
 
 
 def _pairs(z: np.ndarray) -> list[list[float]]:
     return [[float(c.real), float(c.imag)] for c in np.asarray(z, complex).ravel()]
 
 
-def _save(plot, path: str) -> None:
-    plot.save(path)
+def _outputs(plot: str | None, json_out: str | None, force: bool) -> None:
+    output_file(plot, "--plot", force=force, suffixes=PLOT_SUFFIXES)
+    output_file(json_out, "--json-out", force=True)
 
 
 @click.group("slip", cls=ErrorGroup)
@@ -121,17 +128,20 @@ def slip_group() -> None:
 # --------------------------------------------------------------------------------------------
 @slip_group.command("statespace")
 @op_options
-@json_option
-def statespace(ratio, slip, clamp, speed, traction_file, params_file, as_json) -> None:
+@json_options
+def statespace(ratio, slip, clamp, speed, traction_file, params_file, as_json,
+               json_out) -> None:
     """The linearised slip model at one operating point (A, B, C, D with names)."""
+    _outputs(None, json_out, True)
     params, tr = _setup(params_file, traction_file)
-    base, _ = _grid(params, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed), max_sweeps=0)
+    base, _ = _grid(params, tr, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed),
+                    max_sweeps=0)
     m = slip_model(params, base, tr)
-    if as_json:
-        echo_json({"operating_point": base.as_dict(), "c_b": m.belt.c_b, "c_s": m.belt.c_s,
+    if as_json or json_out:
+        emit_json({"operating_point": base.as_dict(), "c_b": m.belt.c_b, "c_s": m.belt.c_s,
                    "g_F": m.belt.g_F, "mu": m.belt.mu, "dmu": m.belt.dmu, "A": m.A, "B": m.B,
                    "C": m.C, "D": m.D, "inputs": m.inputs, "outputs": m.outputs,
-                   "states": m.states})
+                   "states": m.states}, "slip.statespace", json_out)
         return
     b = m.belt
     click.echo(f"slip model at r_g = {base.r_g:g}, nu = {base.nu:g}, F_s = {base.F_s:g} N, "
@@ -149,12 +159,15 @@ def statespace(ratio, slip, clamp, speed, traction_file, params_file, as_json) -
 # --------------------------------------------------------------------------------------------
 @slip_group.command("poles")
 @op_options
-@json_option
+@json_options
 @plot_option
-def poles(ratio, slip, clamp, speed, traction_file, params_file, as_json, plot) -> None:
+@force_option
+def poles(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_out, plot,
+          force) -> None:
     """Poles at one operating point, or over one swept variable (Fig. 11: --slip range)."""
+    _outputs(plot, json_out, force)
     params, tr = _setup(params_file, traction_file)
-    base, sweeps = _grid(params, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed),
+    base, sweeps = _grid(params, tr, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed),
                          max_sweeps=1)
     name, values = next(iter(sweeps.items())) if sweeps else ("nu", np.array([base.nu]))
     sw = pole_sweep(params, name, values, base, tr)  # type: ignore[arg-type]
@@ -169,12 +182,13 @@ def poles(ratio, slip, clamp, speed, traction_file, params_file, as_json, plot) 
                        "stable": bool(max_re <= 1e-6)})
     if plot:
         from ..plotting import plot_pole_sweep
-        _save(plot_pole_sweep(sw), plot)
-    if as_json:
-        echo_json({"operating_point": base.as_dict(), "variable": name if sweeps else None,
+
+        plot_pole_sweep(sw).save(plot)
+    if as_json or json_out:
+        emit_json({"operating_point": base.as_dict(), "variable": name if sweeps else None,
                    "values": values, "points": points,
-                   "note": "poles: all 8 eigenvalues [re, im] in rad/s, including the three "
-                           "structural zeros; max_real and min_damping leave those out"})
+                   "note": "poles: all 8 eigenvalues, including the three structural zeros; "
+                           "max_real and min_damping leave those out"}, "slip.poles", json_out)
         return
     if plot:
         return
@@ -198,21 +212,31 @@ def poles(ratio, slip, clamp, speed, traction_file, params_file, as_json, plot) 
 @click.option("--cb-max", type=float, default=1e4, show_default=True,
               help="Largest c_b [N m s/rad] (c_b -> inf is added exactly).")
 @params_option
-@json_option
+@json_options
 @plot_option
-def rootlocus(ratio, slip, cb_min, cb_max, params_file, as_json, plot) -> None:
+@force_option
+def rootlocus(ratio, slip, cb_min, cb_max, params_file, as_json, json_out, plot,
+              force) -> None:
     """Root locus over the belt damping c_b from 0 to infinity (Fig. 9)."""
+    _outputs(plot, json_out, force)
     params = get_params(params_file)
+    ratio = float(operating_values(params, "ratio", ratio))
+    slip = check_number("--slip", slip, -1.0, 1.0, lo_open=True, hi_open=True)
+    cb_min = check_number("--cb-min", cb_min, 0.0, lo_open=True, unit="N m s/rad")
+    cb_max = check_number("--cb-max", cb_max, cb_min, 1e12, lo_open=True, unit="N m s/rad",
+                          note="above --cb-min")
     rl = belt_root_locus(params, ratio, slip, c_b_range=(cb_min, cb_max))
     if plot:
         from ..plotting import plot_belt_root_locus
-        _save(plot_belt_root_locus(rl), plot)
-    if as_json:
-        echo_json({"ratio": ratio, "slip": slip, "c_b": rl.locus.parameter,
+
+        plot_belt_root_locus(rl).save(plot)
+    if as_json or json_out:
+        emit_json({"r_g": ratio, "nu": slip, "c_b": rl.locus.parameter,
                    "branches": np.stack([rl.locus.poles.real, rl.locus.poles.imag], axis=-1),
                    "start": _pairs(rl.start), "end": _pairs(rl.stop),
                    "end_note": "c_b -> inf: seven finite poles; the eighth goes to -inf",
-                   "uncoupled_hz": rl.uncoupled_hz, "coupled_hz": rl.coupled_hz})
+                   "uncoupled_hz": rl.uncoupled_hz, "coupled_hz": rl.coupled_hz},
+                  "slip.rootlocus", json_out)
         return
     if plot:
         return
@@ -232,17 +256,17 @@ def rootlocus(ratio, slip, cb_min, cb_max, params_file, as_json, plot) -> None:
 @click.option("--fmin", type=float, default=0.1, show_default=True, help="[Hz]")
 @click.option("--fmax", type=float, default=300.0, show_default=True, help="[Hz]")
 @click.option("--n", "n", type=int, default=400, show_default=True, help="Number of frequencies.")
-@json_option
+@json_options
 @plot_option
+@force_option
 def frf(ratio, slip, clamp, speed, traction_file, params_file, inp, out, fmin, fmax, n,
-        as_json, plot) -> None:
+        as_json, json_out, plot, force) -> None:
     """Frequency response (default F_s -> nu) at one or several points (Fig. 12)."""
-    from .linear import frequency_grid
-
+    _outputs(plot, json_out, force)
     params, tr = _setup(params_file, traction_file)
-    base, sweeps = _grid(params, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed),
-                         max_sweeps=1)
     f = frequency_grid(fmin, fmax, n)
+    base, sweeps = _grid(params, tr, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed),
+                         max_sweeps=1, limit=max(2, min(MAX_SWEEP, 10_000_000 // len(f))))
     if sweeps:
         name, values = next(iter(sweeps.items()))
         ops = [base.replace(**{name: float(v)}) for v in values]
@@ -252,14 +276,15 @@ def frf(ratio, slip, clamp, speed, traction_file, params_file, inp, out, fmin, f
                                     output=out)
     if plot:
         from ..plotting import plot_slip_bode
-        _save(plot_slip_bode(resp, title=f"{inp} -> {out}"), plot)
-    if as_json:
-        echo_json({"operating_point": base.as_dict(), "input": inp, "output": out,
+
+        plot_slip_bode(resp, title=f"{inp} -> {out}").save(plot)
+    if as_json or json_out:
+        emit_json({"operating_point": base.as_dict(), "input": inp, "output": out,
                    "frequencies_hz": f,
                    "responses": [{"operating_point": op.as_dict(),
                                   "magnitude_db": r.magnitude_db()[0, 0],
                                   "phase_deg": r.phase_deg()[0, 0]}
-                                 for op, r in zip(ops, resp)]})
+                                 for op, r in zip(ops, resp)]}, "slip.frf", json_out)
         return
     if plot:
         return
@@ -273,13 +298,16 @@ def frf(ratio, slip, clamp, speed, traction_file, params_file, inp, out, fmin, f
 # --------------------------------------------------------------------------------------------
 @slip_group.command("zeros")
 @op_options
-@json_option
+@json_options
 @plot_option
-def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, plot) -> None:
+@force_option
+def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_out, plot,
+          force) -> None:
     """Zeros of F_s -> nu at one ratio or over a --ratio list/range (Fig. 13)."""
+    _outputs(plot, json_out, force)
     params, tr = _setup(params_file, traction_file)
     raw = dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed)
-    base, sweeps = _grid(params, raw, max_sweeps=1)
+    base, sweeps = _grid(params, tr, raw, max_sweeps=1)
     if sweeps and "r_g" not in sweeps:
         raise InputError("zeros: only --ratio may be a list or range (the zeros of F_s -> nu do "
                          "not depend on --clamp or --speed, and on --slip only through "
@@ -288,15 +316,16 @@ def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, plot) 
     zl = zero_locus(params, ratios, base, tr)
     if plot:
         from ..plotting import plot_zero_locus
-        _save(plot_zero_locus(zl), plot)
+
+        plot_zero_locus(zl).save(plot)
     coupled_hz = np.sort(np.abs(zl.coupled), axis=1)[:, ::2] / (2 * np.pi)
-    if as_json:
-        echo_json({"operating_point": base.as_dict(), "ratios": ratios,
+    if as_json or json_out:
+        emit_json({"operating_point": base.as_dict(), "r_g": ratios,
                    "zeros": [_pairs(z[np.isfinite(z)]) for z in zl.zeros],
-                   "zeros_at_origin": zl.n_origin, "zero_hz": zl.zero_hz,
+                   "zeros_at_origin": zl.n_origin, "zeros_hz": zl.zero_hz,
                    "coupled_hz": coupled_hz,
-                   "note": "zeros away from the origin, [re, im] in rad/s; they equal the poles "
-                           "of the coupled driveline (c_b -> inf)"})
+                   "note": "zeros away from the origin; they equal the poles of the coupled "
+                           "driveline (c_b -> inf)"}, "slip.zeros", json_out)
         return
     if plot:
         return
@@ -315,27 +344,35 @@ def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, plot) 
 @click.option("--chunk", "chunk", type=int, default=4096, show_default=True,
               help="Points per batched eigenvalue call (bounds memory).")
 @click.option("--workers", type=int, default=None, help="Threads (default: one per CPU core).")
-@json_option
+@json_options
 @plot_option
+@force_option
 def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk, workers,
-            as_json, plot) -> None:
+            as_json, json_out, plot, force) -> None:
     """Stability map over two ranges (--slip 0.001:0.06:200 --ratio 0.5:2.2:200)."""
+    _outputs(plot, json_out, force)
     params, tr = _setup(params_file, traction_file)
     raw = dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed)
-    base, sweeps = _grid(params, raw, max_sweeps=2, exact=2)
+    base, sweeps = _grid(params, tr, raw, max_sweeps=2, exact=2, limit=MAX_MAP // 2)
     order = ["nu", "F_s", "omega_p", "r_g"]  # x axis: the first of these that is swept
     (x_name, x), (y_name, y) = sorted(sweeps.items(), key=lambda kv: order.index(kv[0]))
+    if x.size * y.size > MAX_MAP:
+        raise InputError(f"--{VARIABLE_OPTION[x_name]} x --{VARIABLE_OPTION[y_name]}: "
+                         f"{x.size} x {y.size} = {x.size * y.size} points; at most {MAX_MAP}")
     sm = stability_map(params, x_name, x, y_name, y, base=base,  # type: ignore[arg-type]
-                       traction=tr, method=method, chunk_size=chunk, workers=workers)
+                       traction=tr, method=method, chunk_size=check_int("--chunk", chunk, 1),
+                       workers=None if workers is None else check_int("--workers", workers, 1,
+                                                                      256))
     if plot:
         from ..plotting import plot_stability_map
-        _save(plot_stability_map(sm), plot)
-    if as_json:
-        echo_json({"operating_point": base.as_dict(), "x": {"name": x_name, "values": x},
+
+        plot_stability_map(sm).save(plot)
+    if as_json or json_out:
+        emit_json({"operating_point": base.as_dict(), "x": {"name": x_name, "values": x},
                    "y": {"name": y_name, "values": y}, "max_real": sm.max_real,
                    "min_damping": sm.min_damping, "unstable": sm.unstable,
                    "unstable_fraction": sm.unstable_fraction,
-                   "note": "arrays have shape (len(y), len(x)); max_real [1/s]"})
+                   "note": "arrays have shape (len(y), len(x))"}, "slip.map", json_out)
         return
     click.echo(f"stability map over {x_name} ({len(x)}) x {y_name} ({len(y)}): "
                f"{100 * sm.unstable_fraction:.1f} % of the points unstable; largest real part "
@@ -352,21 +389,25 @@ def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk
 @click.option("--traction", "traction_file", type=click.Path(dir_okay=False), default=None,
               help="Tabulated traction curves instead of the analytic one.")
 @params_option
-@json_option
+@json_options
 @plot_option
-def traction(ratio, slip, traction_file, params_file, as_json, plot) -> None:
+@force_option
+def traction(ratio, slip, traction_file, params_file, as_json, json_out, plot, force) -> None:
     """Traction coefficient mu and slope mu' over slip at some ratios (Fig. 10)."""
+    _outputs(plot, json_out, force)
     params, tr = _setup(params_file, traction_file)
-    r = parse_values(ratio, "ratio")
-    nu = parse_values(slip, "slip")
+    r = operating_values(params, "ratio", parse_values(ratio, "ratio"))
+    nu = operating_values(params, "slip", parse_values(slip, "slip"), traction=tr)
     curves = traction_curves(tr, r, nu, label="(tabulated)" if traction_file else "")
     if plot:
         from ..plotting import plot_traction
-        _save(plot_traction(curves), plot)
+
+        plot_traction(curves).save(plot)
     nu_pk, mu_pk = curves.peak()
-    if as_json:
-        echo_json({"ratios": r, "slip": nu, "mu": curves.mu, "dmu": curves.dmu,
-                   "nu_range": tr.nu_range, "peak_slip": nu_pk, "peak_mu": mu_pk})
+    if as_json or json_out:
+        emit_json({"r_g": r, "nu": nu, "mu": curves.mu, "dmu": curves.dmu,
+                   "nu_range": tr.nu_range, "nu_peak": nu_pk, "mu_peak": mu_pk},
+                  "slip.traction", json_out)
         return
     if plot:
         return

@@ -22,6 +22,8 @@ from typing import Literal, Mapping
 import numpy as np
 
 from .._lazy import lazy_module
+from .._validate import check_choice, check_int, check_number
+from ..errors import ParameterError
 from ..identification.frf_estimation import FRFEstimate, estimate_frf
 from ..nonlinear.model import nonlinear_model
 from ..nonlinear.simulate import simulate
@@ -49,22 +51,21 @@ def excitation_signal(kind: str, n: int, fs: float, band: tuple[float, float], r
     seed : seed of the random phases / noise
     period : multisine period [samples]
     """
-    if kind not in EXCITATIONS:
-        raise ValueError(f"excitation {kind!r}: choose from {', '.join(EXCITATIONS)}")
+    check_choice("excitation", kind, EXCITATIONS)
     f_lo, f_hi = band
     if not 0 < f_lo < f_hi < fs / 2:
-        raise ValueError(f"band = ({f_lo:g}, {f_hi:g}) Hz: need 0 < f_lo < f_hi < fs/2 = "
-                         f"{fs / 2:g} Hz")
-    if not (np.isfinite(rms) and rms > 0):
-        raise ValueError(f"rms = {rms!r}: must be > 0")
+        raise ParameterError(f"band = ({f_lo:g}, {f_hi:g}) Hz: need 0 < f_lo < f_hi < fs/2 = "
+                             f"{fs / 2:g} Hz")
+    check_number("rms", rms, 0.0, lo_open=True)
     rng = np.random.default_rng(seed)
     t = np.arange(n) / fs
     if kind == "multisine":
         k = np.arange(1, period // 2)
         k = k[(k * fs / period >= f_lo) & (k * fs / period <= f_hi)]
         if k.size == 0:
-            raise ValueError(f"band = ({f_lo:g}, {f_hi:g}) Hz holds no line of a {period}-sample "
-                             "period")
+            raise ParameterError(f"band = ({f_lo:g}, {f_hi:g}) Hz holds no frequency line of the "
+                                 f"{period}-sample multisine period (lines every "
+                                 f"{fs / period:g} Hz): widen the band or lengthen the record")
         spec = np.zeros(period // 2 + 1, complex)
         spec[k] = np.exp(2j * np.pi * rng.uniform(size=k.size))
         one = np.fft.irfft(spec, period)
@@ -118,23 +119,17 @@ class RigSettings:
     seed: int = 1
 
     def __post_init__(self) -> None:
-        if self.excite not in ("T_mp", "T_ms"):
-            raise ValueError(f"excite = {self.excite!r}: choose T_mp or T_ms")
-        if not (self.duration > 0 and self.sample_rate > 0):
-            raise ValueError(f"duration = {self.duration!r} s, sample_rate = "
-                             f"{self.sample_rate!r} Hz: must be > 0")
-        if not 0 <= self.settle < self.duration:
-            raise ValueError(f"settle = {self.settle!r} s: must be in [0, duration = "
-                             f"{self.duration!r} s)")
-        if self.period < 16 or self.period > self.duration * self.sample_rate:
-            raise ValueError(f"period = {self.period!r} samples: must be in [16, "
-                             f"{int(self.duration * self.sample_rate)}]")
-        if min(self.coulomb) < 0:
-            raise ValueError(f"coulomb = {self.coulomb!r}: friction torques must be >= 0 [N m]")
+        check_choice("excite", self.excite, ("T_mp", "T_ms"))
+        check_choice("excitation", self.excitation, EXCITATIONS)
+        check_number("duration", self.duration, 0.0, lo_open=True, unit="s")
+        check_number("sample_rate", self.sample_rate, 0.0, lo_open=True, unit="Hz")
+        check_number("settle", self.settle, 0.0, self.duration, hi_open=True, unit="s")
+        check_int("period", self.period, 16, int(self.duration * self.sample_rate))
+        for k, c in enumerate(self.coulomb):
+            check_number(f"coulomb[{k}]", c, 0.0, unit="N m")
         for name, std in self.noise.items():
-            if name not in MEASURED or not std >= 0:
-                raise ValueError(f"noise[{name!r}] = {std!r}: signals {', '.join(MEASURED)}, "
-                                 "standard deviation >= 0")
+            check_choice("noise signal", name, MEASURED)
+            check_number(f"noise[{name!r}]", std, 0.0)
 
 
 @dataclass(frozen=True, eq=False)

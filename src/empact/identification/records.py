@@ -6,17 +6,28 @@ A record file has one header line of column names and one row per sample, for ex
     0.000,0.12,0.0,0.010
     0.001,0.10,1.3e-4,0.011
 
-The sample rate is given (``fs``) or follows from a time column, which must then be uniform.
+Lines before the header that start with ``#`` are comments; a unit in brackets after a name
+(``time [s]``) is allowed and not part of the name, so ``empact simulate``'s CSV reads as well
+as ``empact rig``'s; a UTF-8 byte-order mark (as spreadsheets write) is skipped.  The sample
+rate is given (``fs``) or follows from a time column, which must then be uniform.
 """
 from __future__ import annotations
 
 import csv
+import re
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
-__all__ = ["load_records", "sample_rate"]
+from ..errors import DataError
+
+__all__ = ["load_records", "sample_rate", "column_name"]
+
+
+def column_name(header: str) -> str:
+    """A header cell without its unit: ``"theta_mp [rad]"`` -> ``"theta_mp"``."""
+    return re.sub(r"\s*\[[^\]]*\]\s*$", "", header.strip())
 
 
 def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
@@ -25,26 +36,37 @@ def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
 
     Raises
     ------
-    ValueError
+    DataError
         One line naming the file, and the column, row and value that are wrong: a missing file
-        or column, a non-numeric or non-finite entry, fewer than `min_rows` rows.
+        or column, a non-numeric or non-finite entry, fewer than `min_rows` rows, a binary or
+        non-UTF-8 file.
     """
     path = Path(path)
     try:
-        with path.open(newline="") as fh:
-            reader = csv.reader(fh)
-            header = [h.strip() for h in next(reader, [])]
-            rows = [r for r in reader if r and any(c.strip() for c in r)]
+        with path.open(newline="", encoding="utf-8-sig") as fh:
+            text = fh.read()
     except FileNotFoundError:
-        raise ValueError(f"{path}: no such data file") from None
+        raise DataError(f"{path}: no such data file") from None
+    except IsADirectoryError:
+        raise DataError(f"{path}: is a folder, not a data file") from None
     except UnicodeDecodeError:
-        raise ValueError(f"{path}: not a text (CSV) file") from None
+        raise DataError(f"{path}: not a UTF-8 text (CSV) file") from None
+    except OSError as exc:
+        raise DataError(f"{path}: cannot be read ({exc.strerror})") from None
+    if "\x00" in text:
+        raise DataError(f"{path}: a binary file, not CSV text")
+    lines = [ln for ln in text.splitlines() if ln.strip()]
+    while lines and lines[0].lstrip().startswith("#"):
+        lines.pop(0)
+    reader = csv.reader(lines)
+    header = [column_name(h) for h in next(reader, [])]
+    rows = [r for r in reader if r and any(c.strip() for c in r)]
     if not header:
-        raise ValueError(f"{path}: empty file (expected a header row of column names)")
+        raise DataError(f"{path}: empty file (expected a header row of column names)")
     out: dict[str, np.ndarray] = {}
     for name in columns:
         if name not in header:
-            raise ValueError(f"{path}: no column {name!r} (columns: {', '.join(header)})")
+            raise DataError(f"{path}: no column {name!r} (columns: {', '.join(header)})")
         j = header.index(name)
         values = np.empty(len(rows))
         for i, row in enumerate(rows):
@@ -52,14 +74,14 @@ def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
             try:
                 values[i] = float(cell)
             except ValueError:
-                raise ValueError(f"{path}: column {name!r}, data row {i + 1}: {cell!r} is not a "
-                                 "number") from None
+                raise DataError(f"{path}: column {name!r}, data row {i + 1}: {cell!r} is not a "
+                                "number") from None
             if not np.isfinite(values[i]):
-                raise ValueError(f"{path}: column {name!r}, data row {i + 1}: {cell!r} is not "
-                                 "finite")
+                raise DataError(f"{path}: column {name!r}, data row {i + 1}: {cell!r} is not "
+                                "finite")
         out[name] = values
     if len(rows) < min_rows:
-        raise ValueError(f"{path}: {len(rows)} data rows; at least {min_rows} are needed")
+        raise DataError(f"{path}: {len(rows)} data rows; at least {min_rows} are needed")
     return out
 
 
@@ -68,11 +90,11 @@ def sample_rate(t: np.ndarray, name: str = "time", rtol: float = 1e-6) -> float:
     dt = np.diff(t)
     if np.any(dt <= 0):
         i = int(np.argmax(dt <= 0))
-        raise ValueError(f"column {name!r} must increase: row {i + 2} has {t[i + 1]!r} after "
+        raise DataError(f"column {name!r} must increase: row {i + 2} has {t[i + 1]!r} after "
                          f"{t[i]!r}")
     mean = (t[-1] - t[0]) / (len(t) - 1)
     dev = np.abs(dt - mean).max() / mean
     if dev > rtol:
-        raise ValueError(f"column {name!r} is not uniformly sampled (spacing varies by "
+        raise DataError(f"column {name!r} is not uniformly sampled (spacing varies by "
                          f"{100 * dev:.3g} %, allowed {100 * rtol:g} %)")
     return 1.0 / mean

@@ -199,24 +199,31 @@ class LumpedModel:
             -> FrequencyResponse:
         """Frequency response computed directly from M, C, K, vectorised over frequency.
 
-        ``H(w) = C_out (K - w^2 M + j w C)^{-1} F``, velocity outputs times ``j w``.
+        ``H(w) = C_out (K + s^2 M + s C)^{-1} F`` at ``s = j w``, velocity outputs times ``s``.
+        A model without any damping (``C = 0``) is evaluated in the limit of vanishing damping,
+        at ``s = j w + 1e-9 w``: its response is real on the axis and its phase at every sign
+        change an arbitrary +-180 deg; the limit makes it the continuation of the damped
+        curves (-180 deg below the first mode for a rigid-body mode), at a relative change of
+        the magnitude of 1e-9 away from the resonances.
 
         Parameters
         ----------
         omega : array, shape (n_f,)
             Frequencies [rad/s], all > 0 when the model has a rigid-body mode.
         inputs, outputs : names (default: all inputs; all coordinates)
+        label : free text for the result
         """
         w = np.atleast_1d(np.asarray(omega, float))
         inputs = list(self.inputs) if inputs is None else list(inputs)
         outputs = list(self.coordinates) if outputs is None else list(outputs)
         F = self.force_matrix(inputs)
         rows, vel = self.output_matrix(outputs)
-        rows = rows[:, :self.n] + rows[:, self.n:]  # velocity rows are multiplied by j w below
-        Z = self.K[None] - (w**2)[:, None, None] * self.M[None] + 1j * w[:, None, None] * self.C[None]
+        rows = rows[:, :self.n] + rows[:, self.n:]  # velocity rows are multiplied by s below
+        s = 1j * w + (1e-9 * w if not np.any(self.C) else 0.0)
+        Z = self.K[None] + (s**2)[:, None, None] * self.M[None] + s[:, None, None] * self.C[None]
         X = np.linalg.solve(Z, np.broadcast_to(F, (len(w),) + F.shape))  # (n_f, n, n_in)
         H = np.einsum("on,fni->oif", rows, X)
-        H[vel] *= 1j * w
+        H[vel] *= s
         return FrequencyResponse(omega=w, H=H, inputs=tuple(inputs), outputs=tuple(outputs),
                                  label=label)
 

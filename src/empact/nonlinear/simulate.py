@@ -242,16 +242,18 @@ def run_scenario(scenario: Scenario, params: Params, *, progress: bool = False) 
 
 
 def csv_text(result: SimulationResult, states: bool = False) -> str:
-    """CSV of a result: time, outputs, inputs (and states); units in the header."""
+    """CSV of a result: a ``#`` comment line with the status, then a header of names with
+    units (``time [s]``, the outputs, the inputs, and with `states` the states as
+    ``x_<state>``) and one row per sample; `empact.identification.load_records` reads it."""
     buf = io.StringIO()
     status = "complete" if result.complete else "INCOMPLETE"
     buf.write(f"# empact simulation {result.scenario!r}: {status}: {result.message}\n")
     w = csv.writer(buf, lineterminator="\n")
-    cols = ["t [s]"] + [f"{o} [{OUTPUT_UNITS[o]}]" for o in result.outputs] \
-        + [f"{i} [{INPUT_UNITS[i]}] (input)" for i in result.inputs]
+    cols = ["time [s]"] + [f"{o} [{OUTPUT_UNITS[o]}]" for o in result.outputs] \
+        + [f"{i} [{INPUT_UNITS[i]}]" for i in result.inputs]
     data = [result.t[:, None], result.y, result.u]
     if states:
-        cols += [f"{s} [{STATE_UNITS[s]}] (state)" for s in result.states]
+        cols += [f"x_{s} [{STATE_UNITS[s]}]" for s in result.states]
         data.append(result.x)
     w.writerow(cols)
     for row in np.hstack(data):

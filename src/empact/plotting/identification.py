@@ -16,7 +16,8 @@ __all__ = ["plot_frf_estimate", "plot_identified_plant"]
 @styled
 def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None = None,
                       models: Sequence[FrequencyResponse] = (), title: str = "",
-                      fmin: float | None = None, axes: Any = None) -> Plot:
+                      fmin: float | None = None, min_coherence: float = 0.5,
+                      axes: Any = None) -> Plot:
     """Magnitude [dB], phase [deg] and coherence of an FRF estimate, one column per pair.
 
     Parameters
@@ -26,6 +27,8 @@ def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None 
     models : model responses to overlay (dashed), with the same signal names
     title : figure title
     fmin : lowest frequency shown [Hz] (default: the first non-zero bin)
+    min_coherence : the estimate's phase is drawn only where the coherence reaches this
+        (elsewhere noise, unwrapped, runs off by many turns); the magnitude is drawn everywhere
     axes : shape (3, len(pairs)); default a new figure
     """
     pairs = list(pairs or [(o, i) for i in est.inputs for o in est.outputs])
@@ -38,7 +41,11 @@ def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None 
         h = est.H[i, j, keep]
         artists += ax[0, col].semilogx(f[keep], 20 * np.log10(np.abs(h)),
                                        label=f"estimate ({est.method})")
-        artists += ax[1, col].semilogx(f[keep], unwrapped_phase_deg(h))
+        good = est.coherence[i, j, keep] >= min_coherence
+        if good.any():
+            phase = np.full(h.shape, np.nan)
+            phase[good] = unwrapped_phase_deg(h[good])
+            artists += ax[1, col].semilogx(f[keep], phase)
         artists += ax[2, col].semilogx(f[keep], est.coherence[i, j, keep])
         for m in models:
             if out in m.outputs and inp in m.inputs:
@@ -48,7 +55,8 @@ def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None 
                 artists += ax[1, col].semilogx(m.frequencies_hz, unwrapped_phase_deg(hm), "--")
         ax[0, col].set_title(f"{symbol(inp)} $\\rightarrow$ {symbol(out)}")
         ax[0, col].set_ylabel("magnitude [dB]")
-        ax[1, col].set_ylabel("phase [deg]")
+        ax[1, col].set_ylabel(f"phase [deg] (estimate: coherence ≥ {min_coherence:g})"
+                              if col == 0 else "phase [deg]")
         ax[2, col].set_ylabel("coherence [-]")
         ax[2, col].set_ylim(0, 1.05)
         ax[2, col].set_xlabel("frequency [Hz]")

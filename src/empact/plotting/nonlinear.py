@@ -39,23 +39,28 @@ def plot_nmp(result: NmpResult, title: str = "", axes: Any = None) -> Plot:
                            label=r"$\Delta L = 4 \phi \delta / \tan\beta$ [µm]")
     ax.axhline(0, color="k", lw=0.6)
     ax.axvline(1, color="k", lw=0.4, ls=":")
+    ticks = [t for t in (0.4, 0.5, 0.7, 1.0, 1.5, 2.0, 2.5) if g.r_g.min() <= t <= g.r_g.max()]
+    ax.set_xticks(ticks, [f"{t:g}" for t in ticks])
+    ax.minorticks_off()
     ax.set_xlabel(r"geometric ratio $r_g$ [-]")
     ax.set_ylabel("length [mm or µm, see legend]")
     ax.legend(loc="best")
     ax.grid(True, which="both")
     ax = axs[0, 1]
     colors = [f"C{k % 10}" for k in range(len(result.r_g))]
-    for r, z, c in zip(result.r_g, result.zeros, colors):
+    top = 1.0
+    for r, z, zr, c in zip(result.r_g, result.zeros, result.rhp_zeros, colors):
         zh = z / (2 * np.pi)
-        rhp = z.real > 1e-6 * np.abs(z)
+        rhp = np.isin(z, zr)  # the analysis' own right-half-plane set
         artists += ax.plot(zh.real[~rhp], zh.imag[~rhp], "o", mfc="none", color=c, ms=5,
                            label=f"$r_g$ = {r:.3g}: {int(rhp.sum())} RHP")
         artists += ax.plot(zh.real[rhp], zh.imag[rhp], "o", color=c, ms=6)
+        top = max(top, float(np.abs(zh.imag).max(initial=0.0)))
     ax.axvline(0, color="k", lw=0.6)
     ax.set_xscale("symlog", linthresh=1.0)
     ax.set_xlabel("real part of zero / 2π [Hz] (symmetric log scale)")
     ax.set_ylabel("imaginary part of zero / 2π [Hz]")
-    ax.set_ylim(-5, result.f_max)
+    ax.set_ylim(-0.05 * top, 1.15 * top)
     ax.set_title(r"zeros of $T_\mathrm{mp} \rightarrow \nu$ (filled: right half-plane)")
     ax.legend(fontsize=6, ncol=2, loc="upper left")
     if title:

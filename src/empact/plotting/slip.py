@@ -258,6 +258,7 @@ def plot_stability_map(sm: StabilityMap, title: str = "", ax: Any = None) -> Plo
     if 0 < unstable.mean() < 1:
         artists.append(ax.contour(X, Y, sm.max_real, levels=[sm.tol], colors="k",
                                   linewidths=1.2))
+    ax.grid(False)
     ax.set_xlabel(lx)
     ax.set_ylabel(ly)
     fixed = ", ".join(_value(k, v) for k, v in sm.base.as_dict().items()

@@ -17,7 +17,7 @@ from ..reproduction.claims import Claim, claims_table
 from .context import Context, Section
 from .sections import SECTIONS
 
-__all__ = ["build_report", "STYLE_CSS"]
+__all__ = ["build_report", "STYLE_CSS", "IMAGE_CHECK"]
 
 STYLE_CSS = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222;
 line-height:1.4}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;
@@ -25,6 +25,14 @@ padding:3px 8px;text-align:right}caption{text-align:left;font-weight:bold;margin
 img{max-width:100%}figcaption{font-size:90%;color:#444}.ok{color:#060}.bad{color:#a00}
 nav ol{columns:2}.summary td{text-align:left}.summary td.v{white-space:nowrap}
 ul.claims li{margin:2px 0}.why{color:#555;font-size:90%}section{margin-top:2em}"""
+
+
+#: Marks the page once loaded: ``data-images`` (count) and ``data-broken-images`` (images that
+#: did not load), for a reader's browser console and the test that renders the page.
+IMAGE_CHECK = ("<script>window.addEventListener('load',function(){var i=document.images,b=0;"
+               "for(var k=0;k<i.length;k++){if(!i[k].complete||i[k].naturalWidth===0){b++;"
+               "i[k].classList.add('broken');}}document.body.dataset.images=i.length;"
+               "document.body.dataset.brokenImages=b;});</script>")
 
 
 def _summary(done: Sequence[tuple[Section, Sequence[Claim]]]) -> str:
@@ -78,7 +86,7 @@ def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool 
                       for s in todo)
         page = ("<!doctype html><html lang='en'><head><meta charset='utf-8'>"
                 "<title>empact report</title>"
-                f"<style>{STYLE_CSS}</style></head><body><h1>Dynamic analysis of the Empact CVT: "
+                f"<style>{STYLE_CSS}</style>{IMAGE_CHECK}</head><body><h1>Dynamic analysis of the Empact CVT: "
                 "reproduced with empact</h1>\n<p>Reference: “Dynamic analysis of the Empact CVT: "
                 "ratio and slip dependent, non-minimum phase dynamics”. Every number below is "
                 "computed from the parameter set in <a href='params.toml'>params.toml</a>.</p>\n"

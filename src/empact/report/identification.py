@@ -1,7 +1,7 @@
 """Report sections for identification: Fig. 2 by realisation, Fig. 14 on the virtual rig."""
 from __future__ import annotations
 
-from ..plotting import plot_frf_estimate, plot_identified_plant
+from ..plotting import plot_frf_estimate, plot_identified_plant, symbol
 from ..reproduction import identification as rep
 from .context import Context
 
@@ -39,7 +39,7 @@ def fig14(ctx: Context, res: rep.Fig14) -> str:
         noise = ", ".join(f"{k} {v:g}" for k, v in s.noise.items())
         parts.append(ctx.figure(
             plot_frf_estimate(run.estimate, run.pairs, models=[run.model], fmin=0.5,
-                              title=f"Virtual rig: {s.excite} excited ({s.excitation}, "
+                              title=f"Virtual rig: {symbol(s.excite)} excited ({s.excitation}, "
                                     f"{s.rms:g} N m RMS)"),
             f"fig14_rig_{s.excite}",
             f"Fig. 14: H1 estimates with coherence, {s.duration:g} s at {s.sample_rate:g} Hz, "

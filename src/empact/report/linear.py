@@ -40,11 +40,11 @@ def table2(ctx: Context, res: rep.Table2) -> str:
 
 def fig4_5(ctx: Context, res: rep.ModeFigure) -> str:
     """Figs. 4 and 5."""
-    return (ctx.figure(plot_mode_shapes(res.modes, split=4, title="Actuation modes, r_g = 1"),
+    return (ctx.figure(plot_mode_shapes(res.modes, split=4, title="Actuation modes, $r_g$ = 1"),
                        "fig4_actuation_modes",
                        "Fig. 4: normalised undamped eigenvectors (q~1..q~8), low modes left, "
                        "translational modes right")
-            + ctx.figure(plot_modal_energy(res.modes, title="Actuation modal energy, r_g = 1"),
+            + ctx.figure(plot_modal_energy(res.modes, title="Actuation modal energy, $r_g$ = 1"),
                          "fig5_actuation_energy",
                          "Fig. 5: signed normalised potential energy of springs 1-5 (worm, "
                          "chain, pushbelt, primary and secondary thrust bearing). Each bar is "
@@ -57,7 +57,7 @@ def fig4_5(ctx: Context, res: rep.ModeFigure) -> str:
 def fig6(ctx: Context, res: rep.Fig6) -> str:
     """Fig. 6."""
     return (ctx.figure(plot_bode(res.responses, [("theta_mp", "T_mp"), ("theta_ms", "T_ms")],
-                                 title="Actuation, r_g = 1", units="rad/(N m)"),
+                                 title="Actuation, $r_g$ = 1", units="rad/(N m)"),
                        "fig6_actuation_frf",
                        "Fig. 6: servo torque to servo position, undamped, moderate and large "
                        "damping")
@@ -66,9 +66,9 @@ def fig6(ctx: Context, res: rep.Fig6) -> str:
 
 def fig8(ctx: Context, res: rep.ModeFigure) -> str:
     """Fig. 8."""
-    return (ctx.figure(plot_mode_shapes(res.modes, title="Driveline modes, r_g = 1"),
+    return (ctx.figure(plot_mode_shapes(res.modes, title="Driveline modes, $r_g$ = 1"),
                        "fig8_driveline_modes", "Fig. 8 (left): normalised undamped eigenvectors")
-            + ctx.figure(plot_modal_energy(res.modes, title="Driveline modal energy, r_g = 1"),
+            + ctx.figure(plot_modal_energy(res.modes, title="Driveline modal energy, $r_g$ = 1"),
                          "fig8_driveline_energy",
                          "Fig. 8 (right): signed normalised potential energy of the torque "
                          "converter, pushbelt and driveshaft (as in Fig. 5)")

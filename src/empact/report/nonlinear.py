@@ -20,7 +20,8 @@ def nmp(ctx: Context, res: rep.NmpSection) -> str:
     eq2_pattern = [kin for kin, sl, a, ks in res.combos
                    if sl == "eq2" and a.n_rhp[ks[0]] > 0 and a.n_rhp[ks[-1]] == 0]
     op = ctx.params.operating
-    return (ctx.figure(plot_nmp(r, title="Sec. 2.3: belt length and zeros of T_mp -> nu"),
+    title = r"Sec. 2.3: belt length and zeros of $T_\mathrm{mp} \rightarrow \nu$"
+    return (ctx.figure(plot_nmp(r, title=title),
                        "nmp_zeros", "Sec. 2.3: Delta_x and belt-length change over the ratio "
                        "(left); zeros of T_mp -> nu (right, filled: right half-plane)")
             + ctx.table("nmp_zeros", ["r_g", "Delta_x [mm]", "dL/delta exact [-]",
@@ -55,9 +56,9 @@ def simulation(ctx: Context, res: rep.SimulationSection) -> str:
 def exact_plant(ctx: Context, res: rep.PlantSection) -> str:
     """The exact plant's magnitudes and operating points."""
     op = ctx.params.operating
-    return (ctx.figure(plot_plant_magnitude(res.responses, title="Exact linearised plant, nu = "
-                                            f"{op.nu:g}, F_s = {op.F_s:g} N, omega_p = "
-                                            f"{op.omega_p:g} rad/s"),
+    return (ctx.figure(plot_plant_magnitude(res.responses, title=r"Exact linearised plant, $\nu$ = "
+                                            f"{op.nu:g}, $F_s$ = {op.F_s / 1e3:g} kN, "
+                                            rf"$\omega_p$ = {op.omega_p:g} rad/s"),
                        "fig2_exact_plant", "Fig. 2 (exact): magnitudes of T_mp, T_ms -> r_g, nu "
                        "at r_g = 0.5, 1, 2, from the complex-step linearisation of the "
                        "nonlinear model")

@@ -66,9 +66,9 @@ def fig11(ctx: Context, res: rep.Fig11) -> str:
 def fig12a(ctx: Context, res: rep.Fig12) -> str:
     """Fig. 12(a)."""
     b = res.base
-    return (ctx.figure(plot_slip_bode(res.responses, title=f"F_s -> nu at r_g = {b.r_g:g}, "
-                                      f"F_s0 = {b.F_s / 1e3:g} kN, omega_p0 = {b.omega_p:g} "
-                                      "rad/s"),
+    title = (rf"$F_s \rightarrow \nu$ at $r_g$ = {b.r_g:g}, $F_{{s0}}$ = {b.F_s / 1e3:g} kN, "
+             rf"$\omega_{{p0}}$ = {b.omega_p:g} rad/s")
+    return (ctx.figure(plot_slip_bode(res.responses, title=title),
                        "fig12a_frf_over_slip",
                        "Fig. 12(a): the paper shows full coupling at 0.1 %, damping of both "
                        "resonances falling with nu and a phase increase (instability) at 4 % - "
@@ -79,9 +79,9 @@ def fig12a(ctx: Context, res: rep.Fig12) -> str:
 def fig12b(ctx: Context, res: rep.Fig12) -> str:
     """Fig. 12(b)."""
     b = res.base
-    return (ctx.figure(plot_slip_bode(res.responses, title=f"F_s -> nu at nu = "
-                                      f"{100 * b.nu:g} %, F_s0 = {b.F_s / 1e3:g} kN, omega_p0 = "
-                                      f"{b.omega_p:g} rad/s"),
+    return (ctx.figure(plot_slip_bode(res.responses, title=rf"$F_s \rightarrow \nu$ at $\nu$ = "
+                                      f"{100 * b.nu:g} %, $F_{{s0}}$ = {b.F_s / 1e3:g} kN, "
+                                      rf"$\omega_{{p0}}$ = {b.omega_p:g} rad/s"),
                        "fig12b_frf_over_ratio",
                        "Fig. 12(b): the paper shows that the two zeros of F_s -> nu move with "
                        f"the ratio - {ctx.verdict(res.claims)}")

@@ -1,0 +1,112 @@
+"""Writing linear systems for other tools: JSON, MATLAB ``.mat`` and numpy ``.npz``.
+
+`save_system` writes a named state-space model (A, B, C, D with the input, output and state
+names and units) and its metadata (operating point, options) atomically.  In MATLAB::
+
+    s = load('plant.mat');
+    sys = ss(s.A, s.B, s.C, s.D, 'InputName', cellstr(s.inputs), ...
+             'OutputName', cellstr(s.outputs), 'StateName', cellstr(s.states));
+
+JSON documents carry ``schema`` (name and version) and ``units``.
+"""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from ._io import atomic_file, atomic_write_text
+from ._lazy import lazy_module
+from ._validate import check_choice
+
+sio = lazy_module("scipy.io")
+
+__all__ = ["FORMATS", "system_dict", "save_system", "format_of", "jsonable"]
+
+#: File formats of `save_system`.
+FORMATS = ("json", "mat", "npz")
+
+
+def jsonable(obj: Any) -> Any:
+    """numpy arrays and scalars to lists and floats; complex to ``[re, im]``; NaN to None."""
+    if isinstance(obj, Mapping):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return jsonable(obj.tolist())
+    if isinstance(obj, (complex, np.complexfloating)):
+        return [jsonable(float(obj.real)), jsonable(float(obj.imag))]
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if np.isfinite(obj) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def format_of(path: str | os.PathLike[str], fmt: str | None = None) -> str:
+    """The format named, or the one of the file's suffix."""
+    if fmt is not None:
+        return check_choice("format", fmt, FORMATS)
+    return check_choice(f"{path}: file suffix", Path(path).suffix.lstrip(".").lower(), FORMATS)
+
+
+def system_dict(sys, units: Mapping[str, Sequence[str]] | None = None,
+                metadata: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """A named `control.StateSpace` as a plain dictionary (A, B, C, D, names, units)."""
+    d: dict[str, Any] = {"A": np.asarray(sys.A), "B": np.asarray(sys.B),
+                         "C": np.asarray(sys.C), "D": np.asarray(sys.D),
+                         "inputs": list(sys.input_labels), "outputs": list(sys.output_labels),
+                         "states": list(sys.state_labels)}
+    if units:
+        d.update({f"{k}_units": list(v) for k, v in units.items()})
+    d.update(metadata or {})
+    return d
+
+
+def save_system(sys, path: str | os.PathLike[str], *, fmt: str | None = None,
+                schema: str = "empact.system", units: Mapping[str, Sequence[str]] | None = None,
+                metadata: Mapping[str, Any] | None = None) -> Path:
+    """Write a named state-space model atomically as JSON, ``.mat`` or ``.npz``.
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+    path : destination file
+    fmt : "json", "mat" or "npz" (default: from the suffix)
+    schema : JSON schema name (version 1)
+    units : ``{"inputs": [...], "outputs": [...], "states": [...]}`` units per signal
+    metadata : extra entries: numbers, strings, flat dictionaries of numbers (a dictionary
+        becomes ``<key>_names`` / ``<key>`` arrays in ``.mat`` and ``.npz``)
+    """
+    fmt = format_of(path, fmt)
+    data = system_dict(sys, units, metadata)
+    if fmt == "json":
+        doc = {"schema": {"name": schema, "version": 1}, **data}
+        atomic_write_text(path, json.dumps(jsonable(doc), indent=1) + "\n")
+        return Path(path)
+    flat: dict[str, Any] = {}
+    for k, v in data.items():
+        if isinstance(v, Mapping):
+            names = [n for n in v if not isinstance(v[n], (Mapping, str))]
+            flat[f"{k}_names"] = np.array(names, dtype=object if fmt == "mat" else str)
+            flat[k] = np.array([float(v[n]) for n in names])
+            for n in v:
+                if isinstance(v[n], str):
+                    flat[f"{k}_{n}"] = v[n]
+        elif isinstance(v, (list, tuple)) and v and isinstance(v[0], str):
+            flat[k] = np.array(v, dtype=object if fmt == "mat" else str)
+        else:
+            flat[k] = np.asarray(v)
+    with atomic_file(path) as tmp:
+        if fmt == "mat":
+            sio.savemat(tmp, flat)
+        else:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **flat)
+    return Path(path)
