@@ -1,101 +1,127 @@
-"""Benchmark: the 2 s shift-and-load-step scenario (issue 4, item 9).
+"""Benchmark: the simulator's integrator against the strongest library route (issues 4, 9, 11).
 
-The compiled route (numba right-hand side, exact complex-step Jacobian, compiled L-stable
-Rosenbrock integrator, `empact.simulate`) against the same model run by
-`scipy.integrate.solve_ivp` (BDF, finite-difference Jacobian) with a plain Python right-hand
-side (the pure-Python source of the same kernel, ``_eval.py_func``), in one process, one core.
-The baseline integrates piece by piece between the input breakpoints, like the compiled route.
-Run: `.venv/bin/python bench/bench_simulation.py`.
+Workload: the shipped ``shift-and-load-step`` scenario (LOW -> OD in 1.3 s under ratio
+control, then a load step; 2 s simulated), one core.  Both routes are driven by the SAME
+compiled right-hand side and exact complex-step Jacobian:
+
+* empact: the compiled L-stable Rosenbrock method of `empact.nonlinear._rosenbrock`
+  (running breakpoint indices, Jacobian columns that cannot change reused);
+* baseline: `scipy.integrate.odeint` (LSODA) with numba wrappers (`_odeint_baseline.py`);
+  the helper's comparison of solve_ivp's LSODA, BDF and Radau found them 2-10x slower still.
+
+Accuracy: the largest error of r_g, nu and F_s at the 2001 output samples against a tight
+reference (odeint at rtol 1e-11), each normalised by its signal's range.  The table pairs
+each empact tolerance with the cheapest baseline run that is at least as accurate ("equal
+accuracy").  Warm timings: median of REPEATS after a warm-up; numba compile or cache load is
+timed separately, in fresh processes.
+
+Run: ``.venv/bin/python bench/bench_simulation.py``
 """
+from __future__ import annotations
+
 import os
+import statistics
+import subprocess
+import sys
+import time
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
-os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-
-import platform  # noqa: E402
-import time  # noqa: E402
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
-from scipy.integrate import solve_ivp  # noqa: E402
 
-from empact import _nonlinear_kernel as K  # noqa: E402
+from _odeint_baseline import simulate_odeint  # noqa: E402
+from empact.nonlinear import _kernel as K  # noqa: E402
+from empact.nonlinear.scenario import example_path, load_scenario  # noqa: E402
+from empact.nonlinear.simulation import run_scenario, scenario_model, simulate  # noqa: E402
 from empact.params import default_params  # noqa: E402
-from empact.simulate import (_inputs_at, example_path, load_scenario, run_scenario,  # noqa: E402
-                             scenario_model, state_tolerances)
+
+REPEATS = 5
+SIGNALS = (K.Y_RG, K.Y_NU, K.Y_FS)
+TARGET_RTF = 20.0
 
 
-def baseline(scenario, params):
-    """solve_ivp(BDF) with the plain-Python right-hand side; returns (t, final x, wall time)."""
-    model, op = scenario_model(scenario, params)
+def setup():
+    params = default_params()
+    sc = load_scenario(example_path("shift-and-load-step"))
+    model, op = scenario_model(sc, params)
+    signals = dict(sc.inputs)
     a = params.actuation
-    signals = dict(scenario.inputs)
     arr = np.array(signals.pop("F_s_ref"), float)
     arr[:, 1] = a.i_e * a.s * model.p[K.P_SIG] * arr[:, 1] / a.i_c
     signals["T_ms"] = arr
-    kmax = max(len(v) for v in signals.values())
-    sig_t, sig_v = np.zeros((4, kmax)), np.zeros((4, kmax))
-    sig_n = np.ones(4, dtype=np.int64)
-    sig_v[:, 0] = op.u
-    brk = {scenario.duration}
-    for j, name in enumerate(model.inputs):
-        if name in signals:
-            v = signals[name]
-            sig_n[j] = len(v)
-            sig_t[j, :len(v)], sig_v[j, :len(v)] = v[:, 0], v[:, 1]
-            brk |= {float(t) for t in v[:, 0] if 0 < t <= scenario.duration}
-    f = K._eval.py_func
-    dx, y = np.empty(model.n), np.empty(K.NY)
-
-    def rhs(t, x, u_left):
-        u = _inputs_at(t, sig_t, sig_v, sig_n) if u_left is None else u_left(t)
-        f(x, u, model.p, model.ix, dx, y)
-        return dx.copy()
-
-    _, atol = state_tolerances(model, scenario.rtol)
-    x, t0 = op.x.copy(), 0.0
-    ts = []
-    wall = time.perf_counter()
-    for t1 in sorted(brk):
-        # inputs of this piece, evaluated at the piece's midpoint segment (steps are right-
-        # continuous at t0, so use the value just after t0 and the slope inside the piece)
-        tm = 0.5 * (t0 + t1)
-        ua, ub = _inputs_at(t0 + 1e-12 * (t1 - t0), sig_t, sig_v, sig_n), \
-            _inputs_at(tm, sig_t, sig_v, sig_n)
-        slope = (ub - ua) / (tm - t0)
-        sol = solve_ivp(rhs, (t0, t1), x, method="BDF", rtol=scenario.rtol,
-                        atol=atol, max_step=scenario.max_step,
-                        args=(lambda t, ua=ua, slope=slope, t0=t0: ua + slope * (t - t0),))
-        if not sol.success:
-            raise RuntimeError(sol.message)
-        x, t0 = sol.y[:, -1], t1
-        ts.append(sol.t)
-    return np.concatenate(ts), x, time.perf_counter() - wall
+    return params, sc, model, op, signals
 
 
-def main():
-    params = default_params()
-    sc = load_scenario(example_path("shift-and-load-step"))
-    run_scenario(sc.with_duration(0.01), params)  # compile (or load the numba cache)
-    walls = []
-    for _ in range(5):
+def timed(fn):
+    fn()
+    times = []
+    for _ in range(REPEATS):
         t0 = time.perf_counter()
-        res = run_scenario(sc, params)
-        walls.append(time.perf_counter() - t0)
-    assert res.complete, res.message
-    wall = min(walls)
-    print(f"machine: {platform.machine()}, {platform.processor() or 'cpu'}, python "
-          f"{platform.python_version()}, numpy {np.__version__}, one core")
-    print(f"scenario {sc.name}: {sc.duration:g} s simulated, {res.stats['n_steps']} steps "
-          f"({res.stats['n_rejected']} rejected), {len(res.t)} output samples")
-    print(f"compiled (numba + Rosenbrock, trim included, best of 5): {1e3 * wall:8.1f} ms   "
-          f"real-time factor {sc.duration / wall:6.1f}")
-    t_b, x_b, wall_b = baseline(sc, params)
-    v, tb = params.variator, np.tan(params.variator.beta)
-    r_b = (v.R_min + x_b[4] / tb) / (v.R_max - x_b[5] / tb)  # final ratio of the baseline
-    dr = abs(res.output("r_g")[-1] - r_b)
-    print(f"plain Python rhs + solve_ivp(BDF, FD Jacobian):          {1e3 * wall_b:8.1f} ms   "
-          f"real-time factor {sc.duration / wall_b:6.2f}   ({len(t_b)} steps)")
-    print(f"speed-up: {wall_b / wall:.1f}x;  |r_g(2 s) compiled - baseline| = {dr:.2e}")
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def error(Y, ref):
+    return max(float(np.max(np.abs(Y[:, k] - ref[:, k])) / np.ptp(ref[:, k])) for k in SIGNALS)
+
+
+COLD = """
+import time, sys
+t0 = time.perf_counter()
+from empact.params import default_params
+from empact.nonlinear.scenario import example_path, load_scenario
+from empact.nonlinear.simulation import run_scenario
+params = default_params()
+sc = load_scenario(example_path("shift-and-load-step"))
+t1 = time.perf_counter()
+run_scenario(sc, params)
+t2 = time.perf_counter()
+print(t1 - t0, t2 - t1)
+"""
+
+
+def main() -> None:
+    params, sc, model, op, signals = setup()
+    kw = dict(u0=op.u, sample_rate=sc.sample_rate, max_step=sc.max_step)
+    ref, _ = simulate_odeint(model, op.x, signals, sc.duration, rtol=1e-11, atol_rtol=1e-9, **kw)
+    rows = []
+    for rtol in (1e-3, 1e-4, 1e-5, 1e-6):
+        t, res = timed(lambda r=rtol: simulate(model, op.x, signals, sc.duration, rtol=r, **kw))
+        rows.append(("empact Rosenbrock", rtol, t, error(res.y, ref), res.stats["n_steps"]))
+    base = []
+    for rtol in (1e-3, 1e-4, 1e-5, 1e-6, 1e-7):
+        t, (Y, n) = timed(lambda r=rtol: simulate_odeint(model, op.x, signals, sc.duration,
+                                                          rtol=r, **kw))
+        base.append(("odeint LSODA", rtol, t, error(Y, ref), n))
+    print(f"shift-and-load-step, {sc.duration:g} s simulated, one core; median of {REPEATS}; "
+          f"errors normalised by each signal's range (r_g, nu, F_s), vs odeint rtol 1e-11"
+          f" (atol of rtol 1e-9)")
+    print(f"{'route':20s} {'rtol':>7s} {'time [ms]':>10s} {'RTF':>7s} {'error':>9s} {'steps':>7s}")
+    for name, rtol, t, err, n in rows + base:
+        print(f"{name:20s} {rtol:7.0e} {1e3 * t:10.2f} {sc.duration / t:7.1f} {err:9.1e} {n:7d}")
+    print("equal accuracy (cheapest baseline run at least as accurate as each empact run):")
+    for name, rtol, t, err, _ in rows:
+        ok = [b for b in base if b[3] <= err]
+        if not ok:
+            print(f"  empact rtol {rtol:.0e} (error {err:.1e}): no baseline run this accurate")
+            continue
+        b = min(ok, key=lambda b: b[2])
+        print(f"  empact rtol {rtol:.0e} ({1e3 * t:.2f} ms, error {err:.1e}) vs odeint rtol "
+              f"{b[1]:.0e} ({1e3 * b[2]:.2f} ms, error {b[3]:.1e}): ratio baseline / empact = "
+              f"{b[2] / t:.2f}")
+    t_default = [r for r in rows if r[1] == sc.rtol][0][2]
+    t_run, _ = timed(lambda: run_scenario(sc, params))
+    print(f"shipped setting (rtol {sc.rtol:g}, trim included): {1e3 * t_run:.1f} ms, real-time "
+          f"factor {sc.duration / t_run:.1f} (target >= {TARGET_RTF:g}); integrator alone "
+          f"{1e3 * t_default:.1f} ms")
+    cold = [subprocess.run([sys.executable, "-c", COLD], capture_output=True, text=True,
+                           check=True).stdout.split() for _ in range(3)]
+    imp, first = zip(*[(float(a), float(b)) for a, b in cold])
+    print(f"cold process (numba cache present): imports {statistics.median(imp):.2f} s, first "
+          f"run (cache load + run) {statistics.median(first):.2f} s")
 
 
 if __name__ == "__main__":

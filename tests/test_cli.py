@@ -196,10 +196,9 @@ def test_estimate_matches_known_filter(records, tmp_path):
     assert plot.stat().st_size > 1000
 
 
-def test_reproduce_writes_complete_report(tmp_path):
+def test_reproduce_writes_complete_report(full_report):
     """The one full build of the suite: every section, figure and table, and the claims."""
-    out = tmp_path / "rep"
-    res = run("reproduce", "--out", out, "--quiet")
+    res, out = full_report
     assert res.exit_code == 0, res.output
     html = (out / "index.html").read_text()
     for stem in ("fig4_actuation_modes", "fig5_actuation_energy", "fig6_actuation_frf",
@@ -210,8 +209,9 @@ def test_reproduce_writes_complete_report(tmp_path):
     assert (out / "table1.csv").exists() and (out / "table2.csv").exists()
     claims = json.loads((out / "claims.json").read_text())
     assert len(claims) > 40 and all(c["verdict"] in ("shown", "NOT shown") for c in claims)
-    leftovers = [p.name for p in tmp_path.iterdir() if p.name != "rep"]
+    leftovers = [p.name for p in out.parent.iterdir() if p.name != "rep"]
     assert leftovers == []  # the temporary folder was moved into place
+    assert max(p.stat().st_size for p in out.glob("*.svg")) < 1_000_000  # rasterised layers
 
 
 
@@ -534,9 +534,10 @@ def test_output_folder_never_clobbered(tmp_path, monkeypatch, name):
     res = run(*args, "--force")  # replaces only its own files
     assert res.exit_code == 0, res.output
     assert (out / "thesis.tex").read_text() == "mine" and len(list(out.iterdir())) > 1
-    res = run(*args, "--force")  # and again: its own files are replaced, nothing else
-    assert res.exit_code == 0, res.output
-    assert (out / "thesis.tex").read_text() == "mine"
+    if name != "identify":  # (the slowest) - again: its own files replaced, nothing else
+        res = run(*args, "--force")
+        assert res.exit_code == 0, res.output
+        assert (out / "thesis.tex").read_text() == "mine"
     for target in (".", ".."):  # never the current folder or a parent, even with --force
         res = run(*(FOLDER_COMMANDS[name] + ["--out", target, "--force"]))
         assert res.exit_code == 2 and "current folder" in res.output

@@ -8,7 +8,7 @@ import pytest
 from empact.experiments.plant_id import identify_plant
 from empact.experiments.rig import RigSettings, excitation_signal, rig_frf, run_rig
 from empact.lti import channel_zeros, system_response
-from empact.nonlinear.linearize import linearize
+from empact.nonlinear.linearization import linearize
 
 
 @pytest.fixture(scope="module")

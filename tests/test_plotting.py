@@ -10,7 +10,7 @@ from empact import plotting
 from empact.linear.actuation import actuation_model
 from empact.nonlinear.nmp import nmp_analysis
 from empact.nonlinear.scenario import example_path, load_scenario
-from empact.nonlinear.simulate import run_scenario
+from empact.nonlinear.simulation import run_scenario
 from empact.params import OperatingPoint
 from empact.slip import belt_root_locus, pole_sweep, slip_frequency_responses, stability_map, \
     zero_locus

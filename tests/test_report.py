@@ -56,7 +56,7 @@ def test_report_renders_in_a_real_browser_with_every_image(tmp_path, params):
                        formats=("png", "svg"))
     (out / "fig10_traction.png").unlink()  # one missing image must be noticed ...
     dom = subprocess.run([_chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'ud'}",
-                          "--virtual-time-budget=10000", "--dump-dom",
+                          "--virtual-time-budget=2000", "--dump-dom",
                           (out / "index.html").as_uri()],
                          capture_output=True, text=True, timeout=120).stdout
     images = int(re.search(r'data-images="(\d+)"', dom).group(1))
@@ -64,7 +64,7 @@ def test_report_renders_in_a_real_browser_with_every_image(tmp_path, params):
     assert images == 3 and broken == 1, (images, broken)
     build_report(params, out, progress=False, sections=sections, formats=("png",))
     dom = subprocess.run([_chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'ud2'}",
-                          "--virtual-time-budget=10000", "--dump-dom",
+                          "--virtual-time-budget=2000", "--dump-dom",
                           (out / "index.html").as_uri()],
                          capture_output=True, text=True, timeout=120).stdout
     # ... and after a rebuild every image loads

@@ -197,11 +197,13 @@ def oscillatory(poles: ArrayLike, tol: float = 1e-3) \
 
 def statespace(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, *,
                inputs: Sequence[str], outputs: Sequence[str], states: Sequence[str],
-               name: str = "sys"):
-    """A named `control.StateSpace` (the name made python-control safe)."""
-    return control.ss(np.asarray(A, float), np.asarray(B, float), np.asarray(C, float),
-                      np.asarray(D, float), inputs=list(inputs), outputs=list(outputs),
-                      states=list(states), name=re.sub(r"[^A-Za-z0-9_]+", "_", name).strip("_"))
+               name: str = "sys", dt: float | None = None):
+    """A named `control.StateSpace` (the name made python-control safe); `dt` [s] makes it
+    discrete-time."""
+    args = [np.asarray(A, float), np.asarray(B, float), np.asarray(C, float),
+            np.asarray(D, float)] + ([] if dt is None else [dt])
+    return control.ss(*args, inputs=list(inputs), outputs=list(outputs), states=list(states),
+                      name=re.sub(r"[^A-Za-z0-9_]+", "_", name).strip("_"))
 
 
 # --------------------------------------------------------------------------------------------

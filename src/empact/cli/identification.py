@@ -110,7 +110,6 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
     """Identify (T_mp, T_ms) -> (r_g, nu) from step responses of the nonlinear model (Fig 2)."""
     from .._io import atomic_folder
     from ..experiments.plant_id import identify_plant
-    from ..plotting import plot_identified_plant, save_figure
 
     if order is not None:
         order = check_int("--order", order, 1, 200)
@@ -128,12 +127,14 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
     models = [{"r_g": res.r_g, "operating_point": res.experiment.op.as_dict(),
                "order": res.realization.order, "fit_percent": res.realization.fit,
                "singular_values": res.realization.singular_values[:40],
-               "A": res.realization.sys.A, "B": res.realization.sys.B,
-               "C": res.realization.sys.C, "D": res.realization.sys.D,
+               "A": res.realization.A, "B": res.realization.B,
+               "C": res.realization.C, "D": res.realization.D,
                "inputs": ["T_mp", "T_ms"], "outputs": ["r_g", "nu"]} for res in results]
     data = {"operating_point": base.as_dict(), "step": step, "models": models}
     if dest is not None:
         import json
+
+        from ..plotting import plot_identified_plant, save_figure
 
         with atomic_folder(dest) as tmp:
             for res in results:

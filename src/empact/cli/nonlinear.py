@@ -39,7 +39,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     """
     from .._io import atomic_folder
     from ..nonlinear.scenario import example_path, list_examples, load_scenario
-    from ..nonlinear.simulate import csv_text, run_scenario
+    from ..nonlinear.simulation import csv_text, run_scenario
     from ..plotting import plot_simulation, save_figure
 
     if list_ex:
@@ -114,7 +114,7 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
                   params_file, force) -> None:
     """Exact linear plant (T_mp, T_ms) -> (r_g, nu) at an operating point: A, B, C, D."""
     from ..export import format_of, save_system, system_dict
-    from ..nonlinear.linearize import PLANT_INPUTS, PLANT_OUTPUTS, linearize, trim_point
+    from ..nonlinear.linearization import PLANT_INPUTS, PLANT_OUTPUTS, linearize, trim_point
     from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, nonlinear_model
 
     if out is None and fmt not in (None, "json"):

@@ -4,7 +4,7 @@ As in the paper (Sec. 3, after Klaassen et al.), the nonlinear model is trimmed 
 operating point, each servo torque is stepped by a small amount on its own, and the step
 responses of ratio and slip (deviations, divided by the step size) are realised as a
 continuous state-space model with `realize_steps`.  The exact linearisation at the same point
-(`empact.nonlinear.linearize.plant`) is the reference the identified model is compared with.
+(`empact.nonlinear.linearization.plant`) is the reference the identified model is compared with.
 
 The slip responds strongly to the servo torques: at the default point a 1e-3 N m step already
 makes the slip response about 10 % nonlinear, so the default steps are 1e-4 N m and the model
@@ -13,6 +13,7 @@ is integrated with a tight tolerance.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Sequence
 
 import numpy as np
@@ -20,9 +21,9 @@ import numpy as np
 from .._validate import check_number
 from ..errors import ParameterError
 from ..identification.realization import RealizationResult, realize_steps
-from ..nonlinear.linearize import plant, trim_point
+from ..nonlinear.linearization import plant, trim_point
 from ..nonlinear.model import nonlinear_model
-from ..nonlinear.simulate import simulate
+from ..nonlinear.simulation import simulate
 from ..params import OperatingPoint
 
 __all__ = ["StepExperiment", "PlantIdentification", "step_experiment", "identify_plant"]
@@ -41,7 +42,7 @@ class StepExperiment:
     steps : responses per unit step, shape (n_t, 2, 2): outputs (r_g [-], nu [-]) per input
         (T_mp, T_ms) [1/(N m)]
     amplitudes : step sizes [N m], shape (2,)
-    op : the trimmed operating point (`empact.nonlinear.trim.TrimResult`)
+    op : the trimmed operating point (`empact.nonlinear.equilibrium.TrimResult`)
     """
 
     t: np.ndarray
@@ -58,12 +59,22 @@ class PlantIdentification:
     ----------
     experiment : the step experiment
     realization : `RealizationResult` (identified model ``realization.sys``)
-    exact : the exact linearisation, a named `control.StateSpace`
+    params : the parameter set
+    point : the requested operating point
+
+    `exact`, the exact linearisation at the same point (a named `control.StateSpace`), is
+    computed on first use.
     """
 
     experiment: StepExperiment
     realization: RealizationResult
-    exact: object
+    params: object
+    point: OperatingPoint
+
+    @cached_property
+    def exact(self):
+        """The exact (T_mp, T_ms) -> (r_g, nu) linearisation at the same operating point."""
+        return plant(self.params, self.point, model=self.experiment.op.model)[0]
 
     @property
     def r_g(self) -> float:
@@ -85,7 +96,7 @@ def step_experiment(params, op: OperatingPoint | None = None, *,
     amplitudes : step sizes of T_mp and T_ms [N m], non-zero
     duration : record length [s]
     sample_rate : [Hz]
-    rtol : integrator tolerance (see `empact.nonlinear.simulate.simulate`)
+    rtol : integrator tolerance (see `empact.nonlinear.simulation.simulate`)
     model : an `EmpactModel` with torque inputs (default: `nonlinear_model(params)`)
     """
     amps = np.asarray(amplitudes, float)
@@ -130,5 +141,4 @@ def identify_plant(params, op: OperatingPoint | None = None, *, order: int | Non
                          n_block_cols=min(n_block_cols, len(exp.t) - n_block_rows),
                          min_fit=None if order is not None else min_fit,
                          inputs=INPUTS, outputs=OUTPUTS)
-    exact, _ = plant(params, op)
-    return PlantIdentification(experiment=exp, realization=real, exact=exact)
+    return PlantIdentification(experiment=exp, realization=real, params=params, point=op)

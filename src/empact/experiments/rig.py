@@ -26,8 +26,8 @@ from .._validate import check_choice, check_int, check_number
 from ..errors import ParameterError
 from ..identification.frf_estimation import FRFEstimate, estimate_frf
 from ..nonlinear.model import nonlinear_model
-from ..nonlinear.simulate import simulate
-from ..nonlinear.trim import trim
+from ..nonlinear.simulation import simulate
+from ..nonlinear.equilibrium import trim
 
 sig = lazy_module("scipy.signal")
 

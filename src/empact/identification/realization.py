@@ -15,13 +15,13 @@ from __future__ import annotations
 import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg as sla
+from threadpoolctl import threadpool_limits
 
-from .._lazy import lazy_module
-
-control = lazy_module("control")
+from ..lti import statespace
 
 __all__ = ["RealizationResult", "realize_steps"]
 
@@ -35,10 +35,14 @@ class RealizationResult:
 
     Attributes
     ----------
-    sys : control.StateSpace
-        Identified continuous-time model (states ``x0, x1, ...``).
-    sys_discrete : control.StateSpace
-        Identified ZOH discrete-time model, sample time ``dt`` [s].
+    A, B, C, D : numpy.ndarray
+        Identified continuous-time model, shapes (n, n), (n, m), (p, n), (p, m).
+    A_d, B_d : numpy.ndarray
+        Identified ZOH discrete-time model (with the same ``C``, ``D``), sample time `dt`.
+    dt : float
+        Sample time [s].
+    inputs, outputs : tuple of str
+        Signal names.
     singular_values : numpy.ndarray
         Singular values of the block Hankel matrix, descending, shape (n_sv,).
     order : int
@@ -47,15 +51,39 @@ class RealizationResult:
         Normalised RMS fit per channel [%], shape (n_out, n_in):
         ``100 (1 - ||y - y_hat|| / ||y - mean(y)||)``; NaN where the measured step is constant.
     step_model : numpy.ndarray
-        Step responses of `sys_discrete` on the sample instants, shape (n_t, n_out, n_in).
+        Step responses of the discrete model on the sample instants, shape (n_t, n_out, n_in).
+
+    `sys` and `sys_discrete` are the models as named `control.StateSpace` objects (built on
+    first use, so that a caller who needs only the matrices does not import python-control).
     """
 
-    sys: control.StateSpace
-    sys_discrete: control.StateSpace
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    A_d: np.ndarray
+    B_d: np.ndarray
+    dt: float
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
     singular_values: np.ndarray
     order: int
     fit: np.ndarray
     step_model: np.ndarray
+
+    @cached_property
+    def sys(self):
+        """The continuous-time model, a named `control.StateSpace` (states ``x0, x1, ...``)."""
+        return statespace(self.A, self.B, self.C, self.D, inputs=self.inputs,
+                          outputs=self.outputs, states=[f"x{i}" for i in range(self.order)],
+                          name="identified")
+
+    @cached_property
+    def sys_discrete(self):
+        """The ZOH discrete-time model, a named `control.StateSpace` with sample time `dt`."""
+        return statespace(self.A_d, self.B_d, self.C, self.D, inputs=self.inputs,
+                          outputs=self.outputs, states=[f"x{i}" for i in range(self.order)],
+                          name="identified_d", dt=self.dt)
 
 
 def _positive_int(name: str, value) -> int | None:
@@ -104,32 +132,39 @@ def _select_order(s: np.ndarray, n_max: int, sv_threshold: float) -> int:
     return int(np.argmax(ratio)) + 1
 
 
-def _model(U, sv, Vt, n, h, p, m, n_t, dt, steps):
-    """Continuous and discrete model of order `n` from the Hankel SVD, its steps and fit."""
+def _discrete(U, sv, Vt, n, h, p, m, n_t, steps):
+    """Discrete model of order `n` from the Hankel SVD, its step responses and fit [%].
+
+    Raises `ValueError` when ``A_d`` has eigenvalues on the closed negative real axis: such a
+    model has no continuous-time ZOH equivalent.
+    """
     root = np.sqrt(sv[:n])
     obs, ctr = U[:, :n] * root, root[:, None] * Vt[:n]
     Ad = np.linalg.lstsq(obs[:-p], obs[p:], rcond=None)[0]
     Bd, Cd, D = ctr[:, :m], obs[:p], h[0]
-
     lam = np.linalg.eigvals(Ad)
     bad = (np.abs(lam.imag) <= 1e-10 * np.abs(lam)) & (lam.real <= 0.0)
     if np.any(bad):
         raise ValueError(f"identified A_d has eigenvalue(s) {np.round(lam[bad].real, 6)} on the "
                          f"negative real axis or at zero: no continuous-time equivalent (try a "
                          f"lower order)")
-    Ac = np.real(sla.logm(Ad)) / dt
-    aug = np.zeros((2 * n, 2 * n))
-    aug[:n, :n], aug[:n, n:] = Ac * dt, np.eye(n)
-    gamma = sla.expm(aug)[:n, n:] * dt  # int_0^dt expm(A_c tau) dtau = dt phi_1(A_c dt)
-    Bc = np.linalg.solve(gamma, Bd)
-
     step_model = _discrete_steps(Ad, Bd, Cd, D, n_t)
     err = np.linalg.norm(steps - step_model, axis=0)
     ref = np.linalg.norm(steps - steps.mean(axis=0), axis=0)
     fit = np.full((p, m), np.nan)
     np.divide(err, ref, out=fit, where=ref > 0)
     fit = 100.0 * (1.0 - fit)
-    return Ac, Bc, Cd, D, Ad, Bd, step_model, fit
+    return Ad, Bd, Cd, D, step_model, fit
+
+
+def _continuous(Ad, Bd, dt):
+    """Exact ZOH inverse: ``A_c = logm(A_d) / dt``, ``B_c = (dt phi_1(A_c dt))^-1 B_d``."""
+    n = Ad.shape[0]
+    Ac = np.real(sla.logm(Ad)) / dt
+    aug = np.zeros((2 * n, 2 * n))
+    aug[:n, :n], aug[:n, n:] = Ac * dt, np.eye(n)
+    gamma = sla.expm(aug)[:n, n:] * dt  # int_0^dt expm(A_c tau) dtau = dt phi_1(A_c dt)
+    return Ac, np.linalg.solve(gamma, Bd)
 
 
 def realize_steps(t, steps, order: int | None = None, *, n_block_rows: int | None = None,
@@ -221,36 +256,37 @@ def realize_steps(t, steps, order: int | None = None, *, n_block_rows: int | Non
     h = np.diff(steps, axis=0, prepend=np.zeros((1, p, m)))       # h[0] = D, h[k] = C A^(k-1) B
     idx = np.arange(r)[:, None] + np.arange(1, s + 1)[None, :]     # H[i, j] = h[1 + i + j]
     hankel = h[idx].transpose(0, 2, 1, 3).reshape(r * p, s * m)
-    U, sv, Vt = np.linalg.svd(hankel, full_matrices=False)
-    if sv[0] == 0.0:
-        raise ValueError("steps are constant in time: nothing to identify")
     if min_fit is not None and not 0 < min_fit < 100:
         raise ValueError(f"min_fit must be in (0, 100) percent, got {min_fit!r}")
-    if order is not None or min_fit is None:
-        n = _select_order(sv, n_max, sv_threshold) if order is None else order
-        model = _model(U, sv, Vt, n, h, p, m, n_t, dt, steps)
-    else:  # smallest order reaching min_fit on every channel, else the best one tried
-        model = None
-        for k in range(1, min(n_max, MAX_FIT_ORDER) + 1):
-            try:
-                cand = _model(U, sv, Vt, k, h, p, m, n_t, dt, steps)
-            except ValueError:  # no continuous-time equivalent at this order
-                continue
-            if model is None or np.nanmin(cand[-1]) > np.nanmin(model[-1]):
-                model = cand
-            if np.nanmin(cand[-1]) >= min_fit:
-                break
-        if model is None:
-            raise ValueError(f"no order up to {min(n_max, MAX_FIT_ORDER)} has a continuous-time "
-                             "equivalent")
-    Ac, Bc, Cd, D, Ad, Bd, step_model, fit = model
-    n = Ac.shape[0]
-    states = [f"x{i}" for i in range(n)]
-    sys_c = control.StateSpace(Ac, Bc, Cd, D, inputs=in_names, outputs=out_names,
-                               states=states)
-    sys_d = control.StateSpace(Ad, Bd, Cd, D, dt, inputs=in_names, outputs=out_names,
-                               states=states)
+    # small dense work: one BLAS thread (two fight over two cores, 4-7x slower measured)
+    with threadpool_limits(limits=1, user_api="blas"):
+        U, sv, Vt = np.linalg.svd(hankel, full_matrices=False)
+        if sv[0] == 0.0:
+            raise ValueError("steps are constant in time: nothing to identify")
+        if order is not None or min_fit is None:
+            n = _select_order(sv, n_max, sv_threshold) if order is None else order
+            model = _discrete(U, sv, Vt, n, h, p, m, n_t, steps)
+        else:  # smallest order reaching min_fit on every channel, else the best one tried
+            model = None
+            for k in range(1, min(n_max, MAX_FIT_ORDER) + 1):
+                try:
+                    cand = _discrete(U, sv, Vt, k, h, p, m, n_t, steps)
+                except ValueError:  # no continuous-time equivalent at this order
+                    continue
+                if model is None or np.nanmin(cand[-1]) > np.nanmin(model[-1]):
+                    model = cand
+                if np.nanmin(cand[-1]) >= min_fit:
+                    break
+            if model is None:
+                raise ValueError(f"no order up to {min(n_max, MAX_FIT_ORDER)} has a "
+                                 "continuous-time equivalent")
+        Ad, Bd, Cd, D, step_model, fit = model
+        Ac, Bc = _continuous(Ad, Bd, dt)  # the chosen order only
     for a in (sv, fit, step_model):
         a.flags.writeable = False
-    return RealizationResult(sys=sys_c, sys_discrete=sys_d, singular_values=sv, order=n,
-                             fit=fit, step_model=step_model)
+    names = lambda given, count, prefix: (tuple(given) if not isinstance(given, int)  # noqa
+                                          else tuple(f"{prefix}[{i}]" for i in range(count)))
+    return RealizationResult(A=Ac, B=Bc, C=Cd, D=D, A_d=Ad, B_d=Bd, dt=float(dt),
+                             inputs=names(in_names, m, "u"), outputs=names(out_names, p, "y"),
+                             singular_values=sv, order=int(Ac.shape[0]), fit=fit,
+                             step_model=step_model)

@@ -5,24 +5,24 @@ Modules
 -------
 model
     Options, the model object and its compiled right-hand side (`_kernel`).
-trim
-    Steady operating points.
-linearize
+equilibrium
+    Steady operating points (`trim`).
+linearization
     Exact (complex-step) linearisation; the (T_mp, T_ms) -> (r_g, nu) plant.
 nmp
     Non-minimum-phase analysis of Sec. 2.3: belt geometry and the zeros of T_mp -> nu.
 scenario
     Simulation scenarios (TOML) and the shipped examples.
-simulate
-    The simulator and its result.
+simulation
+    The simulator (`simulate`, `run_scenario`) and its result.
 """
-from .linearize import PLANT_INPUTS, PLANT_OUTPUTS, linearize, plant, trim_point
+from .equilibrium import TrimResult, traction_peak, trim
+from .linearization import PLANT_INPUTS, PLANT_OUTPUTS, linearize, plant, trim_point
 from .model import (BASE_STATES, OUTPUTS, EmpactModel, ModelOptions, nonlinear_model, rhs,
                     shift_inertia)
 from .nmp import BeltLengthChange, NmpResult, belt_length_change, nmp_analysis
 from .scenario import Scenario, example_path, list_examples, load_scenario
-from .simulate import SimulationResult, run_scenario, simulate, write_csv
-from .trim import TrimResult, traction_peak, trim
+from .simulation import SimulationResult, run_scenario, simulate, write_csv
 
 __all__ = ["ModelOptions", "EmpactModel", "nonlinear_model", "rhs", "shift_inertia",
            "BASE_STATES", "OUTPUTS", "TrimResult", "trim", "traction_peak", "linearize", "plant",

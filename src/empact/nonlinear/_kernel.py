@@ -296,16 +296,30 @@ def _jacobian(x, u, p, ix, A, B, C, D):
             D[i, j] = y[i].imag / h
 
 
+#: Base-state columns of df/dx that depend on the state or the inputs (the rest are constant
+#: over a run): sheave positions and velocities (belt geometry, belt damping, Shafai damping),
+#: spindle speeds (Coulomb friction), pulley speeds (traction).
+VARYING_BASE_COLUMNS = (4, 5, 8, 9, 10, 11, 15, 16)
+
+
+def varying_columns(ix: np.ndarray) -> np.ndarray:
+    """The columns of df/dx that change during a run of a model with optional states `ix`:
+    `VARYING_BASE_COLUMNS` and, with the locked belt, its stretch (its force acts at the
+    current radius).  `tests/test_nonlinear.py` checks every other column is constant."""
+    cols = list(VARYING_BASE_COLUMNS) + ([int(ix[0])] if ix[0] >= 0 else [])
+    return np.array(cols, dtype=np.int64)
+
+
 @njit(cache=True)
-def _state_jacobian(x, u, p, ix, A):
-    """A = df/dx only (complex step), for the implicit integrator."""
+def _state_jacobian(x, u, p, ix, A, cols):
+    """Columns `cols` of A = df/dx (complex step), for the implicit integrator."""
     n = x.shape[0]
     h = 1e-30
     xc = x.astype(np.complex128)
     uc = u.astype(np.complex128)
     dx = np.zeros(n, dtype=np.complex128)
     y = np.zeros(NY, dtype=np.complex128)
-    for j in range(n):
+    for j in cols:
         xc[j] += 1j * h
         _eval(xc, uc, p, ix, dx, y)
         xc[j] = x[j]

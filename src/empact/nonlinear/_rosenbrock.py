@@ -1,4 +1,4 @@
-"""Compiled stiff integrator for the nonlinear model (private; used by `empact.nonlinear.simulate`).
+"""Compiled stiff integrator for the nonlinear model (private; used by `empact.nonlinear.simulation`).
 
 A linearly implicit (Rosenbrock) method of order 2 with an embedded order-3 error estimate:
 the modified Rosenbrock formula of Shampine & Reichelt (MATLAB's ``ode23s``), L-stable, one
@@ -7,7 +7,10 @@ Jacobian is exact (complex step on the compiled right-hand side, `_nonlinear_ker
 explicit time dependence through the inputs is included (``df/dt = B du/dt``).
 
 Inputs are piecewise linear in time (a repeated time is a step); the integrator never steps
-across a breakpoint, so every step sees smooth inputs.
+across a breakpoint, so every step sees smooth inputs.  Breakpoints and input pieces are found
+by running indices (O(1) per step, whatever the number of breakpoints behind), and the
+Jacobian is evaluated in full once per call and afterwards only in its state-dependent
+columns (`_kernel.varying_columns`, 8 or 9 of 18-22).
 
 Status codes returned by `integrate`: 0 reached the end; 1 omega_p at or below omega_min (slip
 undefined); 2 clamping force F_s at or below zero (slack belt); 3 a running radius left
@@ -19,8 +22,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._kernel import NY, P_RMAX, P_RMIN, Y_FS, Y_RP, Y_RS, Y_WP, _eval, \
-    _input_direction, _state_jacobian
+from ._kernel import NY, P_RMAX, P_RMIN, Y_FS, Y_RP, Y_RS, Y_WP, _eval, _input_direction, \
+    _state_jacobian
 
 D_GAMMA = 1.0 / (2.0 + np.sqrt(2.0))
 E32 = 6.0 + np.sqrt(2.0)
@@ -84,8 +87,11 @@ def _lu_solve(LU, piv, b):
 
 
 @njit(cache=True)
-def _segment_inputs(t_mid, sig_t, sig_v, sig_n, u0, slope, tref):
-    """Linear piece of every input signal that contains `t_mid`: u(t) = u0 + slope (t - tref)."""
+def _segment_inputs(t_mid, sig_t, sig_v, sig_n, u0, slope, tref, hint):
+    """Linear piece of every input signal that contains `t_mid`: u(t) = u0 + slope (t - tref).
+
+    `hint` holds each signal's piece index of the last call and is updated: time only moves
+    forward, so the search starts there (O(1) amortised)."""
     for k in range(sig_n.shape[0]):
         n = sig_n[k]
         tref[k] = t_mid
@@ -96,9 +102,12 @@ def _segment_inputs(t_mid, sig_t, sig_v, sig_n, u0, slope, tref):
         if t_mid >= sig_t[k, n - 1]:
             u0[k] = sig_v[k, n - 1]
             continue
-        i = 0
+        i = hint[k]
+        if i > n - 2 or sig_t[k, i] > t_mid:
+            i = 0
         while i + 1 < n and sig_t[k, i + 1] <= t_mid:
             i += 1
+        hint[k] = i
         dt = sig_t[k, i + 1] - sig_t[k, i]
         tref[k] = sig_t[k, i]
         u0[k] = sig_v[k, i]
@@ -130,8 +139,10 @@ def _check(y, p, omega_min):
 
 @njit(cache=True)
 def integrate(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, atol,
-              hmin, hmax, omega_min, max_steps, X, Y):
+              hmin, hmax, omega_min, max_steps, X, Y, cols):
     """Integrate from `t` to `t_end` in place on `x`; fill `X`, `Y` at `samples` in (t, t_end].
+
+    `cols` are the Jacobian columns that change (`_kernel.varying_columns`).
 
     Returns ``(status, t, h, n_filled, n_steps, n_rejected)``; on a stop, `x` holds the last
     accepted state at time `t`.
@@ -155,6 +166,10 @@ def integrate(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, at
     u0 = np.empty(m)
     slope = np.empty(m)
     tref = np.empty(m)
+    hint = np.zeros(m, dtype=np.int64)
+    all_cols = np.arange(n)
+    full = True  # the constant columns are filled by the first evaluation
+    ib = 0
     n_samp = samples.shape[0]
     js = 0
     while js < n_samp and samples[js] <= t:
@@ -167,20 +182,22 @@ def integrate(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, at
     while t_end - t > eps:
         if n_steps >= max_steps:
             return 6, t, h, n_filled, n_steps, n_rej
-        # next breakpoint after t (breakpoints closer than eps count as passed)
+        # next breakpoint after t (breakpoints closer than eps count as passed); brk is sorted
+        while ib < brk.shape[0] and brk[ib] - t <= eps:
+            ib += 1
         t_stop = t_end
-        for b in brk:
-            if b - t > eps and b < t_stop:
-                t_stop = b
+        if ib < brk.shape[0] and brk[ib] < t_stop:
+            t_stop = brk[ib]
         h = min(h, hmax)
         last = False
         if t + h >= t_stop - eps:
             h = t_stop - t
             last = True
-        _segment_inputs(t + 0.5 * h, sig_t, sig_v, sig_n, u0, slope, tref)
+        _segment_inputs(t + 0.5 * h, sig_t, sig_v, sig_n, u0, slope, tref, hint)
         _u_at(t, u0, slope, tref, u)
         _eval(x, u, p, ix, F0, y)
-        _state_jacobian(x, u, p, ix, J)
+        _state_jacobian(x, u, p, ix, J, all_cols if full else cols)
+        full = False
         _input_direction(x, u, slope, p, ix, T)
         accepted = False
         while not accepted:

@@ -7,7 +7,7 @@ Two parts:
   opening), exact from eq. 6 and to first order ``4 phi delta / tan(beta)``: negative below
   r_g = 1 (the belt slackens, F_s falls, the slip rises), positive above.
 * **Zeros.**  The finite zeros of the T_mp -> nu channel of the exactly linearised model
-  (`empact.nonlinear.linearize`) over the ratio; the paper states a right-half-plane zero at r_g = 0.5
+  (`empact.nonlinear.linearization`) over the ratio; the paper states a right-half-plane zero at r_g = 0.5
   and none at r_g = 2.  `nmp_analysis` reports what the model gives, for either sheave
   kinematics (`empact.nonlinear.model.ModelOptions.kinematics`) and for either slip signal:
   ``slip="eq2"``, the slip of eq. 2 on the current radii, or ``slip="speed"``, the slip a
@@ -29,7 +29,7 @@ from .._validate import check_choice, check_number
 from ..geometry import belt_length, check_ratio, radii, wrap_angle
 from ..lti import channel_zeros, statespace
 from ..params import OperatingPoint, Params
-from .linearize import plant
+from .linearization import plant
 from .model import nonlinear_model
 
 __all__ = ["BeltLengthChange", "belt_length_change", "NmpResult", "nmp_analysis", "SLIPS"]

@@ -13,7 +13,7 @@ piecewise-linear input signals.
     drive = "speed"
     ratio_control = true
 
-    [initial]                 # empact.nonlinear.trim.trim: r_g, omega_p and two of nu, F_s, T_l
+    [initial]                 # empact.nonlinear.trim: r_g, omega_p and two of nu, F_s, T_l
     r_g = 0.43
     omega_p = 300.0
     F_s = 15000.0

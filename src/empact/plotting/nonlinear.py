@@ -2,7 +2,7 @@
 magnitudes).
 
 Drawn from result objects only (`empact.nonlinear.nmp.NmpResult`,
-`empact.nonlinear.simulate.SimulationResult`, `empact.lti.FrequencyResponse`); every function
+`empact.nonlinear.simulation.SimulationResult`, `empact.lti.FrequencyResponse`); every function
 draws on the given axes or a new figure and returns a `Plot`.
 """
 from __future__ import annotations
@@ -14,7 +14,7 @@ import numpy as np
 from ..lti import FrequencyResponse
 from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS
 from ..nonlinear.nmp import NmpResult
-from ..nonlinear.simulate import SimulationResult
+from ..nonlinear.simulation import SimulationResult
 from ._common import STYLES, Plot, new_axes, styled, symbol
 
 __all__ = ["plot_nmp", "plot_simulation", "plot_plant_magnitude"]

@@ -4,14 +4,17 @@ from __future__ import annotations
 
 import html
 import json
+import multiprocessing
 import os
 import sys
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Sequence
 
 from tqdm import tqdm
 
 from .._io import atomic_folder
+from .._validate import check_int
 from ..params import Params, dumps_params
 from ..reproduction.claims import Claim, claims_table
 from .context import Context, Section
@@ -53,9 +56,19 @@ def _summary(done: Sequence[tuple[Section, Sequence[Claim]]]) -> str:
             + "</tbody></table>\n")
 
 
+def _build_section(sec: Section, params: Params, out: Path,
+                   formats: tuple[str, ...]) -> tuple[str, tuple[Claim, ...]]:
+    """Compute and render one section into `out`; its HTML and claims."""
+    ctx = Context(params=params, out=out, formats=formats)
+    result = sec.compute(params)
+    body = sec.render(ctx, result)
+    return (f'<section id="{sec.anchor}"><h2>{html.escape(sec.title)}</h2>\n{body}</section>',
+            tuple(result.claims))
+
+
 def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool = True,
                  sections: Sequence[Section] | None = None,
-                 formats: Sequence[str] = ("png", "svg")) -> Path:
+                 formats: Sequence[str] = ("png", "svg"), workers: int | None = None) -> Path:
     """Compute every section and write ``out/index.html`` with its figures and tables.
 
     Parameters
@@ -65,6 +78,9 @@ def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool 
     progress : a progress bar on stderr
     sections : the sections (default: all, `empact.report.sections.SECTIONS`)
     formats : figure formats (``"png"``, ``"svg"``, ``"pdf"``); the page shows the PNG
+    workers : processes building sections in parallel (default: one per CPU core, at most
+        the number of sections; 1 builds in this process).  Sections are independent: each
+        computes its results and draws its figures (the slow part) into its own files.
 
     Returns
     -------
@@ -72,24 +88,38 @@ def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool 
         The report folder.
     """
     todo = list(SECTIONS if sections is None else sections)
+    n_workers = min(len(todo), os.cpu_count() or 1) if workers is None else \
+        check_int("workers", workers, 1, 64)
+    fmts = tuple(formats)
     with atomic_folder(out) as tmp:
-        ctx = Context(params=params, out=tmp, formats=tuple(formats))
-        parts, done = [], []
-        for sec in tqdm(todo, desc="report", unit="section", disable=not progress,
-                        file=sys.stderr):
-            result = sec.compute(params)
-            body = sec.render(ctx, result)
-            done.append((sec, tuple(result.claims)))
-            parts.append(f'<section id="{sec.anchor}"><h2>{html.escape(sec.title)}</h2>\n'
-                         f"{body}</section>")
+        bar = tqdm(total=len(todo), desc="report", unit="section", disable=not progress,
+                   file=sys.stderr)
+        built: dict[str, tuple[str, tuple[Claim, ...]]] = {}
+        if n_workers <= 1:
+            for sec in todo:
+                built[sec.anchor] = _build_section(sec, params, tmp, fmts)
+                bar.update(1)
+        else:
+            # fork: the children start with everything imported (no second start-up)
+            ctx = multiprocessing.get_context("fork")
+            with ProcessPoolExecutor(n_workers, mp_context=ctx) as pool:
+                futures = {pool.submit(_build_section, sec, params, tmp, fmts): sec
+                           for sec in sorted(todo, key=lambda s: -s.cost)}
+                for fut in as_completed(futures):
+                    built[futures[fut].anchor] = fut.result()
+                    bar.update(1)
+        bar.close()
+        done = [(sec, built[sec.anchor][1]) for sec in todo]
+        parts = [built[sec.anchor][0] for sec in todo]
         toc = "".join(f'<li><a href="#{s.anchor}">{html.escape(s.title)}</a></li>'
                       for s in todo)
         page = ("<!doctype html><html lang='en'><head><meta charset='utf-8'>"
                 "<title>empact report</title>"
-                f"<style>{STYLE_CSS}</style>{IMAGE_CHECK}</head><body><h1>Dynamic analysis of the Empact CVT: "
-                "reproduced with empact</h1>\n<p>Reference: “Dynamic analysis of the Empact CVT: "
-                "ratio and slip dependent, non-minimum phase dynamics”. Every number below is "
-                "computed from the parameter set in <a href='params.toml'>params.toml</a>.</p>\n"
+                f"<style>{STYLE_CSS}</style>{IMAGE_CHECK}</head><body><h1>Dynamic analysis of "
+                "the Empact CVT: reproduced with empact</h1>\n<p>Reference: “Dynamic analysis "
+                "of the Empact CVT: ratio and slip dependent, non-minimum phase dynamics”. Every "
+                "number below is computed from the parameter set in "
+                "<a href='params.toml'>params.toml</a>.</p>\n"
                 f'<nav><h2 id="contents">Contents</h2><ol><li><a href="#summary">Verdicts</a>'
                 f"</li>{toc}</ol></nav>\n" + _summary(done) + "\n".join(parts)
                 + "</body></html>\n")

@@ -33,12 +33,15 @@ class Section:
     anchor : HTML id (also the table-of-contents link)
     compute : ``params -> result`` with a ``claims`` attribute (`empact.reproduction`)
     render : ``(Context, result) -> html``
+    cost : rough build time [s] on one core; the parallel build starts the costly sections
+        first
     """
 
     title: str
     anchor: str
     compute: Callable[[Params], Any]
     render: Callable[["Context", Any], str]
+    cost: float = 1.0
 
 
 def fmt_cell(value: object) -> str:

@@ -2,7 +2,7 @@
 simulation, and the exact (T_mp, T_ms) -> (r_g, nu) plant (the exact counterpart of Fig. 2)."""
 from __future__ import annotations
 
-from ..nonlinear.simulate import write_csv
+from ..nonlinear.simulation import write_csv
 from ..plotting import plot_nmp, plot_plant_magnitude, plot_simulation
 from ..reproduction import nonlinear as rep
 from .context import Context

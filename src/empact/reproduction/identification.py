@@ -12,7 +12,7 @@ from ..experiments.rig import RigRecord, RigSettings, rig_frf, run_rig
 from ..identification import FRFEstimate
 from ..linear.actuation import actuation_model
 from ..lti import FrequencyResponse, channel_zeros, damping_ratio, system_response
-from ..nonlinear.linearize import linearize
+from ..nonlinear.linearization import linearize
 from ..params import Params
 from .claims import Claim
 

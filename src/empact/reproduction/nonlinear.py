@@ -8,10 +8,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..lti import FrequencyResponse, system_response
-from ..nonlinear.linearize import plant
+from ..nonlinear.linearization import plant
 from ..nonlinear.nmp import NmpResult, nmp_analysis
 from ..nonlinear.scenario import Scenario, example_path, load_scenario
-from ..nonlinear.simulate import SimulationResult, run_scenario
+from ..nonlinear.simulation import SimulationResult, run_scenario
 from ..params import Params
 from .claims import Claim
 

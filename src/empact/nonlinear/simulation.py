@@ -30,7 +30,7 @@ from . import _kernel as K
 from ._rosenbrock import STATUS, integrate
 from .model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
 from .scenario import Scenario
-from .trim import TrimResult, trim
+from .equilibrium import TrimResult, trim
 
 __all__ = ["SimulationResult", "simulate", "run_scenario", "scenario_model", "csv_text",
            "write_csv", "state_tolerances"]
@@ -167,6 +167,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     K._eval(x, u_first, model.p, model.ix, dx, y0)
     Y[0] = y0
     rel, atol = state_tolerances(model, rtol)
+    cols = K.varying_columns(model.ix)
     t, h = 0.0, min(1e-5, max_step)
     chunks = np.linspace(0.0, duration, 101)[1:]
     status, n_steps, n_rej, filled = 0, 0, 0, 1
@@ -176,7 +177,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
         for t_chunk in chunks:
             status, t, h, filled, ns, nr = integrate(
                 x, t, float(t_chunk), h, samples, model.p, model.ix, sig_t, sig_v, sig_n,
-                brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps, X, Y)
+                brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps, X, Y, cols)
             n_steps += ns
             n_rej += nr
             bar.update(1)

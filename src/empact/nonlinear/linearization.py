@@ -18,7 +18,7 @@ import numpy as np
 from ..lti import index, statespace
 from ..params import OperatingPoint, Params
 from .model import EmpactModel, nonlinear_model
-from .trim import TrimResult, trim
+from .equilibrium import TrimResult, trim
 
 __all__ = ["linearize", "plant", "trim_point", "PLANT_INPUTS", "PLANT_OUTPUTS"]
 
