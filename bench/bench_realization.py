@@ -95,6 +95,32 @@ def main() -> None:
     print("\n".join(rows))
     print("\nrealize_steps timing includes the logm conversion to continuous time and the "
           "step-response fit; eigensys_realization returns the discrete model only.")
+    threads(t, steps)
+
+
+def threads(t: np.ndarray, steps: np.ndarray) -> None:
+    """Issue 11: the wide case by default against one BLAS thread, and the SVD the old route
+    ran with the default threads (two on this machine fight over two cores)."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    n_blas = max((p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"),
+                 default=1)
+    kw = dict(n_block_rows=ROWS, n_block_cols=COLS)
+    t_def, _ = best_time(lambda: realize_steps(t, steps, ORDER, **kw))
+    with threadpool_limits(limits=1, user_api="blas"):
+        t_one, _ = best_time(lambda: realize_steps(t, steps, ORDER, **kw))
+    h = np.diff(steps, axis=0, prepend=np.zeros((1, 2, 2)))
+    idx = np.arange(ROWS)[:, None] + np.arange(1, COLS + 1)[None, :]
+    hankel = h[idx].transpose(0, 2, 1, 3).reshape(ROWS * 2, COLS * 2)
+    t_svd_def, _ = best_time(lambda: np.linalg.svd(hankel, full_matrices=False))
+    with threadpool_limits(limits=1, user_api="blas"):
+        t_svd_one, _ = best_time(lambda: np.linalg.svd(hankel, full_matrices=False))
+    print(f"\nwide case ({ROWS} x {COLS} blocks), BLAS threads available: {n_blas}")
+    print(f"  realize_steps, default settings : {1e3 * t_def:8.2f} ms")
+    print(f"  realize_steps, one BLAS thread  : {1e3 * t_one:8.2f} ms  -> default / one-thread "
+          f"= {t_def / t_one:.2f} (target <= 2)")
+    print(f"  the Hankel SVD alone, default threads {1e3 * t_svd_def:.1f} ms, one thread "
+          f"{1e3 * t_svd_one:.1f} ms (the old route ran it with the default threads)")
 
 
 if __name__ == "__main__":

@@ -23,7 +23,6 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from empact.experiments.rig import RigSettings, run_rig  # noqa: E402
-from empact.nonlinear import _kernel as K  # noqa: E402
 import importlib
 
 S = importlib.import_module("empact.nonlinear.simulation")  # noqa: E402
@@ -37,7 +36,8 @@ OLD_COMMIT = "b9157d2"
 def old_integrator():
     """The integrate() of OLD_COMMIT, compiled against today's kernel (all columns)."""
     root = Path(__file__).resolve().parents[1]
-    src = subprocess.run(["git", "-C", str(root), "show", f"{OLD_COMMIT}:src/empact/_rosenbrock.py"],
+    src = subprocess.run(["git", "-C", str(root), "show",
+                          f"{OLD_COMMIT}:src/empact/_rosenbrock.py"],
                          capture_output=True, text=True, check=True).stdout
     src = src.replace("from ._nonlinear_kernel import", "from empact.nonlinear._kernel import")
     src = src.replace("_state_jacobian(x, u, p, ix, J)", "_state_jacobian(x, u, p, ix, J, ALL)")

@@ -1,4 +1,5 @@
-"""Compiled stiff integrator for the nonlinear model (private; used by `empact.nonlinear.simulation`).
+"""Compiled stiff integrator for the nonlinear model (private; used by
+`empact.nonlinear.simulation`).
 
 A linearly implicit (Rosenbrock) method of order 2 with an embedded order-3 error estimate:
 the modified Rosenbrock formula of Shampine & Reichelt (MATLAB's ``ode23s``), L-stable, one
