@@ -138,19 +138,25 @@ def test_cli_simulate_linearize_nmp(tmp_path):
     assert res.exit_code == 0, res.output
     data = json.loads(res.output)
     assert data["schema"] == {"name": "empact.linearize", "version": 1}
-    assert data["inputs"] == ["T_mp", "T_ms"] and data["outputs"] == ["r_g", "nu"]
-    assert data["states_units"][4] == "m" and data["inputs_units"] == ["N m", "N m"]
+    # control inputs, the load as the named disturbance, both slip signals
+    assert data["inputs"] == ["T_mp", "T_ms", "T_l"]
+    assert data["outputs"] == ["r_g", "nu", "nu_r"]
+    assert data["disturbance_inputs"] == ["T_l"] and data["control_inputs"] == ["T_mp", "T_ms"]
+    assert data["states_units"][4] == "m" and data["inputs_units"] == ["N m"] * 3
     assert np.array(data["A"]).shape == (18, 18) and len(data["states"]) == 18
     assert data["operating_point"]["r_g"] == pytest.approx(0.5)
+    res = run("linearize", "--load", "speed")
+    assert json.loads(res.output)["inputs"] == ["T_mp", "T_ms", "omega_l_ref"]
     mat = tmp_path / "plant.mat"
     res = run("linearize", "--ratio", "2", "--slip", "0.004", "--clamp", "1e4", "--speed",
               "300", "--format", "mat", "--out", str(mat))
     assert res.exit_code == 0, res.output
     from scipy.io import loadmat
     assert loadmat(mat)["A"].shape == (18, 18)
-    res = run("nmp", "--json")
+    res = run("nmp", "--json", "--slip-signal", "nu_r")
     assert res.exit_code == 0, res.output
-    assert json.loads(res.output)["n_rhp"][0] >= 1
+    data = json.loads(res.output)
+    assert data["n_rhp_real"][0] == 1 and data["slip_signal"] == "nu_r"
 
 
 def test_rig_cli_composes_with_frf_estimate(tmp_path):

@@ -23,20 +23,22 @@ def test_identified_plant_matches_exact_linearisation(plant_r1):
     Hi = system_response(R.sys, w).H
     He = system_response(plant_r1.exact, w).H
     err = np.median(np.abs(Hi - He) / np.abs(He), axis=-1)
-    # 5 % median per channel between 0.2 and 100 Hz: the steps are 1e-4 N m, where the slip
-    # response is about 1 % nonlinear, and the record is 6 s at 500 Hz
+    # 5 % median per channel between 0.2 and 100 Hz: the steps are 1e-5 N m (3e-5 N m already
+    # gives up to 7 %: the slip responds nonlinearly near the traction peak), 6 s at 500 Hz
     assert err.max() <= 0.05, err
 
 
 def test_identified_rhp_zero_matches_exact(plant_r1):
-    z_id = channel_zeros(plant_r1.realization.sys, "T_mp", "nu", max_abs=1e7)
-    z_ex = channel_zeros(plant_r1.exact, "T_mp", "nu", max_abs=1e7)
+    """The real right-half-plane zero of T_mp -> nu_r (the slip at the operating ratio) is
+    found in the identified model as in the exact one."""
+    z_id = channel_zeros(plant_r1.realization.sys, "T_mp", "nu_r", max_abs=1e7)
+    z_ex = channel_zeros(plant_r1.exact, "T_mp", "nu_r", max_abs=1e7)
     # real right-half-plane zeros; below 0.05 Hz they cancel the driveline's pole at the origin
     real_rhp = lambda z: z[(z.real > 2 * np.pi * 0.05)  # noqa: E731
                            & (np.abs(z.imag) < 1e-6 * np.abs(z))].real
     slow_ex = real_rhp(z_ex).min()
     slow_id = real_rhp(z_id).min()
-    # the slowest real right-half-plane zero (about 1 Hz) recovered within 5 %
+    # the slowest real right-half-plane zero (about 1.7 Hz) recovered within 5 %
     assert abs(slow_id / slow_ex - 1) < 0.05
 
 

@@ -13,14 +13,16 @@ KNOWN_DEVIATIONS = {
     # Sec. 2.2: the uncoupled sides' labels (15.5 Hz primary, 24.6 Hz secondary) fit no
     # parameter set of Fig. 7 together with Table 2; empact uses them swapped
     "fig9.labels",
-    # Sec. 2.3 / Sec. 3: with the Sec. 2.1 kinematics a right-half-plane zero of T_mp -> nu
-    # appears at every ratio, r_g = 2 included
-    "nmp.none_at_2",
-    # Sec. 3 on Fig. 2: the actuation modes of the nonlinear model carry the linear model's
-    # damping, and the 48 Hz zeros lie just below their pole, not above it
+    # Secs. 2.3 and 3 on the machine with the creep law: eq. 2's slip has no real RHP zero at
+    # any ratio, nu_r one at every ratio (the creep law separates the clamping transient from
+    # the slow shift); with the Sec. 2.1 rows eq. 2's slip has one at every ratio
+    "nmp.nu", "nmp.nu_r", "nmp.sec21",
+    # Sec. 3 on Fig. 2: at the creep law's published magnitude the actuation modes move down
+    # rather than gain much damping; the 48 Hz zeros lie just below their pole, not above it
     "fig2.damping", "fig2.zeros_48hz",
-    # Sec. 4 / Fig. 14: the servo angle falls with -1.73 rather than -1 between 1 and 2 Hz
-    "fig14.slope.T_mp",
+    # Sec. 4 / Fig. 14: the -1 slope of the servo angle ends near 0.35 Hz (creep law at its
+    # published magnitude), and the machine's secondary servo clamps (flat T_ms -> theta_ms)
+    "fig14.slope.T_mp", "fig14.slope.T_ms",
 }
 
 
@@ -39,7 +41,7 @@ def claims(full_report):
 def test_every_section_checks_claims(claims):
     keys = [c["key"] for c in claims]
     assert len(keys) == len(set(keys))  # unique keys
-    assert {c["section"] for c in claims} == {s.anchor for s in SECTIONS} - {"exact-plant"}
+    assert {c["section"] for c in claims} == {s.anchor for s in SECTIONS}
 
 
 @pytest.mark.parametrize("anchor", CHEAP)

@@ -20,6 +20,13 @@ Variator geometry and traction (eqs. 1, 4-6; Fig. 10)
    traction_from_params, load_traction, traction_curves
                       -- analytic and tabulated traction curves mu(nu, r_g)
 
+Axial physics of the variator (the machine as built)
+====================================================
+   creep_damping, shift_rate
+                      -- the creep law (Carbone et al. 2007; Ide et al.), its linearisation
+   thrust_ratio_from_params, load_thrust_ratio, kappa_geo
+                      -- the equilibrium thrust ratio kappa*(tau, r_g), analytic or tabulated
+
 Linear models (Sec. 2.1, 2.2)
 =============================
    actuation_model    -- servos, worm, epicyclic sets, screws, sheaves, belt (Fig. 3)
@@ -39,8 +46,9 @@ Nonlinear model (Secs. 2.3, 3)
 ==============================
    nonlinear_model    -- the whole CVT (compiled right-hand side)
    trim               -- steady operating points
-   linearize, plant   -- exact linearisation; the (T_mp, T_ms) -> (r_g, nu) plant
-   nmp_analysis       -- non-minimum-phase zeros of T_mp -> nu (Sec. 2.3)
+   linearize, plant   -- exact linearisation; the plant (T_mp, T_ms; load T_l as the
+                         disturbance) -> (r_g, nu, nu_r)
+   nmp_analysis       -- non-minimum-phase zeros of T_mp -> nu or nu_r (Sec. 2.3)
    simulate, run_scenario, load_scenario
                       -- time simulation
 
@@ -75,6 +83,9 @@ _CATALOGUE = {
     "variator_state": "geometry", "belt_length": "geometry", "ratio_range": "geometry",
     "traction_from_params": "traction", "load_traction": "traction",
     "traction_curves": "traction",
+    "creep_damping": "shift_law", "shift_rate": "shift_law",
+    "thrust_ratio_from_params": "thrust_ratio", "load_thrust_ratio": "thrust_ratio",
+    "kappa_geo": "thrust_ratio",
     "actuation_model": "linear.actuation", "driveline_model": "linear.driveline",
     "LumpedModel": "linear.lumped", "calibrate": "linear.calibration",
     "slip_model": "slip.model", "belt_root_locus": "slip.loci", "pole_sweep": "slip.loci",

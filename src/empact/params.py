@@ -9,6 +9,9 @@ A parameter set has one section per concept::
     [damping.large]
     [driveline]         inertias and stiffnesses of the test-bench driveline (Fig. 7)
     [traction]          traction curve mu(nu, r_g) (Fig. 10)
+    [shift]             creep-mode shifting of the belt (Carbone et al. 2007; Ide et al.)
+    [thrust_ratio]      torque-dependent equilibrium thrust ratio kappa(tau, r_g)
+    [paper_sec21]       stiffnesses of the paper's Sec. 2.1 kinematics (the published variant)
     [operating]         the default operating point (r_g, nu, F_s, omega_p), used by every
                         analysis that is not given one (slip model, trim, plants, NMP, Fig. 2)
 
@@ -37,7 +40,8 @@ from .geometry import ratio_range
 
 __all__ = [
     "ParameterError", "VariatorParams", "ActuationParams", "DampingLevel", "DampingParams",
-    "DrivelineParams", "TractionParams", "OperatingPoint", "Params", "default_params",
+    "DrivelineParams", "TractionParams", "ShiftParams", "ThrustRatioParams", "Sec21Stiffness",
+    "OperatingPoint", "Params", "default_params",
     "load_params", "save_params", "dumps_params", "read_toml", "DAMPING_LEVELS",
     "OPERATING_VARIABLES",
 ]
@@ -215,6 +219,80 @@ class TractionParams(_Section):
                 f"{self.r_low!r} and r_od = {self.r_od!r}")
 
 
+@dataclass(frozen=True)
+class ShiftParams(_Section):
+    """Creep-mode shifting of the pushbelt: the belt's resistance to a ratio change.
+
+    Carbone, Mangialardi, Bonsen, Tursi, Veenhuizen, "CVT dynamics: theory and experiments",
+    Mechanism and Machine Theory 42 (2007) 409-428: in creep mode the ratio rate is
+    proportional to the primary speed and linear in the log of the ratio of the actual to the
+    equilibrium thrust ratio::
+
+        dr_g/dt = |omega_p| K_c [ln(F_p / F_s) - ln kappa*(tau, r_g)]
+        K_c = gain D(F_s) (1 + cos^2 beta) / sin(2 beta) r_g (R_p / a) (a1 + a2 ln^2 r_g)
+        D(F_s) = D_ref (1 + k_D (F_s - F_ref))
+
+    D is the amplitude of the pulley deformation that lets the belt creep radially (rigid
+    pulleys: no creep).  The coefficients are a third party's reconstruction of the paper's
+    fits (eng-tools.dev, "How does a CVT actually change ratio?", its Eqs. 23 and 49 and the
+    calculator's a1, a2 fitted to the paper's Fig. 13); the paper's own tables could not be
+    read, so the magnitude is uncertain by about a factor 10 (hence `gain`).  The test rig of
+    the paper covered r_g = 0.6-1.8, F_s = 20-30 kN, 1000-2000 rpm.
+    """
+
+    _name = "shift"
+    D_ref: float = _p("rad", "pulley deformation amplitude at F_ref (Carbone 2007, "
+                             "reconstructed: 1e-3)", 0.0, 5e-3)
+    F_ref: float = _p("N", "clamping force of D_ref (Carbone 2007: 20 kN)", 1e3, 1e6)
+    k_D: float = _p("1/N", "growth of D with the clamping force (Carbone 2007, "
+                           "reconstructed: 2e-5, i.e. 2 % per kN)", 0.0, 1e-4, lo_open=False)
+    a1: float = _p("-", "ratio dependence g(r) = r q (a1 + a2 ln^2 r), constant term "
+                        "(reconstructed fit: 0.21)", 0.0, 5.0)
+    a2: float = _p("-", "ratio dependence, quadratic term (reconstructed fit: 0.08)", 0.0, 5.0,
+                   lo_open=False)
+    gain: float = _p("-", "overall factor on the creep rate: 1 is the published magnitude; "
+                          "the reconstruction is uncertain by about 10x", 0.1, 50.0,
+                     lo_open=False)
+    omega_0: float = _p("rad/s", "speed below which creep fades (regularisation at "
+                                 "standstill: no shifting without rotation)", 0.01, 10.0)
+    xi_sat: float = _p("-", "saturation of the log thrust-ratio error (slip mode beyond "
+                            "it; no published threshold)", 0.3, 3.0, lo_open=False)
+
+
+@dataclass(frozen=True)
+class ThrustRatioParams(_Section):
+    """Torque-dependent equilibrium thrust ratio ``kappa* = F_p* / F_s`` (analytic default).
+
+    ``ln kappa*(tau, r_g) = p0 ln kappa_geo(r_g) + (b0 - b1 ln r_g) tau`` with the torque ratio
+    ``tau = T_b cos(beta) / (2 mu_max F_s R_s)`` (1 at the traction limit) and the geometric
+    thrust ratio of the elastic belt ``kappa_geo = (pi + 2 phi) / (pi - 2 phi)`` (virtual
+    work; Carbone's frictionless limit): with ``p0 = 1`` it agrees exactly at zero torque.
+    Shaped like published pushbelt curves (rising with torque, faster at LOW, flat or falling
+    at OD); the values are estimates, no measured map could be read: a tabulated map (CSV or
+    TOML, `empact.thrust_ratio.load_thrust_ratio`) replaces it.
+    """
+
+    _name = "thrust_ratio"
+    p0: float = _p("-", "steepness of the zero-torque curve relative to kappa_geo", 0.5, 2.0,
+                   lo_open=False)
+    b0: float = _p("-", "d ln kappa* / d tau at r_g = 1", 0.0, 1.5, lo_open=False)
+    b1: float = _p("-", "how much faster ln kappa* rises with tau at LOW than at OD", -1.0, 2.0)
+
+
+@dataclass(frozen=True)
+class Sec21Stiffness(_Section):
+    """Stiffnesses of the actuation model with the paper's Sec. 2.1 kinematics as published
+    (kinematics ``"paper-sec2.1"``), calibrated to Table 1 on its own: the overlay that
+    `empact.linear.actuation.actuation_model` and the nonlinear model use for that variant."""
+
+    _name = "paper_sec21"
+    k_w: float = _p("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
+    k_c: float = _p("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
+    k_belt: float = _p("N/m", "longitudinal pushbelt stiffness (spring 3)", 1e2, 1e11)
+    k_tp: float = _p("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
+    k_ts: float = _p("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
+
+
 #: Operating-point variables: unit and description (names as in the paper).
 OPERATING_VARIABLES = {"r_g": ("-", "geometric ratio R_p / R_s"),
                        "nu": ("-", "slip (fraction, 0.01 is 1 %)"),
@@ -270,7 +348,8 @@ class OperatingPoint(_Section):
 
 _SECTIONS = {
     "variator": VariatorParams, "actuation": ActuationParams, "driveline": DrivelineParams,
-    "traction": TractionParams, "operating": OperatingPoint,
+    "traction": TractionParams, "shift": ShiftParams, "thrust_ratio": ThrustRatioParams,
+    "paper_sec21": Sec21Stiffness, "operating": OperatingPoint,
 }
 
 
@@ -283,9 +362,16 @@ class Params:
     damping: DampingParams
     driveline: DrivelineParams
     traction: TractionParams
+    shift: ShiftParams
+    thrust_ratio: ThrustRatioParams
+    paper_sec21: Sec21Stiffness
     operating: OperatingPoint
 
     def __post_init__(self) -> None:
+        if self.shift.k_D * self.shift.F_ref >= 0.9:
+            raise ParameterError(
+                f"shift.k_D = {self.shift.k_D:g}: with F_ref = {self.shift.F_ref:g} N the "
+                f"deformation D would vanish at low clamping force; need k_D F_ref < 0.9")
         lo, hi = ratio_range(self.variator)
         if not lo <= self.operating.r_g <= hi:
             raise ParameterError(

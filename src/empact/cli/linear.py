@@ -25,6 +25,14 @@ def plot_option(fn):
                         help="Write the figure (format from the suffix: .png, .svg, .pdf).")(fn)
 
 
+def kinematics_option(fn):
+    """``--kinematics`` (actuation model rows)."""
+    return click.option("--kinematics", type=click.Choice(["equal-translation", "paper-sec2.1"]),
+                        default="equal-translation", show_default=True,
+                        help="Actuation rows: the machine, or the paper's Sec. 2.1 rows "
+                             "(stiffnesses [paper_sec21]).")(fn)
+
+
 def ratio_option(default: float):
     """``--ratio`` (r_g)."""
     return click.option("--ratio", "r_g", type=float, default=default, show_default=True,
@@ -34,15 +42,18 @@ def ratio_option(default: float):
 @click.command("modes")
 @click.argument("model", type=click.Choice(list(MODELS)))
 @ratio_option(1.0)
+@kinematics_option
 @params_option
 @json_options
-def modes(model: str, r_g: float, params_file: str | None, as_json: bool,
+def modes(model: str, r_g: float, kinematics: str, params_file: str | None, as_json: bool,
           json_out: str | None) -> None:
     """Undamped eigenfrequencies, mode shapes and modal energy of MODEL at a ratio."""
     output_file(json_out, "--json-out", force=True)
     params = get_params(params_file)
     r_g = float(check_ratio(check_number("--ratio", r_g), params.variator, "--ratio"))
-    m = MODELS[model](params, r_g).modes()
+    lm = actuation_model(params, r_g, kinematics=kinematics) if model == "actuation" \
+        else driveline_model(params, r_g)
+    m = lm.modes()
     if as_json or json_out:
         data = {"model": model, "r_g": r_g, "coordinates": m.coordinates, "springs": m.springs,
                 "frequencies_hz": m.frequencies_hz, "energy_fraction": m.energy_fraction,
@@ -50,9 +61,11 @@ def modes(model: str, r_g: float, params_file: str | None, as_json: bool,
                 "mass_matrix": m.mass_matrix, "stiffness_matrix": m.stiffness_matrix}
         if model == "driveline":
             data["uncoupled_hz"] = uncoupled_frequencies(params)
+        else:
+            data["kinematics"] = kinematics
         emit_json(data, "modes", json_out)
         return
-    click.echo(f"{model} model at r_g = {r_g:g}")
+    click.echo(f"{lm.name}")
     click.echo(f"{'mode':>4s} {'f [Hz]':>10s}  energy fraction per spring "
                f"({', '.join(m.springs)})")
     for j, f in enumerate(m.frequencies_hz):
@@ -82,6 +95,16 @@ def frequency_grid(fmin: float, fmax: float, n: int) -> np.ndarray:
                    "append _dot for a velocity.")
 @click.option("--damping", type=click.Choice(DAMPING_LEVELS), default="moderate",
               show_default=True, help="Damping level (actuation model).")
+@click.option("--pulley-damping", "pulley_damping", type=click.Choice(["shafai", "creep"]),
+              default="shafai", show_default=True,
+              help="Actuation pulley damping: Shafai's at the damping level, or the creep law "
+                   "linearised at --speed and --clamp.")
+@click.option("--speed", "omega_p", type=float, default=None,
+              help="Primary speed for the pulley damping [rad/s] (default: [damping] "
+                   "omega_pulley).")
+@click.option("--clamp", "F_s", type=float, default=None,
+              help="Clamping force for the creep law [N] (default: [operating] F_s).")
+@kinematics_option
 @ratio_option(1.0)
 @click.option("--fmin", type=float, default=0.1, show_default=True, help="[Hz]")
 @click.option("--fmax", type=float, default=1000.0, show_default=True, help="[Hz]")
@@ -91,8 +114,9 @@ def frequency_grid(fmin: float, fmax: float, n: int) -> np.ndarray:
 @json_options
 @plot_option
 @force_option
-def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: str, r_g: float,
-        fmin: float, fmax: float, n: int, params_file: str | None, as_json: bool,
+def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: str,
+        pulley_damping: str, omega_p: float | None, F_s: float | None, kinematics: str,
+        r_g: float, fmin: float, fmax: float, n: int, params_file: str | None, as_json: bool,
         json_out: str | None, plot: str | None, force: bool) -> None:
     """Damped frequency response of MODEL, computed directly from M, C and K."""
     output_file(plot, "--plot", force=force, suffixes=PLOT_SUFFIXES)
@@ -100,7 +124,12 @@ def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: 
     params = get_params(params_file)
     f = frequency_grid(fmin, fmax, n)
     r_g = float(check_ratio(check_number("--ratio", r_g), params.variator, "--ratio"))
-    lm = actuation_model(params, r_g, damping) if model == "actuation" \
+    if omega_p is not None:
+        omega_p = check_number("--speed", omega_p, 0.0, 2000.0, lo_open=True, unit="rad/s")
+    if F_s is not None:
+        F_s = check_number("--clamp", F_s, 0.0, 1e6, lo_open=True, unit="N")
+    lm = actuation_model(params, r_g, damping, omega_p, kinematics=kinematics,
+                         pulley_damping=pulley_damping, F_s=F_s) if model == "actuation" \
         else driveline_model(params, r_g)
     try:
         resp = lm.frequency_response(2 * np.pi * f, list(inputs) or None, list(outputs) or None,
@@ -113,7 +142,9 @@ def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: 
         pairs = [(o, i) for i in resp.inputs for o in resp.outputs]
         plot_bode([resp], pairs, title=f"{lm.name}").save(plot)
     if as_json or json_out:
-        emit_json({"model": model, "r_g": r_g, "damping": damping, "inputs": resp.inputs,
+        emit_json({"model": model, "r_g": r_g, "damping": damping,
+                   **({"kinematics": kinematics, "pulley_damping": pulley_damping}
+                      if model == "actuation" else {}), "inputs": resp.inputs,
                    "outputs": resp.outputs, "frequencies_hz": resp.frequencies_hz,
                    "magnitude_db": resp.magnitude_db(), "phase_deg": resp.phase_deg(),
                    "H": np.stack([resp.H.real, resp.H.imag], axis=-1)}, "frf", json_out)
@@ -136,24 +167,39 @@ def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: 
 @click.option("--tolerance", type=float, default=1.0, show_default=True,
               help="Largest relative miss of any target [%]; beyond it nothing is written "
                    "and the exit status is 1.")
+@click.option("--kinematics", type=click.Choice(["equal-translation", "paper-sec2.1"]),
+              default=None, help="Actuation rows for targets that do not name theirs "
+              "(default: the file's, else equal-translation).")
+@click.option("--tie", "tie", multiple=True, metavar="DEPENDENT=FREE",
+              help="Hold a parameter equal to a free one, e.g. actuation.k_ts=actuation.k_tp "
+                   "(repeatable; adds to the file's [ties]).")
 @force_option
 def calibrate_cmd(targets: str, params_file: str | None, out: str, tolerance: float,
-                  force: bool) -> None:
+                  kinematics: str | None, tie: tuple[str, ...], force: bool) -> None:
     """Fit the free parameters named in TARGETS to its target eigenfrequencies.
 
     Exit status 0 when every target is met within --tolerance (the file is written), 1 when
     not (nothing written), 2 for bad input.
     """
     tol = check_number("--tolerance", tolerance, 0.0, 100.0, lo_open=True, unit="%")
+    ties = {}
+    for item in tie:
+        dep, eq, src = item.partition("=")
+        if not eq or not dep.strip() or not src.strip():
+            raise InputError(f"--tie {item!r}: expected DEPENDENT=FREE, e.g. "
+                             "actuation.k_ts=actuation.k_tp")
+        ties[dep.strip()] = src.strip()
     output_file(out, "--out", force=force)
     params = get_params(params_file)
-    tgts, free = load_targets(targets)
-    res = calibrate(params, tgts, free)
-    click.echo(f"{'target':34s} {'target [Hz]':>11s} {'model [Hz]':>11s} {'error':>9s}", err=True)
+    tgts, free, ties = load_targets(targets, kinematics=kinematics, ties=ties)
+    res = calibrate(params, tgts, free, ties)
+    click.echo(f"{'target':44s} {'target [Hz]':>11s} {'model [Hz]':>11s} {'error':>9s}", err=True)
     for t, f, e in zip(res.targets, res.achieved_hz, res.relative_error):
-        click.echo(f"{t.label:34s} {t.frequency_hz:11.4g} {f:11.4g} {100 * e:+8.3f}%", err=True)
+        click.echo(f"{t.label:44s} {t.frequency_hz:11.4g} {f:11.4g} {100 * e:+8.3f}%", err=True)
     for name, a, b in zip(res.free, res.initial, res.final):
         click.echo(f"  {name:22s} {a:12.5g} -> {b:12.5g}", err=True)
+    for dep, src in res.ties.items():
+        click.echo(f"  {dep:22s} tied to {src}", err=True)
     click.echo(f"optimiser: {res.message}", err=True)
     worst = int(np.argmax(np.abs(res.relative_error)))
     miss = 100 * abs(res.relative_error[worst])

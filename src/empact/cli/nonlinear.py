@@ -70,8 +70,22 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
         raise Failed(f"incomplete: {res.message}")
 
 
-def _options(drive: str, load: str, damping: str, kinematics: str) -> dict:
-    return {"drive": drive, "load": load, "damping": damping, "kinematics": kinematics}
+def _options(drive: str, load: str, damping: str, kinematics: str, shift_law: str,
+             thrust_ratio: str | None) -> dict:
+    opts = {"drive": drive, "load": load, "damping": damping, "kinematics": kinematics,
+            "shift_law": shift_law}
+    if thrust_ratio:
+        from ..thrust_ratio import load_thrust_ratio
+
+        opts["thrust_ratio"] = load_thrust_ratio(thrust_ratio)
+    return opts
+
+
+def _described(opts: dict) -> dict:
+    """The model options for JSON / metadata (a thrust-ratio table by its source)."""
+    return {k: (v.source if k == "thrust_ratio" and v is not None else v)
+            for k, v in opts.items()
+            if not (k in ("thrust_ratio", "reference_ratio") and v is None)}
 
 
 model_options = [
@@ -81,9 +95,16 @@ model_options = [
                  show_default=True, help="Drive motor torque- or speed-controlled."),
     click.option("--load", type=click.Choice(["torque", "speed"]), default="torque",
                  show_default=True, help="Load motor torque- or speed-controlled."),
-    click.option("--kinematics", type=click.Choice(["actuation", "equal-translation"]),
-                 default="actuation", show_default=True,
-                 help="Sense of the secondary sheave coordinate (see empact.nonlinear.model)."),
+    click.option("--kinematics", type=click.Choice(["equal-translation", "paper-sec2.1"]),
+                 default="equal-translation", show_default=True,
+                 help="The machine's sheave kinematics, or the paper's Sec. 2.1 rows (a "
+                      "named variant)."),
+    click.option("--shift-law", "shift_law", type=click.Choice(["carbone", "ide", "shafai"]),
+                 default="carbone", show_default=True,
+                 help="The belt's shift resistance (empact.shift_law)."),
+    click.option("--thrust-ratio", "thrust_ratio", type=click.Path(dir_okay=False),
+                 default=None, help="Measured thrust-ratio map kappa*(tau, r_g), .csv "
+                 "(r_g,tau,kappa) or .toml (default: the analytic [thrust_ratio])."),
 ]
 
 
@@ -111,10 +132,15 @@ def _add(options):
 @params_option
 @force_option
 def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load, kinematics,
-                  params_file, force) -> None:
-    """Exact linear plant (T_mp, T_ms) -> (r_g, nu) at an operating point: A, B, C, D."""
+                  shift_law, thrust_ratio, params_file, force) -> None:
+    """Exact linear plant at an operating point: A, B, C, D.
+
+    Inputs T_mp, T_ms (control) and the load T_l (or omega_l_ref with --load speed) as the
+    disturbance; outputs r_g, nu (eq. 2) and nu_r (slip at the operating ratio).
+    """
     from ..export import format_of, save_system, system_dict
-    from ..nonlinear.linearization import PLANT_INPUTS, PLANT_OUTPUTS, linearize, trim_point
+    from ..nonlinear.linearization import (PLANT_INPUTS, PLANT_OUTPUTS, disturbance_input,
+                                           linearize, trim_point)
     from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, nonlinear_model
 
     if out is None and fmt not in (None, "json"):
@@ -122,14 +148,17 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
     output_file(out, "--out", force=force, suffixes=("json", "mat", "npz"))
     params = get_params(params_file)
     point = operating_point(params, trim=True, ratio=r_g, slip=nu, clamp=F_s, speed=omega_p)
-    model = nonlinear_model(params, **_options(drive, load, damping, kinematics))
+    opts = _options(drive, load, damping, kinematics, shift_law, thrust_ratio)
+    model = nonlinear_model(params, **opts)
     op = trim_point(model, point)
-    sys_ = linearize(op, None if all_io else PLANT_INPUTS, None if all_io else PLANT_OUTPUTS)
+    dist = disturbance_input(model)
+    sys_ = linearize(op, None if all_io else PLANT_INPUTS + (dist,),
+                     None if all_io else PLANT_OUTPUTS)
     units = {"inputs": [INPUT_UNITS[n] for n in sys_.input_labels],
              "outputs": [OUTPUT_UNITS[n] for n in sys_.output_labels],
              "states": [STATE_UNITS[n] for n in sys_.state_labels]}
-    meta = {"operating_point": op.as_dict(),
-            "model_options": _options(drive, load, damping, kinematics)}
+    meta = {"operating_point": op.as_dict(), "model_options": _described(opts),
+            "control_inputs": list(PLANT_INPUTS), "disturbance_inputs": [dist]}
     if out is None:
         emit_json(system_dict(sys_, units, meta), "linearize")
         return
@@ -147,8 +176,8 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
 @click.option("--speed", "omega_p", type=float, default=None, help="Primary speed [rad/s].")
 @click.option("--fmax", "f_max", type=float, default=200.0, show_default=True,
               help="Largest zero frequency reported [Hz].")
-@click.option("--slip-signal", "slip_signal", type=click.Choice(["eq2", "speed"]), default="eq2",
-              show_default=True, help="Slip of eq. 2, or from the shaft speeds at the "
+@click.option("--slip-signal", "slip_signal", type=click.Choice(["nu", "nu_r"]), default="nu",
+              show_default=True, help="Slip nu of eq. 2 on the current radii, or nu_r at the "
               "operating ratio (see empact.nonlinear.nmp).")
 @plot_option
 @_add(model_options)
@@ -156,7 +185,7 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
 @json_options
 @force_option
 def nmp_cmd(ratios, nu, F_s, omega_p, f_max, slip_signal, plot, damping, drive, load,
-            kinematics, params_file, as_json, json_out, force) -> None:
+            kinematics, shift_law, thrust_ratio, params_file, as_json, json_out, force) -> None:
     """Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio (Sec 2.3)."""
     from ..nonlinear.nmp import nmp_analysis
 
@@ -173,7 +202,7 @@ def nmp_cmd(ratios, nu, F_s, omega_p, f_max, slip_signal, plot, damping, drive, 
     base = operating_point(params, trim=True, slip=nu, clamp=F_s, speed=omega_p)
     check_ratio(r, params.variator, "--ratios")
     res = nmp_analysis(params, r, base=base, f_max=f_max, slip=slip_signal,
-                       **_options(drive, load, damping, kinematics))
+                       **_options(drive, load, damping, kinematics, shift_law, thrust_ratio))
     if plot:
         from ..plotting import plot_nmp
 
@@ -185,10 +214,10 @@ def nmp_cmd(ratios, nu, F_s, omega_p, f_max, slip_signal, plot, damping, drive, 
                    "zeros": list(res.zeros), "rhp_zeros": list(res.rhp_zeros),
                    "n_rhp": res.n_rhp, "n_rhp_real": res.n_rhp_real,
                    "slip_signal": res.slip, "operating_point": base.as_dict(),
-                   "model_options": res.operating["options"]}, "nmp", json_out)
+                   "model_options": _described(res.operating["options"])}, "nmp", json_out)
         return
     click.echo(f"{'r_g':>6s} {'Delta_x [mm]':>13s} {'dL/delta exact':>15s} {'4 phi/tan(b)':>13s}"
-               f"  RHP zeros of T_mp -> nu [Hz]")
+               f"  RHP zeros of T_mp -> {res.slip} [Hz]")
     for k, rg in enumerate(res.r_g):
         z = ", ".join(f"{v.real / 2 / np.pi:+.3g}{v.imag / 2 / np.pi:+.3g}j"
                       for v in res.rhp_zeros[k]) or "none"

@@ -1,8 +1,12 @@
 """Calibration: fit chosen parameters to target eigenfrequencies (bounded least squares).
 
-A targets file (TOML) names the free parameters and lists the targets::
+A targets file (TOML) names the free parameters, optional ties, and lists the targets::
 
-    free = ["driveline.J_p", "driveline.k_tc"]      # dotted parameter names
+    free = ["driveline.J_p", "driveline.k_tc", "actuation.k_tp"]   # dotted parameter names
+    kinematics = "equal-translation"   # default for actuation targets (optional)
+
+    [ties]                             # parameters that follow a free one (optional)
+    "actuation.k_ts" = "actuation.k_tp"
 
     [[target]]
     model = "driveline"        # "actuation" or "driveline"
@@ -17,19 +21,26 @@ A targets file (TOML) names the free parameters and lists the targets::
     uncoupled = "primary"      # belt removed: "primary" or "secondary" side
     frequency_hz = 24.6
 
+    [[target]]
+    model = "actuation"
+    kinematics = "paper-sec2.1"   # this target's actuation rows (stiffnesses [paper_sec21])
+    ratio = 1.0
+    mode = 2
+    frequency_hz = 10.7
+
 The fit works on the logarithm of each free parameter (all are positive), bounded by the
 parameter's allowed range, and minimises ``sum weight * (f_model / f_target - 1)^2``.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Any, Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from .actuation import actuation_model
+from .actuation import KINEMATICS, actuation_model
 from .driveline import driveline_model, uncoupled_frequencies
 from ..params import _SECTIONS, DampingLevel, Params, read_toml
 from ..errors import ParameterError
@@ -52,6 +63,8 @@ class Target:
     uncoupled : "primary" or "secondary" (driveline with the belt removed)
     weight : weight of the squared relative residual
     source : where the number comes from
+    kinematics : actuation rows, "equal-translation" (the machine, stiffnesses
+        ``[actuation]``) or "paper-sec2.1" (stiffnesses ``[paper_sec21]``)
     """
 
     model: str
@@ -61,13 +74,15 @@ class Target:
     uncoupled: str | None = None
     weight: float = 1.0
     source: str = ""
+    kinematics: str = "equal-translation"
 
     @property
     def label(self) -> str:
         """Short description, e.g. ``driveline r_g=1 mode 2``."""
         if self.uncoupled:
             return f"{self.model} uncoupled {self.uncoupled}"
-        return f"{self.model} r_g={self.ratio:g} mode {self.mode}"
+        kin = f" ({self.kinematics})" if self.model == "actuation" else ""
+        return f"{self.model}{kin} r_g={self.ratio:g} mode {self.mode}"
 
 
 @dataclass(frozen=True)
@@ -83,6 +98,7 @@ class CalibrationResult:
     free : names of the fitted parameters
     initial, final : their values before and after
     success, message : from the optimiser
+    ties : ``{dependent: free}``, parameters set equal to a fitted one
     """
 
     params: Params
@@ -94,6 +110,7 @@ class CalibrationResult:
     final: np.ndarray
     success: bool
     message: str
+    ties: dict[str, str] = field(default_factory=dict)
 
 
 def _field_meta(dotted: str) -> dict[str, Any]:
@@ -118,6 +135,9 @@ def _check_target(raw: dict[str, Any], where: str) -> Target:
         raise ParameterError(f"{where}: {exc}") from None
     if t.model not in MODELS:
         raise ParameterError(f"{where}: model = {t.model!r}: must be one of {', '.join(MODELS)}")
+    if t.kinematics not in KINEMATICS:
+        raise ParameterError(f"{where}: kinematics = {t.kinematics!r}: must be one of "
+                             f"{', '.join(KINEMATICS)}")
     if not isinstance(t.frequency_hz, (int, float)) or isinstance(t.frequency_hz, bool) \
             or not t.frequency_hz > 0:
         raise ParameterError(f"{where}: frequency_hz = {t.frequency_hz!r}: must be > 0 [Hz]")
@@ -133,23 +153,60 @@ def _check_target(raw: dict[str, Any], where: str) -> Target:
     return t
 
 
-def load_targets(path: str) -> tuple[tuple[Target, ...], tuple[str, ...]]:
-    """Read a targets file; returns ``(targets, free)``.  Errors name the entry and key."""
+def load_targets(path: str, kinematics: str | None = None,
+                 ties: dict[str, str] | None = None) \
+        -> tuple[tuple[Target, ...], tuple[str, ...], dict[str, str]]:
+    """Read a targets file; returns ``(targets, free, ties)``.  Errors name the entry and key.
+
+    `kinematics` (if given) is the default for actuation targets that do not name theirs
+    (over the file's own ``kinematics``); `ties` are added to the file's ``[ties]``.
+    """
     data = read_toml(path, "targets")
-    unknown = set(data) - {"free", "target"}
+    unknown = set(data) - {"free", "target", "ties", "kinematics"}
     if unknown:
-        raise ParameterError(f"{path}: unknown key {sorted(unknown)[0]!r} (allowed: free, target)")
+        raise ParameterError(f"{path}: unknown key {sorted(unknown)[0]!r} (allowed: free, "
+                             "kinematics, ties, target)")
     free = data.get("free")
     if not isinstance(free, list) or not free or not all(isinstance(x, str) for x in free):
         raise ParameterError(f"{path}: free = {free!r}: must be a non-empty list of parameter "
                              "names")
     for name in free:
         _field_meta(name)
+    default_kin = kinematics if kinematics is not None else data.get("kinematics",
+                                                                      "equal-translation")
+    if default_kin not in KINEMATICS:
+        raise ParameterError(f"{path}: kinematics = {default_kin!r}: must be one of "
+                             f"{', '.join(KINEMATICS)}")
+    raw_ties = data.get("ties", {})
+    if not isinstance(raw_ties, dict):
+        raise ParameterError(f"{path}: ties must be a table of \"dependent\" = \"free\" names")
+    all_ties = {**raw_ties, **(ties or {})}
+    check_ties(all_ties, free, str(path))
     raw = data.get("target")
     if not isinstance(raw, list) or not raw:
         raise ParameterError(f"{path}: needs at least one [[target]] table")
-    targets = tuple(_check_target(dict(t), f"{path}: target {i + 1}") for i, t in enumerate(raw))
-    return targets, tuple(free)
+    targets = tuple(_check_target({"kinematics": default_kin, **dict(t)},
+                                  f"{path}: target {i + 1}") for i, t in enumerate(raw))
+    return targets, tuple(free), dict(all_ties)
+
+
+def check_ties(ties: dict[str, str], free: Sequence[str], where: str = "ties") -> None:
+    """Each tie ``dependent = source``: both parameter names of the same unit, the source
+    fitted (in `free`), the dependent not."""
+    for dep, src in ties.items():
+        if not isinstance(src, str):
+            raise ParameterError(f"{where}: tie {dep!r} = {src!r}: the source must be a "
+                                 "parameter name")
+        m_dep, m_src = _field_meta(dep), _field_meta(src)
+        if src not in free:
+            raise ParameterError(f"{where}: tie {dep} = {src}: {src} is not a free parameter "
+                                 f"(free: {', '.join(free)})")
+        if dep in free:
+            raise ParameterError(f"{where}: tie {dep} = {src}: {dep} is free; a tied "
+                                 "parameter follows its source and cannot be fitted too")
+        if m_dep["unit"] != m_src["unit"]:
+            raise ParameterError(f"{where}: tie {dep} = {src}: units differ "
+                                 f"({m_dep['unit']} vs {m_src['unit']})")
 
 
 def model_frequencies(params: Params, targets: Sequence[Target]) -> np.ndarray:
@@ -160,10 +217,11 @@ def model_frequencies(params: Params, targets: Sequence[Target]) -> np.ndarray:
         if t.uncoupled:
             out[i] = uncoupled_frequencies(params)[t.uncoupled]
             continue
-        key = (t.model, float(t.ratio))
+        key = (t.model, float(t.ratio), t.kinematics)
         if key not in cache:
-            build = actuation_model if t.model == "actuation" else driveline_model
-            cache[key] = build(params, t.ratio).modes().frequencies_hz
+            lm = actuation_model(params, t.ratio, kinematics=t.kinematics) \
+                if t.model == "actuation" else driveline_model(params, t.ratio)
+            cache[key] = lm.modes().frequencies_hz
         f = cache[key]
         if t.mode > len(f):
             raise ParameterError(f"target {t.label}: the {t.model} model has {len(f)} modes")
@@ -171,13 +229,17 @@ def model_frequencies(params: Params, targets: Sequence[Target]) -> np.ndarray:
     return out
 
 
-def calibrate(params: Params, targets: Sequence[Target], free: Sequence[str]) -> CalibrationResult:
+def calibrate(params: Params, targets: Sequence[Target], free: Sequence[str],
+              ties: dict[str, str] | None = None) -> CalibrationResult:
     """Fit the `free` parameters of `params` to the target frequencies.
 
     Bounded least squares (`scipy.optimize.least_squares`, trust-region reflective) on the
-    logarithms of the free parameters; bounds are the parameters' allowed ranges.
+    logarithms of the free parameters; bounds are the parameters' allowed ranges.  `ties`
+    ``{dependent: source}`` set a parameter equal to a free one throughout (e.g.
+    ``{"actuation.k_ts": "actuation.k_tp"}``).
     """
-    targets, free = tuple(targets), tuple(free)
+    targets, free, ties = tuple(targets), tuple(free), dict(ties or {})
+    check_ties(ties, free)
     x0 = np.log([params.get(name) for name in free])
     lo, hi = [], []
     for name in free:
@@ -188,7 +250,9 @@ def calibrate(params: Params, targets: Sequence[Target], free: Sequence[str]) ->
     w = np.sqrt([t.weight for t in targets])
 
     def build(x: np.ndarray) -> Params:
-        return params.from_dotted(dict(zip(free, np.exp(x))))
+        values = dict(zip(free, np.exp(x)))
+        values.update({dep: values[src] for dep, src in ties.items()})
+        return params.from_dotted(values)
 
     def residual(x: np.ndarray) -> np.ndarray:
         return w * (model_frequencies(build(x), targets) / f_t - 1)
@@ -200,4 +264,4 @@ def calibrate(params: Params, targets: Sequence[Target], free: Sequence[str]) ->
     return CalibrationResult(params=fitted, targets=targets, achieved_hz=achieved,
                              relative_error=achieved / f_t - 1, free=free,
                              initial=np.exp(x0), final=np.exp(sol.x), success=bool(sol.success),
-                             message=str(sol.message))
+                             message=str(sol.message), ties=ties)

@@ -4,7 +4,9 @@ Private: the public interface, the state ordering and the sign conventions are d
 `empact.nonlinear`.  Everything here works on flat arrays:
 
 * ``x`` state, shape (n,); ``u`` inputs, shape (4,);
-* ``p`` float parameters, shape (NP,), laid out by the ``P_*`` indices below;
+* ``p`` float parameters, shape (NP + n_table,), laid out by the ``P_*`` indices below and
+  followed by an optional tabulated thrust-ratio map
+  (`empact.thrust_ratio.TabulatedThrustRatio.encode`);
 * ``ix`` int64, shape (4,): positions in ``x`` of the optional states (belt stretch, drive and
   load speed-loop integrators, ratio-controller integrator), -1 when absent.
 
@@ -26,19 +28,27 @@ from numba import njit
  P_JD, P_JP, P_JS, P_JL, P_KTC, P_KDS, P_KBD,
  P_LLOW, P_LMED, P_LOD,
  P_B0, P_B1, P_B2, P_C0, P_C1, P_C2, P_D0, P_D1, P_D2, P_E0, P_E1, P_E2,
- P_DKP, P_DKI, P_LKP, P_LKI, P_RKP, P_RKD, P_RKI, P_SIG, P_RS0) = range(61)
-NP = 61
+ P_DKP, P_DKI, P_LKP, P_LKI, P_RKP, P_RKD, P_RKI, P_SIG, P_RS0,
+ P_LAW, P_DREF, P_FREF, P_KD, P_A1, P_A2, P_GAIN, P_W0, P_XSAT, P_GBETA,
+ P_KP0, P_KB0, P_KB1, P_RREF, P_TAB) = range(76)
+NP = 76
+
+#: shift laws (``p[P_LAW]``): Shafai's c / |omega| on each sheave, or the belt's creep
+#: resistance after Carbone et al. (log of the thrust ratio) or Ide et al. (thrust difference)
+LAW_SHAFAI, LAW_CARBONE, LAW_IDE = 0.0, 1.0, 2.0
 
 #: number of base states (actuation 12, driveline 6)
 NX_BASE = 18
 
-OUTPUTS = ("r_g", "nu", "theta_mp", "theta_ms", "F_p", "F_s", "omega_p", "omega_s",
-           "omega_d", "omega_l", "omega_mp", "omega_ms", "T_b", "mu", "R_p", "R_s", "phi",
-           "x_p", "x_s", "belt_elongation", "T_mp_act", "T_d_act", "T_l_act", "E", "P_in",
-           "P_diss")
+OUTPUTS = ("r_g", "nu", "nu_r", "theta_mp", "theta_ms", "F_p", "F_s", "F_p_act", "F_s_act",
+           "omega_p", "omega_s", "omega_d", "omega_l", "omega_mp", "omega_ms", "T_b", "mu",
+           "tau", "kappa", "kappa_eq", "r_g_dot", "F_creep", "R_p", "R_s", "phi", "x_p", "x_s",
+           "belt_elongation", "T_mp_act", "T_d_act", "T_l_act", "E", "P_in", "P_diss",
+           "P_creep")
 NY = len(OUTPUTS)
-(Y_RG, Y_NU, Y_THMP, Y_THMS, Y_FP, Y_FS, Y_WP, Y_WS, Y_WD, Y_WL, Y_WMP, Y_WMS, Y_TB, Y_MU,
- Y_RP, Y_RS, Y_PHI, Y_XP, Y_XS, Y_E, Y_TMP, Y_TD, Y_TL, Y_EN, Y_PIN, Y_PDISS) = range(NY)
+(Y_RG, Y_NU, Y_NUR, Y_THMP, Y_THMS, Y_FP, Y_FS, Y_FPA, Y_FSA, Y_WP, Y_WS, Y_WD, Y_WL, Y_WMP,
+ Y_WMS, Y_TB, Y_MU, Y_TAU, Y_KAP, Y_KEQ, Y_RDOT, Y_FCR, Y_RP, Y_RS, Y_PHI, Y_XP, Y_XS, Y_E,
+ Y_TMP, Y_TD, Y_TL, Y_EN, Y_PIN, Y_PDISS, Y_PCREEP) = range(NY)
 
 
 @njit(cache=True)
@@ -74,6 +84,81 @@ def belt_geometry(R_p, R_s, a):
     """
     phi = np.arcsin((R_p - R_s) / a)
     return phi, 2.0 * a * np.cos(phi) + (np.pi + 2.0 * phi) * R_p + (np.pi - 2.0 * phi) * R_s
+
+
+@njit(cache=True)
+def _curve(tau, p, start):
+    """Piecewise-linear ``ln kappa*`` of one tabulated curve at torque ratio `tau`, held
+    constant outside its samples (real or complex `tau`)."""
+    n = int(p[start])
+    t0 = start + 1
+    k0 = start + 1 + n
+    if tau.real <= p[t0]:
+        return p[k0] + 0.0 * tau
+    for j in range(n - 1):
+        if tau.real <= p[t0 + j + 1]:
+            w = (tau - p[t0 + j]) / (p[t0 + j + 1] - p[t0 + j])
+            return p[k0 + j] + w * (p[k0 + j + 1] - p[k0 + j])
+    return p[k0 + n - 1] + 0.0 * tau
+
+
+@njit(cache=True)
+def log_kappa_eq(tau, lr, kgeo, p):
+    """``ln kappa*(tau, r_g)``: the equilibrium thrust ratio F_p* / F_s at torque ratio `tau`
+    and log-ratio `lr` (kappa_geo = `kgeo`), analytic or tabulated (linear in ln r_g between
+    the tabulated curves, held constant outside)."""
+    if p[P_TAB] == 0.0:
+        return p[P_KP0] * np.log(kgeo) + (p[P_KB0] - p[P_KB1] * lr) * tau
+    base = NP
+    n_r = int(p[base])
+    if n_r == 1 or lr.real <= p[base + 1]:
+        return _curve(tau, p, base + int(p[base + 1 + n_r]))
+    for i in range(n_r - 1):
+        if lr.real <= p[base + 2 + i]:
+            w = (lr - p[base + 1 + i]) / (p[base + 2 + i] - p[base + 1 + i])
+            c0 = _curve(tau, p, base + int(p[base + 1 + n_r + i]))
+            c1 = _curve(tau, p, base + int(p[base + 2 + n_r + i]))
+            return c0 + w * (c1 - c0)
+    return _curve(tau, p, base + int(p[base + 2 * n_r]))
+
+
+@njit(cache=True)
+def creep_coefficient(r_g, R_p, F_s, p):
+    """``K_c`` [-]: creep rate per radian of primary rotation per unit log thrust-ratio error
+    (Carbone et al. 2007): ``gain D(F_s) G_beta r_g (R_p / a) (a1 + a2 ln^2 r_g)``."""
+    lr = np.log(r_g)
+    D = p[P_DREF] * (1.0 + p[P_KD] * (F_s - p[P_FREF]))
+    return p[P_GAIN] * D * p[P_GBETA] * r_g * (R_p / p[P_A]) * (p[P_A1] + p[P_A2] * lr * lr)
+
+
+@njit(cache=True)
+def creep_force(r_g, R_p, R_s, phi, F_s, tau, rdot, w_p, p):
+    """``(Lambda, kappa, kappa_eq)``: the belt's shift resistance as a generalised force on the
+    ratio [N m] (on the sheaves as ``-Lambda dr_g/dq``), the thrust ratio F_p / F_s it
+    implies, and the equilibrium thrust ratio kappa*(tau, r_g); `F_s` is the belt element's
+    secondary force.
+
+    The creep law solved for the thrust ratio: Carbone ``kappa = kappa* exp(xi)``, Ide
+    ``kappa = kappa* (1 + xi)``, with ``xi = xi_sat tanh(r_g_dot / (omega_eff K_c) / xi_sat)``
+    and ``omega_eff = sqrt(omega_p^2 + omega_0^2)``.  Lambda makes the clamping forces
+    ``F_p = kappa_geo F_s + Lambda a``, ``F_s - Lambda b`` (``a = r_g / (tan(beta) R_p)``,
+    ``b = r_g / (tan(beta) R_s)``) stand in the ratio kappa:
+    ``Lambda = F_s (kappa - kappa_geo) / (a + kappa b)``.
+    """
+    tb = p[P_TB]
+    kgeo = (np.pi + 2.0 * phi) / (np.pi - 2.0 * phi)
+    lnk = log_kappa_eq(tau, np.log(r_g), kgeo, p)
+    Kc = creep_coefficient(r_g, R_p, F_s, p)
+    w_eff = np.sqrt(w_p * w_p + p[P_W0] * p[P_W0])
+    xi = p[P_XSAT] * np.tanh(rdot / (w_eff * Kc) / p[P_XSAT])
+    keq = np.exp(lnk)
+    if p[P_LAW] == LAW_IDE:
+        kap = keq * (1.0 + xi)
+    else:
+        kap = keq * np.exp(xi)
+    a = r_g / (tb * R_p)
+    b = r_g / (tb * R_s)
+    return F_s * (kap - kgeo) / (a + kap * b), kap, keq
 
 
 @njit(cache=True)
@@ -122,8 +207,8 @@ def _eval(x, u, p, ix, dx, y):
     edot = g5 * v5 + g6 * v6
     alpha = p[P_ALPHA]
     N = p[P_KBELT] * (e + alpha * edot)  # belt element force [N], elastic + proportional damping
-    F_p = N * g5
-    F_s = N * (pi - 2.0 * phi) / tb
+    F_p_el = N * g5                      # the belt element's axial forces (virtual work)
+    F_s_el = N * (pi - 2.0 * phi) / tb
 
     # actuation springs (sign conventions of empact.linear.actuation)
     i_w = p[P_IW]
@@ -143,10 +228,10 @@ def _eval(x, u, p, ix, dx, y):
     F_tp = p[P_KTP] * (d_p + alpha * dd_p)
     F_ts = p[P_KTS] * (d_s + alpha * dd_s)
 
-    # Shafai pulley damping with the current pulley speeds
+    # Shafai pulley damping with the current pulley speeds (shift law "shafai" only)
     c_p = zero
     c_s = zero
-    if p[P_CSH] != 0.0:
+    if p[P_LAW] == LAW_SHAFAI and p[P_CSH] != 0.0:
         c_p = p[P_CSH] / _sabs(wp)
         c_s = p[P_CSH] / _sabs(ws)
     # smooth Coulomb friction in the spindles (screw rotations q3 and q4 - q3)
@@ -158,17 +243,41 @@ def _eval(x, u, p, ix, dx, y):
     if p[P_TCSS] != 0.0:
         Tf_ss = p[P_TCSS] * np.tanh(w43 / p[P_WC])
 
-    # ratio, slip (eq. 2), traction
+    # ratio, slip (eq. 2)
     r_g = R_p / R_s
     nu = 1.0 - ws / (r_g * wp)
     mu = traction_mu(nu, r_g, p)
+    lr = np.log(r_g)
+    mu_max = _interp3(lr, p[P_LLOW], p[P_LMED], p[P_LOD], p[P_D0], p[P_D1], p[P_D2])
     if ix[0] >= 0:  # belt locked: elastic chain element R_p theta_p - R_s theta_s
         F_b = p[P_KBD] * x[ix[0]]
-        T_on_p = -R_p * F_b
         T_b = R_s * F_b
+        tau = T_b * p[P_COSB] / (2.0 * mu_max * F_s_el * R_s)
+    else:
+        tau = mu / mu_max
+
+    # the belt's shift resistance (creep-mode shifting): a generalised force Lambda on the
+    # ratio, on the sheaves through dr_g/dq5 = r_g / (tan(beta) R_p) and
+    # dr_g/dq6 = sig r_g / (tan(beta) R_s) (virtual work)
+    dr5 = r_g / (tb * R_p)
+    dr6 = sig * r_g / (tb * R_s)
+    rdot = dr5 * v5 + dr6 * v6
+    if p[P_LAW] == LAW_SHAFAI:
+        lam = zero
+        kap = (pi + 2.0 * phi) / (pi - 2.0 * phi)
+        keq = kap
+    else:
+        lam, kap, keq = creep_force(r_g, R_p, R_s, phi, F_s_el, tau, rdot, wp, p)
+    # clamping forces at the contacts (opening the sheaves): the belt element's and the creep's
+    F_p = F_p_el + lam * dr5
+    F_s = F_s_el - lam * r_g / (tb * R_s)
+
+    # traction (eq. 1) with the secondary clamping force
+    if ix[0] >= 0:
+        T_on_p = -R_p * F_b
         P_slip = zero
         dx[ix[0]] = R_p * wp - R_s * ws
-    else:  # traction torque, eq. 1
+    else:
         T_b = 2.0 * mu * F_s * R_s / p[P_COSB]
         T_on_p = -r_g * T_b
         P_slip = T_b * (r_g * wp - ws)
@@ -200,8 +309,8 @@ def _eval(x, u, p, ix, dx, y):
     Q2 = T_ms - T_c / i_c - p[P_CMS] * w2
     Q3 = T_w / i_e - s * F_tp + s * F_ts - p[P_CSP] * w3 - Tf_sp + p[P_CSS] * w43 + Tf_ss
     Q4 = T_c / i_e - s * F_ts - p[P_CSS] * w43 - Tf_ss
-    Q5 = -N * g5 - F_tp - c_p * v5
-    Q6 = -N * g6 - F_ts - c_s * v6
+    Q5 = -N * g5 - F_tp - c_p * v5 - lam * dr5
+    Q6 = -N * g6 - F_ts - c_s * v6 - lam * dr6
     dx[0] = w1
     dx[1] = w2
     dx[2] = w3
@@ -239,13 +348,22 @@ def _eval(x, u, p, ix, dx, y):
               + alpha * (p[P_KW] * ed_w * ed_w + p[P_KC] * ed_c * ed_c
                          + p[P_KBELT] * edot * edot + p[P_KTP] * dd_p * dd_p
                          + p[P_KTS] * dd_s * dd_s)
-              + Tf_sp * w3 + Tf_ss * w43 + P_slip)
+              + Tf_sp * w3 + Tf_ss * w43 + P_slip + lam * rdot)
     y[Y_RG] = r_g
     y[Y_NU] = nu
+    y[Y_NUR] = 1.0 - ws / (p[P_RREF] * wp)
     y[Y_THMP] = q1
     y[Y_THMS] = q2
     y[Y_FP] = F_p
     y[Y_FS] = F_s
+    y[Y_FPA] = -F_tp
+    y[Y_FSA] = sig * F_ts
+    y[Y_TAU] = tau
+    y[Y_KAP] = kap
+    y[Y_KEQ] = keq
+    y[Y_RDOT] = rdot
+    y[Y_FCR] = lam * dr5
+    y[Y_PCREEP] = lam * rdot
     y[Y_WP] = wp
     y[Y_WS] = ws
     y[Y_WD] = wd

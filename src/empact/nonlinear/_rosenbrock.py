@@ -13,6 +13,10 @@ by running indices (O(1) per step, whatever the number of breakpoints behind), a
 Jacobian is evaluated in full once per call and afterwards only in its state-dependent
 columns (`_kernel.varying_columns`, 8 or 9 of 18-22).
 
+Numba caches this module's compiled code with `_kernel._eval` inlined and re-checks only this
+file's time stamp: after editing `_kernel.py` in a source checkout delete the ``*.nbi`` /
+``*.nbc`` files under ``nonlinear/__pycache__`` (an installed upgrade replaces both files).
+
 Status codes returned by `integrate`: 0 reached the end; 1 omega_p at or below omega_min (slip
 undefined); 2 clamping force F_s at or below zero (slack belt); 3 a running radius left
 [R_min, R_max]; 4 non-finite state; 5 step size below hmin; 6 too many steps; 7 singular

@@ -89,7 +89,7 @@ def traction_peak(model: EmpactModel, r_g: float) -> tuple[float, float]:
 
 def _belt_radii(model: EmpactModel, r_g: float, F_s: float, request: str) -> tuple[float, ...]:
     """Radii of the stretched belt carrying clamping force F_s at ratio r_g."""
-    v, k = model.params.variator, model.params.actuation.k_belt
+    v, k = model.params.variator, model.p[K.P_KBELT]
     tb = np.tan(v.beta)
 
     def f(R_s: float) -> float:
@@ -156,39 +156,47 @@ def trim(model: EmpactModel, r_g: float, omega_p: float, *, nu: float | None = N
     elif sum(v is not None for v in (nu, F_s, T_l)) != 2:
         raise TrimError(f"{request}: give exactly two of nu, F_s, T_l")
 
-    if F_s is not None:
-        R_p, R_s, phi, e = _belt_radii(model, r_g, F_s, request)
-    if not locked:
-        if nu is not None and F_s is not None:
-            T_l = 2 * K.traction_mu(nu, r_g, model.p) * F_s * R_s / cosb
-        elif nu is not None:  # nu and T_l: find F_s (R_s depends weakly on F_s: fixed point)
-            mu = K.traction_mu(nu, r_g, model.p)
-            if mu * T_l <= 0:
-                raise TrimError(f"{request}: mu(nu) = {mu:.4g} cannot carry T_l = {T_l:g} N m "
-                                f"with a positive clamping force")
-            R_s = float(radii(r_g, model.params.variator.L_belt, model.params.variator.a)[1])
-            for _ in range(20):
-                F_s = T_l * cosb / (2 * mu * R_s)
-                R_p, R_s_new, phi, e = _belt_radii(model, r_g, F_s, request)
-                done = abs(R_s_new - R_s) < 1e-15
-                R_s = R_s_new
-                if done:
-                    break
+    mu_max = _mu_max(model, r_g)
+    if locked:
+        R_p, R_s, phi, e = _contact_radii(
+            model, r_g, F_s, lambda R_s, F_el: T_l * cosb / (2 * mu_max * F_el * R_s), request)
+    elif nu is not None and F_s is not None:
+        mu = K.traction_mu(nu, r_g, model.p)
+        R_p, R_s, phi, e = _contact_radii(model, r_g, F_s, lambda R_s, F_el: mu / mu_max,
+                                          request)
+        T_l = 2 * mu * F_s * R_s / cosb
+    elif nu is not None:  # nu and T_l: find F_s (R_s depends weakly on F_s: fixed point)
+        mu = K.traction_mu(nu, r_g, model.p)
+        if mu * T_l <= 0:
+            raise TrimError(f"{request}: mu(nu) = {mu:.4g} cannot carry T_l = {T_l:g} N m "
+                            f"with a positive clamping force")
+        R_s = float(radii(r_g, model.params.variator.L_belt, model.params.variator.a)[1])
+        for _ in range(30):
             F_s = T_l * cosb / (2 * mu * R_s)
-            R_p, R_s, phi, e = _belt_radii(model, r_g, F_s, request)
-        else:  # F_s and T_l: find nu on the rising branch of the traction curve
-            need = T_l * cosb / (2 * F_s * R_s)
-            nu_pk, mu_pk = traction_peak(model, r_g)
-            if abs(need) > mu_pk:
-                raise TrimError(f"{request}: T_l = {T_l:g} N m needs mu = {abs(need):.4g}, above "
-                                f"the traction peak {mu_pk:.4g} at F_s = {F_s:g} N (slip would "
-                                f"run away)")
-            if need == 0:
-                nu = 0.0
-            else:
-                sgn = np.sign(need)
-                nu = sgn * brentq(lambda n: K.traction_mu(n, r_g, model.p) - abs(need), 0.0,
-                                  nu_pk, xtol=1e-15, rtol=1e-14)
+            R_p, R_s_new, phi, e = _contact_radii(model, r_g, F_s,
+                                                  lambda R_s, F_el: mu / mu_max, request)
+            done = abs(R_s_new - R_s) < 1e-15
+            R_s = R_s_new
+            if done:
+                break
+        F_s = T_l * cosb / (2 * mu * R_s)
+        R_p, R_s, phi, e = _contact_radii(model, r_g, F_s, lambda R_s, F_el: mu / mu_max,
+                                          request)
+    else:  # F_s and T_l: find nu on the rising branch of the traction curve
+        R_p, R_s, phi, e = _contact_radii(
+            model, r_g, F_s, lambda R_s, F_el: T_l * cosb / (2 * F_s * R_s) / mu_max, request)
+        need = T_l * cosb / (2 * F_s * R_s)
+        nu_pk, mu_pk = traction_peak(model, r_g)
+        if abs(need) > mu_pk:
+            raise TrimError(f"{request}: T_l = {T_l:g} N m needs mu = {abs(need):.4g}, above "
+                            f"the traction peak {mu_pk:.4g} at F_s = {F_s:g} N (slip would "
+                            f"run away)")
+        if need == 0:
+            nu = 0.0
+        else:
+            sgn = np.sign(need)
+            nu = sgn * brentq(lambda n: K.traction_mu(n, r_g, model.p) - abs(need), 0.0,
+                              nu_pk, xtol=1e-15, rtol=1e-14)
     x, u, named = _assemble(model, r_g, omega_p, float(nu), float(F_s), float(T_l),
                             R_p, R_s, phi, e)
     residual = _residual(model, x, u, named)
@@ -202,20 +210,70 @@ def trim(model: EmpactModel, r_g: float, omega_p: float, *, nu: float | None = N
                       T_ms=named["T_ms"], mu=y["mu"], residual=residual)
 
 
+def _mu_max(model: EmpactModel, r_g: float) -> float:
+    """Peak traction coefficient D(r_g) of the magic formula (the kernel's interpolation)."""
+    p = model.p
+    return float(K._interp3(np.log(r_g), p[K.P_LLOW], p[K.P_LMED], p[K.P_LOD], p[K.P_D0],
+                            p[K.P_D1], p[K.P_D2]))
+
+
+def _static_creep(model: EmpactModel, r_g, R_p, R_s, phi, F_el, tau) -> tuple[float, float]:
+    """``(Lambda, kappa*)`` of the creep law at rest for the belt element's secondary force
+    `F_el` (``Lambda = 0`` and the geometric thrust ratio for Shafai's law)."""
+    p = model.p
+    kgeo = (np.pi + 2 * phi) / (np.pi - 2 * phi)
+    if p[K.P_LAW] == K.LAW_SHAFAI:
+        return 0.0, kgeo
+    lam, _, keq = K.creep_force(r_g, R_p, R_s, phi, F_el, tau, 0.0, 1.0, p)
+    return float(lam), float(keq)
+
+
+def _contact_radii(model: EmpactModel, r_g: float, F_s: float, tau_of, request: str):
+    """Radii of the stretched belt whose secondary *clamping* force (belt element minus the
+    static creep force) is `F_s`; `tau_of(R_s, F_el)` gives the torque ratio.  Fixed point
+    on the belt element's force ``F_el = F_s (a + kappa* b) / (a + kappa_geo b)``."""
+    tb = model.p[K.P_TB]
+    F_el = F_s
+    for _ in range(50):
+        R_p, R_s, phi, e = _belt_radii(model, r_g, F_el, request)
+        if model.p[K.P_LAW] == K.LAW_SHAFAI:
+            return R_p, R_s, phi, e
+        kgeo = (np.pi + 2 * phi) / (np.pi - 2 * phi)
+        _, keq = _static_creep(model, r_g, R_p, R_s, phi, F_el, tau_of(R_s, F_el))
+        a, b = r_g / (tb * R_p), r_g / (tb * R_s)
+        new = F_s * (a + keq * b) / (a + kgeo * b)
+        if abs(new - F_el) <= 1e-13 * F_s:
+            return _belt_radii(model, r_g, new, request)
+        F_el = new
+    raise TrimError(f"{request}: the belt force does not converge with the creep law's "
+                    "static force")
+
+
 def _assemble(model: EmpactModel, r_g, omega_p, nu, F_s, T_l, R_p, R_s, phi, e):
     v, a, d = model.params.variator, model.params.actuation, model.params.driveline
+    p = model.p
+    k_w, k_c, k_belt, k_tp, k_ts = (p[K.P_KW], p[K.P_KC], p[K.P_KBELT], p[K.P_KTP],
+                                    p[K.P_KTS])
     tb = np.tan(v.beta)
-    N = a.k_belt * e
+    N = k_belt * e
     F_p = N * (np.pi + 2 * phi) / tb
     q5 = (R_p - v.R_min) * tb
-    sig = model.p[K.P_SIG]  # sense of q6 (ModelOptions.kinematics)
-    q6 = sig * (model.p[K.P_RS0] - R_s) * tb
-    q3 = (-F_p / a.k_tp - q5) / a.s
-    q4 = q3 + (sig * F_s / a.k_ts - q6) / a.s
-    T_c = a.i_e * a.s * sig * F_s
-    q2 = a.i_c * (T_c / a.k_c + q4 / a.i_e)
-    T_w = -a.i_e * a.s * (F_p + sig * F_s)
-    q1 = a.i_w * (T_w / a.k_w + q3 / a.i_e)
+    sig = p[K.P_SIG]  # sense of q6 (ModelOptions.kinematics)
+    q6 = sig * (p[K.P_RS0] - R_s) * tb
+    # the actuator forces carry the clamping forces: the belt element's and the static creep
+    # force of the law at rest (torque ratio as the kernel computes it)
+    F_el = N * (np.pi - 2 * phi) / tb
+    tau = (T_l * np.cos(v.beta) / (2 * _mu_max(model, r_g) * F_el * R_s) if model.ix[0] >= 0
+           else K.traction_mu(nu, r_g, p) / _mu_max(model, r_g))
+    lam, _ = _static_creep(model, r_g, R_p, R_s, phi, F_el, tau)
+    F_p_act = F_p + lam * r_g / (tb * R_p)
+    F_s_act = F_el - lam * r_g / (tb * R_s)
+    q3 = (-F_p_act / k_tp - q5) / a.s
+    q4 = q3 + (sig * F_s_act / k_ts - q6) / a.s
+    T_c = a.i_e * a.s * sig * F_s_act
+    q2 = a.i_c * (T_c / k_c + q4 / a.i_e)
+    T_w = -a.i_e * a.s * (F_p_act + sig * F_s_act)
+    q1 = a.i_w * (T_w / k_w + q3 / a.i_e)
     T_mp, T_ms = T_w / a.i_w, T_c / a.i_c
     omega_s = (1 - nu) * r_g * omega_p
     T_d = r_g * T_l
@@ -233,7 +291,7 @@ def _assemble(model: EmpactModel, r_g, omega_p, nu, F_s, T_l, R_p, R_s, phi, e):
         x[ix[2]], u[3] = T_l, omega_s
     if ix[3] >= 0:
         x[ix[3]], u[0] = T_mp, r_g  # the integral carries the holding torque
-    return x, u, {"T_ms": T_ms, "F_p": F_p, "T_d": T_d}
+    return x, u, {"T_ms": T_ms, "F_p": F_p_act, "T_d": T_d}
 
 
 def _residual(model: EmpactModel, x, u, named) -> float:

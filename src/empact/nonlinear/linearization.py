@@ -20,10 +20,19 @@ from ..params import OperatingPoint, Params
 from .model import EmpactModel, nonlinear_model
 from .equilibrium import TrimResult, trim
 
-__all__ = ["linearize", "plant", "trim_point", "PLANT_INPUTS", "PLANT_OUTPUTS"]
+__all__ = ["linearize", "plant", "trim_point", "PLANT_INPUTS", "PLANT_OUTPUTS",
+           "disturbance_input"]
 
+#: the plant's control inputs (servo torques) and outputs (ratio and the two slip signals:
+#: eq. 2 on the current radii, and at the operating ratio)
 PLANT_INPUTS = ("T_mp", "T_ms")
-PLANT_OUTPUTS = ("r_g", "nu")
+PLANT_OUTPUTS = ("r_g", "nu", "nu_r")
+
+
+def disturbance_input(model: EmpactModel) -> str:
+    """The plant's disturbance input: the load torque ``T_l`` (torque-controlled load motor)
+    or the load speed reference ``omega_l_ref`` (speed-controlled)."""
+    return model.inputs[3]
 
 
 def _select(names: Sequence[str], wanted: Sequence[str] | None, what: str) -> list[int]:
@@ -49,10 +58,16 @@ def linearize(op: TrimResult, inputs: Sequence[str] | None = None,
     -------
     control.StateSpace
         ``dx = A x + B u``, ``y = C x + D u`` in deviations from `op`; states named as
-        ``op.model.states``.  Units: SI, as in `empact.nonlinear.model`.
+        ``op.model.states``.  Units: SI, as in `empact.nonlinear.model`.  The output
+        ``nu_r`` is linearised at the trimmed ratio (the slip of eq. 3 and Fig. 12).
     """
     m = op.model
     A, B, C, D = m.jacobian(op.x, op.u)
+    # nu_r = 1 - omega_s / (r_g0 omega_p) at the trimmed ratio r_g0, whatever the model's
+    # reference: d nu_r = d nu - (1 - nu0) d r_g / r_g0 (eq. 2 without its ratio term)
+    i_nu, i_r, i_nur = (m.outputs.index(k) for k in ("nu", "r_g", "nu_r"))
+    w = (1 - op.nu) / op.r_g
+    C[i_nur], D[i_nur] = C[i_nu] - w * C[i_r], D[i_nu] - w * D[i_r]
     ii = _select(m.inputs, inputs, "input")
     oo = _select(m.outputs, outputs, "output")
     return statespace(A, B[:, ii], C[oo], D[np.ix_(oo, ii)], states=m.states,
@@ -66,8 +81,9 @@ def trim_point(model: EmpactModel, op: OperatingPoint) -> TrimResult:
 
 
 def plant(params: Params, op: OperatingPoint | None = None, *,
-          model: EmpactModel | None = None, **options):
-    """The exact (T_mp, T_ms) -> (r_g, nu) plant of Fig. 2 at one operating point.
+          model: EmpactModel | None = None, disturbance: bool = True, **options):
+    """The exact plant of Fig. 2 at one operating point: servo torques (and the load as a
+    disturbance) to ratio and slip.
 
     Parameters
     ----------
@@ -77,12 +93,16 @@ def plant(params: Params, op: OperatingPoint | None = None, *,
     model : EmpactModel, optional
         A built model (then `options` must be empty); default ``nonlinear_model(params,
         **options)``.
+    disturbance : bool
+        Include the load input (``T_l``, or ``omega_l_ref`` with a speed-controlled load) as
+        a third input, the plant's disturbance.
     **options
         `empact.nonlinear.model.ModelOptions` fields.
 
     Returns
     -------
     (control.StateSpace, TrimResult)
+        Inputs ``T_mp, T_ms`` [N m] (+ the disturbance), outputs ``r_g, nu, nu_r`` [-].
     """
     if model is None:
         model = nonlinear_model(params, **options)
@@ -93,4 +113,5 @@ def plant(params: Params, op: OperatingPoint | None = None, *,
     op = params.operating if op is None else op
     trimmed = trim_point(model, op)
     name = f"plant_rg_{op.r_g:g}".replace(".", "p")
-    return linearize(trimmed, PLANT_INPUTS, PLANT_OUTPUTS, name=name), trimmed
+    inputs = PLANT_INPUTS + ((disturbance_input(model),) if disturbance else ())
+    return linearize(trimmed, inputs, PLANT_OUTPUTS, name=name), trimmed

@@ -8,8 +8,9 @@ with slip, and the test-bench driveline (model notes Sec. 6; the paper's ref. [4
                                               |  screw s, thrust k_tp               |  screw s, thrust k_ts
                                               v  q7 = s q3 + q5                     v  q8 = s (q4 - q3) + q6
                                     sheave P (q5, m_p)                     sheave S (q6, m_s)
-                                     R_p = R_min + q5/tan(beta)             R_s = R_max - q6/tan(beta)
+                                     R_p = R_min + q5/tan(beta)             R_s = R_min + q6/tan(beta)
                                               \___ pushbelt: N = k_belt (L(R_p, R_s) - L_0) ___/
+                                               |  creep resistance Lambda on r_g (shift law)
                                                |  traction T_b = 2 mu(nu, r_g) F_s R_s / cos(beta)
       drive motor         lock-up clutch      primary pulley        secondary pulley    driveshaft     load motor
       J_d (omega_d) --/\/\ k_tc /\/\-- J_p (omega_p)  -r_g T_b  |  +T_b  J_s (omega_s) --/\/\ k_ds --- J_l (omega_l)
@@ -39,12 +40,15 @@ Inputs ``u`` (4): ``T_mp`` (or ``r_g_ref`` with the ratio controller), ``T_ms`` 
 
 Construction choices (documented, not hidden):
 
-* **Sheave kinematics.** ``R_p = R_min + q5 / tan(beta)`` and ``R_s = R_max - q6 / tan(beta)``:
-  both moving sheaves translate in the same absolute direction; ``q5 > 0`` closes the primary
-  (R_p grows), ``q6 > 0`` opens the secondary (R_s shrinks).  ``q5 = 0`` is the primary at its
-  smallest radius, ``q6 = 0`` the secondary at its largest.  These are the directions of spring 3
-  of `empact.linear.actuation` (elongation ``[(pi + 2 phi) q5 - (pi - 2 phi) q6] / tan(beta)``), of
-  which this element is the exact, nonlinear version.
+* **Sheave kinematics** (`ModelOptions.kinematics`).  The machine (``"equal-translation"``,
+  default): ``R_p = R_min + q5 / tan(beta)``, ``R_s = R_min + q6 / tan(beta)``; both sheaves
+  close for positive q, so an equal translation ``q5 = -q6`` (both in the same absolute
+  direction) is a ratio change at nearly constant belt length: the primary servo shifts, the
+  secondary clamps (paper Secs. 1 and 2.3; model notes Sec. 5).  The element is the exact,
+  nonlinear version of spring 3 of `empact.linear.actuation`, ``[(pi + 2 phi) q5 + (pi - 2
+  phi) q6] / tan(beta)``.  The paper's Sec. 2.1 rows (``"paper-sec2.1"``): ``R_s = R_max -
+  q6 / tan(beta)``, spring 3 ``[(pi + 2 phi) q5 - (pi - 2 phi) q6] / tan(beta)``, with the
+  ``[paper_sec21]`` stiffnesses; a primary-servo rotation then squeezes both sheaves.
 * **Belt.** An elastic element with force ``N = k_belt (e + alpha de/dt)``, ``e = L(R_p, R_s) -
   L_0`` (eq. 6 on the current radii), ``L_0 = L_belt`` (the belt's unstretched length): the
   clamping force comes from stretching it, e.g. ``e = 0.35 mm`` for ``F_s = 10 kN``.  Axial
@@ -54,10 +58,18 @@ Construction choices (documented, not hidden):
 * **Thrust bearings, worm, chain, screws** exactly as the rows of `empact.linear.actuation`, with zero
   free length at ``q7 = q8 = 0`` and zero worm/chain twist.  Proportional damping ``alpha k``
   on every spring (belt included), viscous friction ``c_mp, c_ms`` (servos), ``c_sp`` (q3),
-  ``c_ss`` (q4 - q3), Shafai damping ``c_shafai / |omega|`` on each sheave with the *current*
-  pulley speed (primary ``omega_p``, secondary ``omega_s``): this couples the actuation to the
-  driveline.  Optional smooth Coulomb friction ``T_c tanh(omega / omega_c)`` in the spindles
-  (on q3 and on q4 - q3).
+  ``c_ss`` (q4 - q3).  Optional smooth Coulomb friction ``T_c tanh(omega / omega_c)`` in the
+  spindles (on q3 and on q4 - q3).
+* **Shift law** (`ModelOptions.shift_law`, `empact.shift_law`).  The belt resists a ratio change
+  by creep (Carbone et al. 2007, or Ide et al.): a generalised force ``Lambda`` on the ratio,
+  acting on the sheaves as ``-Lambda dr_g/dq5`` and ``-Lambda dr_g/dq6`` (virtual work), sized
+  so that the actuator forces stand in the thrust ratio the law gives for the current ratio
+  rate, ``kappa = kappa*(tau, r_g) exp(xi)``.  Its static part ``F_s (kappa* - kappa_geo)``
+  is how the transmitted torque (through ``tau = mu / mu_max``) pushes the ratio; its rate
+  part is a damper ``~ F_s / (omega_p K_c)`` on the ratio: this couples the actuation to the
+  driveline.  Its power ``Lambda dr_g/dt`` is part of ``P_diss``.  Shift law ``"shafai"``
+  instead puts ``c_shafai / |omega|`` on each sheave with the *current* pulley speed
+  (primary ``omega_p``, secondary ``omega_s``) and no torque path.
 * **Traction** (eqs. 1-2): ``nu = 1 - omega_s / (r_g omega_p)``, ``T_b = 2 mu(nu, r_g) F_s R_s /
   cos(beta)`` on the secondary and ``-r_g T_b`` on the primary; ``mu`` is the magic formula of
   `empact.params.TractionParams`.  The slip power ``T_b (r_g omega_p - omega_s)`` is dissipated.
@@ -73,14 +85,19 @@ Construction choices (documented, not hidden):
   is non-collocated across the worm mode (10.7 Hz).
 
 What the linear models of Sec. 2 leave out, and this one contains: the geometric stiffness of
-the belt preload (``N d^2 L / dq^2``, ``d^2 L/dR_p^2 = 2 / (a cos phi)``), which turns the
-actuation's rigid-body (shift) mode into a slow oscillation of a few Hz at 10 kN, and moves the
-other actuation modes by well under 1 %; the dependence of the radii on the belt stretch; and
-the coupling of actuation and driveline through Shafai damping and through the traction torque.
+the belt preload (``N d^2 L / dq^2``, ``d^2 L/dR_p^2 = 2 / (a cos phi)``), which with Shafai's
+law turns the actuation's rigid-body (shift) mode into a slow oscillation of a few Hz at
+10 kN and moves the other actuation modes by well under 1 %; the dependence of the radii on
+the belt stretch; the shift law's static force (the torque's push on the ratio); and the
+coupling of actuation and driveline through the shift law and the traction torque.  With the
+creep law linearised as its pulley damping (`empact.linear.actuation`, ``pulley_damping=
+"creep"``) the linear actuation model has the nonlinear model's actuation eigenvalues to
+within about 1 %.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, replace
+import os
+from dataclasses import dataclass, field, fields
 from functools import lru_cache
 from typing import Literal
 
@@ -92,11 +109,17 @@ from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
 from ..linear.actuation import actuation_model
 from ..params import DAMPING_LEVELS, Params
+from ..shift_law import SHIFT_LAWS, g_beta
+from ..thrust_ratio import TabulatedThrustRatio, load_thrust_ratio
 from . import _kernel as K
 
 control = lazy_module("control")
 
-__all__ = ["ModelOptions", "EmpactModel", "nonlinear_model", "rhs", "BASE_STATES", "OUTPUTS",
+#: sheave kinematics: the machine, and the paper's Sec. 2.1 rows as published
+KINEMATICS = ("equal-translation", "paper-sec2.1")
+
+__all__ = ["KINEMATICS", "ModelOptions", "EmpactModel", "nonlinear_model", "rhs", "BASE_STATES",
+           "OUTPUTS",
            "OUTPUT_UNITS", "STATE_UNITS"]
 
 BASE_STATES = ("theta_mp", "theta_ms", "theta_sp", "theta_ss", "x_p", "x_s",
@@ -109,12 +132,26 @@ STATE_UNITS = {"theta_mp": "rad", "theta_ms": "rad", "theta_sp": "rad", "theta_s
                "twist_tc": "rad", "twist_ds": "rad", "omega_d": "rad/s", "omega_p": "rad/s",
                "omega_s": "rad/s", "omega_l": "rad/s", "s_b": "m", "z_d": "N m", "z_l": "N m",
                "z_r": "N m"}
-OUTPUT_UNITS = {"r_g": "-", "nu": "-", "theta_mp": "rad", "theta_ms": "rad", "F_p": "N",
-                "F_s": "N", "omega_p": "rad/s", "omega_s": "rad/s", "omega_d": "rad/s",
-                "omega_l": "rad/s", "omega_mp": "rad/s", "omega_ms": "rad/s", "T_b": "N m",
-                "mu": "-", "R_p": "m", "R_s": "m", "phi": "rad", "x_p": "m", "x_s": "m",
-                "belt_elongation": "m", "T_mp_act": "N m", "T_d_act": "N m", "T_l_act": "N m",
-                "E": "J", "P_in": "W", "P_diss": "W"}
+OUTPUT_UNITS = {"r_g": "-", "nu": "-", "nu_r": "-", "theta_mp": "rad", "theta_ms": "rad",
+                "F_p": "N", "F_s": "N", "F_p_act": "N", "F_s_act": "N", "omega_p": "rad/s",
+                "omega_s": "rad/s", "omega_d": "rad/s", "omega_l": "rad/s",
+                "omega_mp": "rad/s", "omega_ms": "rad/s", "T_b": "N m", "mu": "-", "tau": "-",
+                "kappa": "-", "kappa_eq": "-", "r_g_dot": "1/s", "F_creep": "N", "R_p": "m",
+                "R_s": "m", "phi": "rad", "x_p": "m", "x_s": "m", "belt_elongation": "m",
+                "T_mp_act": "N m", "T_d_act": "N m", "T_l_act": "N m", "E": "J", "P_in": "W",
+                "P_diss": "W", "P_creep": "W"}
+#: what each output is (`empact.nonlinear.model` docs, JSON exports)
+OUTPUT_DESCRIPTIONS = {
+    "nu": "slip of eq. 2 on the current radii, 1 - omega_s / (r_g omega_p)",
+    "nu_r": "slip at the reference ratio, 1 - omega_s / (r_ref omega_p) (eq. 3, Fig. 12)",
+    "F_p": "primary axial force of the belt element", "F_s": "secondary clamping force of "
+    "the belt element (eq. 1)", "F_p_act": "primary thrust-bearing force (actuator)",
+    "F_s_act": "secondary thrust-bearing force (actuator)",
+    "tau": "torque ratio T_b cos(beta) / (2 mu_max F_s R_s)",
+    "kappa": "thrust ratio the shift law implies for the current ratio rate",
+    "kappa_eq": "equilibrium thrust ratio kappa*(tau, r_g)", "r_g_dot": "ratio rate",
+    "F_creep": "creep force on the primary sheave (opening)",
+    "P_creep": "power absorbed by the creep resistance (part of P_diss)"}
 INPUT_UNITS = {"T_mp": "N m", "r_g_ref": "-", "T_ms": "N m", "T_d": "N m",
                "omega_d_ref": "rad/s", "T_l": "N m", "omega_l_ref": "rad/s"}
 
@@ -144,13 +181,30 @@ class ModelOptions:
     ratio_bandwidth : float
         Ratio-loop natural frequency [Hz] (damping ratio 0.7, integral at a quarter of it),
         gains from the shift-mode inertia at r_g = 1 referred to the primary servo.
-    kinematics : {"actuation", "equal-translation"}
-        Sense of the secondary sheave coordinate q6.  ``"actuation"`` (default): ``R_s = R_max
-        - q6 / tan(beta)``, the convention of `empact.linear.actuation` whose stiffnesses are
-        calibrated to Table 1.  ``"equal-translation"``: ``R_s = R_min + q6 / tan(beta)``, so
-        that with the secondary servo held a primary-servo rotation translates both sheaves
-        equally (the premise of Sec. 2.3); with the calibrated stiffnesses its two lowest
-        actuation modes are lower than Table 1 (about 5.7 and 15.9 Hz at r_g = 1).
+    kinematics : {"equal-translation", "paper-sec2.1"}
+        Sheave kinematics.  ``"equal-translation"`` (default, the Empact as built, Secs. 1 and
+        2.3): ``R_s = R_min + q6 / tan(beta)``; with the secondary servo held a primary-servo
+        rotation translates both sheaves equally (the primary servo shifts, the secondary
+        clamps); stiffnesses from ``[actuation]``.  ``"paper-sec2.1"``: the paper's Sec. 2.1
+        rows as published, ``R_s = R_max - q6 / tan(beta)``, with the stiffness overlay
+        ``[paper_sec21]`` calibrated to Table 1 for them (a named variant, for reproducing the
+        paper, not the machine).
+    shift_law : {"carbone", "ide", "shafai"}
+        The sheaves' axial resistance to a ratio change (`empact.shift_law`): creep-mode
+        shifting after Carbone et al. 2007 (default) or Ide et al., with the equilibrium
+        thrust ratio of `empact.thrust_ratio`; or Shafai's ``c / |omega|`` on each sheave at
+        the damping level's ``c_shafai`` with the geometric thrust ratio (no path from the
+        load to the ratio: the first model's choice).  The creep law replaces Shafai's term:
+        both are a sheave resistance that falls with speed, and keeping both would count the
+        belt's resistance twice.
+    thrust_ratio : TabulatedThrustRatio, optional
+        A measured map ``kappa*(tau, r_g)`` (`empact.thrust_ratio.load_thrust_ratio`);
+        default the analytic one of ``[thrust_ratio]``.
+    reference_ratio : float, optional
+        Ratio of the output ``nu_r = 1 - omega_s / (r_ref omega_p)`` (the slip of eq. 3 and
+        Fig. 12, at a fixed operating ratio); default ``params.operating.r_g``.  The
+        linearisation (`empact.nonlinear.linearization.linearize`) always refers ``nu_r`` to
+        the trimmed ratio.
     """
 
     damping: Literal["none", "moderate", "large"] = "moderate"
@@ -164,11 +218,22 @@ class ModelOptions:
     drive_bandwidth: float = 5.0
     load_bandwidth: float = 5.0
     ratio_bandwidth: float = 2.0
-    kinematics: Literal["actuation", "equal-translation"] = "actuation"
+    kinematics: Literal["equal-translation", "paper-sec2.1"] = "equal-translation"
+    shift_law: Literal["carbone", "ide", "shafai"] = "carbone"
+    thrust_ratio: TabulatedThrustRatio | None = None
+    reference_ratio: float | None = None
 
     def __post_init__(self) -> None:
         check_choice("damping", self.damping, DAMPING_LEVELS)
-        check_choice("kinematics", self.kinematics, ("actuation", "equal-translation"))
+        check_choice("kinematics", self.kinematics, KINEMATICS)
+        check_choice("shift_law", self.shift_law, SHIFT_LAWS)
+        if self.thrust_ratio is not None and not isinstance(self.thrust_ratio,
+                                                            TabulatedThrustRatio):
+            raise ParameterError(f"thrust_ratio = {self.thrust_ratio!r}: must be a "
+                                 "TabulatedThrustRatio (empact.thrust_ratio.load_thrust_ratio)")
+        if self.reference_ratio is not None:
+            object.__setattr__(self, "reference_ratio", check_number(
+                "reference_ratio", self.reference_ratio, 0.0, lo_open=True))
         check_choice("belt", self.belt, ("traction", "locked"))
         check_choice("drive", self.drive, ("torque", "speed"))
         check_choice("load", self.load, ("torque", "speed"))
@@ -189,6 +254,9 @@ class ModelOptions:
             if key not in allowed:
                 raise ParameterError(f"unknown model option {key!r} (allowed: "
                                      f"{', '.join(allowed)})")
+        values = dict(values)
+        if isinstance(values.get("thrust_ratio"), (str, os.PathLike)):
+            values["thrust_ratio"] = load_thrust_ratio(values["thrust_ratio"])
         return cls(**values)
 
 
@@ -255,11 +323,11 @@ class EmpactModel:
         if x[15] == 0.0:
             raise ValueError("omega_p = 0: the slip nu (eq. 2) is undefined at a standing "
                              "primary pulley")
-        if x[16] == 0.0 and self.p[K.P_CSH] != 0.0:
+        if x[16] == 0.0 and self.p[K.P_CSH] != 0.0 and self.p[K.P_LAW] == K.LAW_SHAFAI:
             raise ValueError("omega_s = 0: Shafai damping c_shafai / |omega_s| is undefined")
         v = self.params.variator
         R_p = v.R_min + x[4] / self.p[K.P_TB]
-        R_s = v.R_max - x[5] / self.p[K.P_TB]
+        R_s = self.p[K.P_RS0] - self.p[K.P_SIG] * x[5] / self.p[K.P_TB]
         if not (abs(R_p - R_s) < v.a and R_p > 0 and R_s > 0):
             raise ValueError(f"x_p = {x[4]:g} m, x_s = {x[5]:g} m: radii R_p = {R_p:g} m, "
                              f"R_s = {R_s:g} m have no belt geometry (need |R_p - R_s| < a = "
@@ -315,20 +383,29 @@ class EmpactModel:
                              states=list(self.states), name=name)
 
 
+def stiffnesses(params: Params, kinematics: str) -> tuple[float, float, float, float, float]:
+    """``(k_w, k_c, k_belt, k_tp, k_ts)`` of the actuation for `kinematics`: the machine's
+    (``[actuation]``) or the Sec. 2.1 overlay (``[paper_sec21]``)."""
+    s = params.actuation if kinematics == "equal-translation" else params.paper_sec21
+    return s.k_w, s.k_c, s.k_belt, s.k_tp, s.k_ts
+
+
 def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
     v, a, d = params.variator, params.actuation, params.driveline
     lvl = params.damping.level(o.damping)
-    t = params.traction
-    p = np.zeros(K.NP)
+    t, sh, kr = params.traction, params.shift, params.thrust_ratio
+    table = o.thrust_ratio.encode() if o.thrust_ratio is not None else np.zeros(0)
+    p = np.zeros(K.NP + len(table))
+    p[K.NP:] = table
     p[K.P_A], p[K.P_TB], p[K.P_COSB] = v.a, np.tan(v.beta), np.cos(v.beta)
     p[K.P_RMIN], p[K.P_RMAX], p[K.P_L0] = v.R_min, v.R_max, v.L_belt
-    sig = 1.0 if o.kinematics == "actuation" else -1.0
+    sig = sheave_sense(o.kinematics)
     p[K.P_SIG], p[K.P_RS0] = sig, (v.R_max if sig > 0 else v.R_min)
     p[K.P_JMP], p[K.P_JMS], p[K.P_JSP], p[K.P_JSS] = a.J_mp, a.J_ms, a.J_sp, a.J_ss
     p[K.P_MP], p[K.P_MS] = a.m_p, a.m_s
     p[K.P_IW], p[K.P_IC], p[K.P_IE], p[K.P_S] = a.i_w, a.i_c, a.i_e, a.s
-    p[K.P_KW], p[K.P_KC], p[K.P_KBELT], p[K.P_KTP], p[K.P_KTS] = \
-        a.k_w, a.k_c, a.k_belt, a.k_tp, a.k_ts
+    p[K.P_KW], p[K.P_KC], p[K.P_KBELT], p[K.P_KTP], p[K.P_KTS] = stiffnesses(params,
+                                                                            o.kinematics)
     p[K.P_ALPHA], p[K.P_CMP], p[K.P_CMS] = lvl.alpha, lvl.c_mp, lvl.c_ms
     p[K.P_CSP], p[K.P_CSS], p[K.P_CSH] = lvl.c_sp, lvl.c_ss, lvl.c_shafai
     p[K.P_TCSP], p[K.P_TCSS], p[K.P_WC] = o.coulomb_sp, o.coulomb_ss, o.coulomb_omega
@@ -344,19 +421,31 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
         w = 2 * np.pi * f
         p[kp], p[ki] = J * w, J * w * w / 4
     w = 2 * np.pi * o.ratio_bandwidth
-    J = shift_inertia(params, sig)
+    J = shift_inertia(params, o.kinematics)
     p[K.P_RKP], p[K.P_RKD], p[K.P_RKI] = J * w * w, 2 * 0.7 * w * J, J * w**3 / 4
+    p[K.P_LAW] = {"shafai": K.LAW_SHAFAI, "carbone": K.LAW_CARBONE, "ide": K.LAW_IDE}[
+        o.shift_law]
+    p[K.P_DREF], p[K.P_FREF], p[K.P_KD] = sh.D_ref, sh.F_ref, sh.k_D
+    p[K.P_A1], p[K.P_A2], p[K.P_GAIN] = sh.a1, sh.a2, sh.gain
+    p[K.P_W0], p[K.P_XSAT], p[K.P_GBETA] = sh.omega_0, sh.xi_sat, g_beta(v.beta)
+    p[K.P_KP0], p[K.P_KB0], p[K.P_KB1] = kr.p0, kr.b0, kr.b1
+    p[K.P_RREF] = params.operating.r_g if o.reference_ratio is None else o.reference_ratio
+    p[K.P_TAB] = 1.0 if len(table) else 0.0
     return p
 
 
-def shift_inertia(params: Params, sense: float = 1.0, r_g: float = 1.0) -> float:
+def sheave_sense(kinematics: str) -> float:
+    """Sense of the secondary sheave coordinate q6: -1 for ``"equal-translation"`` (q6 > 0
+    closes the secondary, ``R_s = R_min + q6 / tan(beta)``), +1 for ``"paper-sec2.1"`` (q6 > 0
+    opens it, ``R_s = R_max - q6 / tan(beta)``)."""
+    return -1.0 if kinematics == "equal-translation" else 1.0
+
+
+def shift_inertia(params: Params, kinematics: str = "equal-translation",
+                  r_g: float = 1.0) -> float:
     """Inertia of the actuation's shift (rigid-body) motion referred to the primary servo
-    [kg m^2]: ``v^T M v`` with the rigid-body mode ``v`` scaled to ``q1 = 1``; `sense` is
-    +1 for the ``"actuation"`` kinematics and -1 for ``"equal-translation"``."""
-    lm = actuation_model(params, r_g)
-    rows = lm.spring_rows.copy()
-    rows[2, 5] *= sense
-    lm = replace(lm, spring_rows=rows)
+    [kg m^2]: ``v^T M v`` with the rigid-body mode ``v`` scaled to ``q1 = 1``."""
+    lm = actuation_model(params, r_g, kinematics=kinematics)
     v = lm.modes().shapes[:, 0]
     v = v / v[0]
     return float(v @ lm.M @ v)

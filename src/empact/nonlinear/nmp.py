@@ -6,14 +6,14 @@ Two parts:
   change for an equal translation ``delta`` of both sheaves (primary closing, secondary
   opening), exact from eq. 6 and to first order ``4 phi delta / tan(beta)``: negative below
   r_g = 1 (the belt slackens, F_s falls, the slip rises), positive above.
-* **Zeros.**  The finite zeros of the T_mp -> nu channel of the exactly linearised model
-  (`empact.nonlinear.linearization`) over the ratio; the paper states a right-half-plane zero at r_g = 0.5
-  and none at r_g = 2.  `nmp_analysis` reports what the model gives, for either sheave
-  kinematics (`empact.nonlinear.model.ModelOptions.kinematics`) and for either slip signal:
-  ``slip="eq2"``, the slip of eq. 2 on the current radii, or ``slip="speed"``, the slip a
-  speed measurement gives at the operating ratio, ``1 - omega_s / (r_g0 omega_p)``, whose
-  linearisation is ``nu~ - (1 - nu0) r_g~ / r_g0`` (eq. 2 without its direct dependence on the
-  ratio; the paper's Fig. 12 slip is linearised at constant r_g in the same way).
+* **Zeros.**  The finite zeros of the T_mp -> slip channel of the exactly linearised model
+  (`empact.nonlinear.linearization`) over the ratio, for either slip signal (model notes
+  Sec. 6): ``slip="nu"``, the slip of eq. 2 on the current radii, or ``slip="nu_r"``, the slip
+  at the operating ratio, ``1 - omega_s / (r_g0 omega_p)``, whose linearisation is ``nu~ -
+  (1 - nu0) r_g~ / r_g0`` (eq. 2 without its direct dependence on the ratio: eq. 3 and the
+  paper's Fig. 12 slip).  The paper states a right-half-plane zero at r_g = 0.5 and none at
+  r_g = 2; `nmp_analysis` reports what the model gives, for either sheave kinematics
+  (`empact.nonlinear.model.ModelOptions.kinematics`).
 
 A zero counts as right-half-plane when its real part exceeds 1e-3 of its magnitude (damping
 ratio below -0.001): lightly damped zeros on the imaginary axis stay out of the count.
@@ -27,14 +27,15 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validate import check_choice, check_number
 from ..geometry import belt_length, check_ratio, radii, wrap_angle
-from ..lti import channel_zeros, statespace
+from ..lti import channel_zeros
 from ..params import OperatingPoint, Params
 from .linearization import plant
 from .model import nonlinear_model
 
 __all__ = ["BeltLengthChange", "belt_length_change", "NmpResult", "nmp_analysis", "SLIPS"]
 
-SLIPS = ("eq2", "speed")
+#: the two slip signals (plant outputs)
+SLIPS = ("nu", "nu_r")
 
 
 @dataclass(frozen=True)
@@ -87,7 +88,7 @@ class NmpResult:
     n_rhp : array of int, shape (n_r,)
     n_rhp_real : array of int, shape (n_r,)
         Real right-half-plane zeros (imaginary part below 1e-6 of the magnitude).
-    slip : "eq2" or "speed" (see the module docstring)
+    slip : "nu" or "nu_r" (see the module docstring)
     geometry : BeltLengthChange
     operating : dict
         nu, F_s [N], omega_p [rad/s], model options.
@@ -115,7 +116,7 @@ class NmpResult:
 
 def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
                  base: OperatingPoint | None = None, f_max: float = 200.0,
-                 slip: str = "eq2", **options) -> NmpResult:
+                 slip: str = "nu", **options) -> NmpResult:
     """Zeros of the exactly linearised T_mp -> nu transfer over `ratios`.
 
     Parameters
@@ -129,11 +130,11 @@ def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
         replaced by each of `ratios`.
     f_max : float
         Keep zeros below this frequency [Hz], > 0.
-    slip : {"eq2", "speed"}
+    slip : {"nu", "nu_r"}
         The slip signal (see the module docstring).
     **options
         `empact.nonlinear.model.ModelOptions` (default: moderate damping, torque-controlled
-        drive and load, ``kinematics="actuation"``).
+        drive and load, the machine's kinematics and shift law).
     """
     check_choice("slip", slip, SLIPS)
     f_max = check_number("f_max", f_max, 0.0, lo_open=True, unit="Hz")
@@ -142,12 +143,8 @@ def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
     model = nonlinear_model(params, **options)
     zs, rhp = [], []
     for rg in r:
-        sys, op = plant(params, base.replace(r_g=float(rg)), model=model)
-        if slip == "speed":  # nu~ - (1 - nu0) r_g~ / r_g0: eq. 2 at the operating ratio
-            w = np.array([-(1 - op.nu) / op.r_g, 1.0])
-            sys = statespace(sys.A, sys.B, w @ sys.C, w @ sys.D, inputs=sys.input_labels,
-                             outputs=["nu"], states=sys.state_labels)
-        z = channel_zeros(sys, "T_mp", "nu", max_abs=1e7)
+        sys, op = plant(params, base.replace(r_g=float(rg)), model=model, disturbance=False)
+        z = channel_zeros(sys, "T_mp", slip, max_abs=1e7)
         z = z[np.abs(z) < 2 * np.pi * f_max]
         zs.append(z)
         rhp.append(z[(z.real > 1e-3 * np.abs(z)) & (np.abs(z) > 1e-3)])

@@ -23,6 +23,9 @@ piecewise-linear input signals.
     r_g_ref = [[0.2, 0.43], [1.2, 2.25]]
     T_l = [[1.5, 30.0], [1.5, 60.0]]
 
+    [offsets]                 # [[t, value], ...] added to the input's trimmed value
+    T_ms = [[0.3, 0.0], [0.3, 0.5]]
+
     [solver]                  # optional
     rtol = 1e-4
     max_step = 0.01           # [s]
@@ -30,15 +33,18 @@ piecewise-linear input signals.
 
 Input names are the model's (``T_mp`` or ``r_g_ref``, ``T_ms``, ``T_d`` or ``omega_d_ref``,
 ``T_l`` or ``omega_l_ref``); ``F_s_ref`` [N] may replace ``T_ms`` and is mapped to the static
-servo torque ``T_ms = i_e s F_s_ref / i_c``.  A signal holds its first value before its first
-point and its last value after its last point; inputs not given hold their trimmed values.
+servo torque ``T_ms = i_e s F_s_ref / i_c``.  An ``[offsets]`` signal is added to the input's
+trimmed value (steps of a servo torque around its holding torque, which depends on the
+parameters); an input is given absolutely or as an offset, not both.  A signal holds its first
+value before its first point and its last value after its last point; inputs not given hold
+their trimmed values.
 The shipped examples are in ``empact/data/scenarios``.
 """
 from __future__ import annotations
 
 import os
 import tomllib
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
@@ -56,7 +62,8 @@ __all__ = ["Scenario", "load_scenario", "scenario_from_dict", "list_examples", "
 
 _SCENARIO_KEYS = {"scenario": {"name", "description", "duration", "sample_rate"},
                   "model": None, "initial": {"r_g", "omega_p", "nu", "F_s", "T_l"},
-                  "inputs": None, "solver": {"rtol", "max_step", "omega_min", "max_steps"}}
+                  "inputs": None, "offsets": None,
+                  "solver": {"rtol", "max_step", "omega_min", "max_steps"}}
 
 
 @dataclass(frozen=True)
@@ -75,6 +82,8 @@ class Scenario:
         The trim request (keys r_g, omega_p and two of nu, F_s, T_l; SI).
     inputs : dict name -> array, shape (k, 2)
         Piecewise-linear signals ``[[t, value], ...]``.
+    offsets : dict name -> array, shape (k, 2)
+        Piecewise-linear signals added to the input's trimmed value.
     rtol : float
         Relative tolerance of the integrator.
     max_step : float
@@ -92,6 +101,7 @@ class Scenario:
     options: ModelOptions
     initial: Mapping[str, float]
     inputs: Mapping[str, NDArray[np.float64]]
+    offsets: Mapping[str, NDArray[np.float64]] = field(default_factory=dict)
     rtol: float = 1e-4
     max_step: float = 0.01
     omega_min: float = 1.0
@@ -136,8 +146,12 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
                             unit="s", where=src)
     rate = check_number("scenario.sample_rate", head.get("sample_rate", 1000.0), 0.0, 1e6,
                         lo_open=True, unit="Hz", where=src)
+    model = dict(data.get("model", {}))
+    table = model.get("thrust_ratio")
+    if isinstance(table, str) and not Path(table).is_absolute() and Path(src).is_file():
+        model["thrust_ratio"] = str(Path(src).parent / table)  # relative to the scenario
     try:
-        options = ModelOptions.from_mapping(dict(data.get("model", {})))
+        options = ModelOptions.from_mapping(model)
     except ParameterError as exc:
         raise ParameterError(f"{src}: [model] {exc}") from None
     initial = dict(data.get("initial", {}))
@@ -157,6 +171,15 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
         inputs[name] = arr
     if "F_s_ref" in inputs and "T_ms" in inputs:
         raise ParameterError(f"{src}: give inputs.T_ms or inputs.F_s_ref, not both")
+    offsets: dict[str, NDArray[np.float64]] = {}
+    for name, pts in data.get("offsets", {}).items():
+        if name not in model_inputs:
+            raise ParameterError(f"{src}: unknown offset input {name!r} for this model "
+                                 f"(allowed: {', '.join(model_inputs)})")
+        if name in inputs or (name == "T_ms" and "F_s_ref" in inputs):
+            raise ParameterError(f"{src}: input {name!r} given in [inputs] and [offsets]; "
+                                 "give one")
+        offsets[name] = _signal(f"{src}: offsets.{name}", pts, duration)
     solver = data.get("solver", {})
     rtol = check_number("solver.rtol", solver.get("rtol", 1e-4), 1e-12, 0.1, lo_open=True,
                         where=src)
@@ -169,7 +192,8 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
     return Scenario(name=str(head.get("name", Path(src).stem)),
                     description=str(head.get("description", "")), duration=duration,
                     sample_rate=rate, options=options, initial=initial, inputs=inputs,
-                    rtol=rtol, max_step=max_step, omega_min=omega_min, max_steps=max_steps)
+                    offsets=offsets, rtol=rtol, max_step=max_step, omega_min=omega_min,
+                    max_steps=max_steps)
 
 
 def input_names(options: ModelOptions) -> tuple[str, ...]:

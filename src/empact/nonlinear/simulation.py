@@ -32,7 +32,8 @@ from .model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinea
 from .scenario import Scenario
 from .equilibrium import TrimResult, trim
 
-__all__ = ["SimulationResult", "simulate", "run_scenario", "scenario_model", "csv_text",
+__all__ = ["SimulationResult", "simulate", "run_scenario", "scenario_model", "scenario_signals",
+           "csv_text",
            "write_csv", "state_tolerances"]
 
 
@@ -226,18 +227,29 @@ def scenario_model(scenario: Scenario, params: Params) -> tuple[EmpactModel, Tri
     return model, trim(model, r_g, omega_p, **req)
 
 
+def scenario_signals(scenario: Scenario, model: EmpactModel,
+                     op: TrimResult) -> dict[str, NDArray[np.float64]]:
+    """The scenario's input signals for `simulate`: ``F_s_ref`` mapped to the static servo
+    torque ``T_ms = i_e s F_s_ref / i_c`` (with the sense of q6), offsets added to the
+    trimmed inputs."""
+    signals = dict(scenario.inputs)
+    if "F_s_ref" in signals:
+        a = model.params.actuation
+        arr = np.array(signals.pop("F_s_ref"), float)
+        arr[:, 1] = a.i_e * a.s * model.p[K.P_SIG] * arr[:, 1] / a.i_c
+        signals["T_ms"] = arr
+    for name, arr in scenario.offsets.items():
+        arr = np.array(arr, float)
+        arr[:, 1] += op.u[model.inputs.index(name)]
+        signals[name] = arr
+    return signals
+
+
 def run_scenario(scenario: Scenario, params: Params, *, progress: bool = False) -> SimulationResult:
     """Trim the scenario's initial point and simulate it (see `simulate`)."""
     model, op = scenario_model(scenario, params)
-    signals = dict(scenario.inputs)
-    if "F_s_ref" in signals:
-        a = params.actuation
-        sig = model.p[K.P_SIG]
-        arr = np.array(signals.pop("F_s_ref"), float)
-        arr[:, 1] = a.i_e * a.s * sig * arr[:, 1] / a.i_c
-        signals["T_ms"] = arr
-    return simulate(model, op.x, signals, scenario.duration, u0=op.u,
-                    sample_rate=scenario.sample_rate, rtol=scenario.rtol,
+    return simulate(model, op.x, scenario_signals(scenario, model, op), scenario.duration,
+                    u0=op.u, sample_rate=scenario.sample_rate, rtol=scenario.rtol,
                     max_step=scenario.max_step, omega_min=scenario.omega_min,
                     max_steps=scenario.max_steps, progress=progress, name=scenario.name)
 

@@ -68,35 +68,37 @@ def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None 
 
 @styled
 def plot_identified_plant(results, f_hz: np.ndarray, title: str = "", axes: Any = None) -> Plot:
-    """Fig. 2: |(T_mp, T_ms) -> (r_g, nu)| of identified (solid) and exact (dashed) models.
+    """Fig. 2: |(T_mp, T_ms) -> (r_g, nu, nu_r)| of identified (solid) and exact (dashed)
+    models, one row per output.
 
     Parameters
     ----------
     results : sequence of `empact.experiments.plant_id.PlantIdentification`
     f_hz : frequencies [Hz]
     title : figure title
-    axes : shape (2, 2); default a new figure
+    axes : shape (n_outputs, 2); default a new figure
     """
-    fig, ax = new_axes(axes, 2, 2, size=(10, 6.5), sharex=True)
+    names_in = tuple(results[0].realization.inputs)
+    names_out = tuple(results[0].realization.outputs)
+    n_out = len(names_out)
+    fig, ax = new_axes(axes, n_out, 2, size=(10, 2.6 * n_out + 1.3), sharex=True)
     w = 2 * np.pi * np.asarray(f_hz)
     artists = []
     for k, res in enumerate(results):
         color = f"C{k}"
         for sys, ls, kind in ((res.realization.sys, "-", "identified"), (res.exact, "--", "exact")):
             H = system_response(sys, w).H
-            for i in range(2):
+            for i in range(n_out):
                 for j in range(2):
                     artists += ax[i, j].loglog(
                         f_hz, np.abs(H[i, j]), ls=ls, color=color,
                         label=f"$r_g$ = {res.r_g:g}, {kind}"
                         + (f" (order {res.realization.order})" if kind == "identified" else ""))
-    names_in, names_out = ("T_mp", "T_ms"), ("r_g", "nu")
-    for i in range(2):
+    for i in range(n_out):
         for j in range(2):
             ax[i, j].set_title(f"{symbol(names_in[j])} $\\rightarrow$ {symbol(names_out[i])}")
             ax[i, j].grid(True, which="both")
-    ax[0, 0].set_ylabel(r"$|r_g / T|$ [1/(N m)]")
-    ax[1, 0].set_ylabel(r"$|\nu / T|$ [1/(N m)]")
+        ax[i, 0].set_ylabel(f"$|${symbol(names_out[i])}$ / T|$ [1/(N m)]")
     for a in ax[-1]:
         a.set_xlabel("frequency [Hz]")
     ax[0, 0].legend(fontsize=6, loc="best")

@@ -61,7 +61,8 @@ def plot_nmp(result: NmpResult, title: str = "", axes: Any = None) -> Plot:
     ax.set_xlabel("real part of zero / 2π [Hz] (symmetric log scale)")
     ax.set_ylabel("imaginary part of zero / 2π [Hz]")
     ax.set_ylim(-0.05 * top, 1.15 * top)
-    ax.set_title(r"zeros of $T_\mathrm{mp} \rightarrow \nu$ (filled: right half-plane)")
+    ax.set_title(rf"zeros of $T_\mathrm{{mp}} \rightarrow$ {symbol(result.slip)} (filled: right "
+                 "half-plane)")
     ax.legend(fontsize=6, ncol=2, loc="upper left")
     if title:
         fig.suptitle(title)
@@ -113,12 +114,14 @@ def plot_simulation(result: SimulationResult,
 @styled
 def plot_plant_magnitude(responses: Sequence[FrequencyResponse], title: str = "",
                          axes: Any = None) -> Plot:
-    """Magnitudes of (T_mp, T_ms) -> (r_g, nu), one line style per response (Fig. 2).
+    """Magnitudes of the plant (e.g. T_mp, T_ms, T_l -> r_g, nu, nu_r), one line style per
+    response (Fig. 2).
 
     `axes`: shape (n_out, n_in) of the responses; default a new figure.
     """
     n_out, n_in = len(responses[0].outputs), len(responses[0].inputs)
-    fig, axs = new_axes(axes, n_out, n_in, size=(10, 6), sharex=True)
+    fig, axs = new_axes(axes, n_out, n_in, size=(3.6 * n_in + 1.2, 2.3 * n_out + 1.0),
+                        sharex=True)
     artists = []
     for k, resp in enumerate(responses):
         for i, out in enumerate(resp.outputs):

@@ -2,6 +2,8 @@
 simulation, and the exact (T_mp, T_ms) -> (r_g, nu) plant (the exact counterpart of Fig. 2)."""
 from __future__ import annotations
 
+import numpy as np
+
 from ..nonlinear.simulation import write_csv
 from ..plotting import plot_nmp, plot_plant_magnitude, plot_simulation
 from ..reproduction import nonlinear as rep
@@ -15,32 +17,36 @@ def nmp(ctx: Context, res: rep.NmpSection) -> str:
     r, g = res.result, res.result.geometry
     rows = [[rg, 1e3 * g.delta_x[k], g.dL_exact[k] / g.delta, rep.hz_text(r.rhp_zeros[k])]
             for k, rg in enumerate(r.r_g)]
-    combo_rows = [[kin, sl] + [rep.hz_text(a.rhp_zeros[k]) for k in ks]
+    combo_rows = [["machine" if kin == rep.MACHINE else "Sec. 2.1 rows", sl]
+                  + [rep.hz_text(rep.real_rhp(a.rhp_zeros[k])) for k in ks]
+                  + [rep.hz_text(a.rhp_zeros[k][~np.isin(a.rhp_zeros[k],
+                                                         rep.real_rhp(a.rhp_zeros[k]))
+                                                & (a.rhp_zeros[k].imag > 0)]) for k in ks]
                   for kin, sl, a, ks in res.combos]
-    eq2_pattern = [kin for kin, sl, a, ks in res.combos
-                   if sl == "eq2" and a.n_rhp[ks[0]] > 0 and a.n_rhp[ks[-1]] == 0]
     op = ctx.params.operating
-    title = r"Sec. 2.3: belt length and zeros of $T_\mathrm{mp} \rightarrow \nu$"
+    title = r"Sec. 2.3 (machine): belt length and zeros of $T_\mathrm{mp} \rightarrow \nu$"
     return (ctx.figure(plot_nmp(r, title=title),
-                       "nmp_zeros", "Sec. 2.3: Delta_x and belt-length change over the ratio "
-                       "(left); zeros of T_mp -> nu (right, filled: right half-plane)")
+                       "nmp_zeros", "Sec. 2.3 on the machine: Delta_x and belt-length change "
+                       "over the ratio (left); zeros of T_mp -> nu, eq. 2's slip (right, "
+                       "filled: right half-plane)")
             + ctx.table("nmp_zeros", ["r_g", "Delta_x [mm]", "dL/delta exact [-]",
                                       "RHP zeros of T_mp -> nu [Hz]"], rows,
-                        "Sec. 2.3: geometry and right-half-plane zeros")
+                        "Sec. 2.3 on the machine: geometry and right-half-plane zeros")
             + ctx.claims(res.claims)
-            + f"<p>Zeros of the exactly linearised T_mp -> nu channel at nu = {op.nu:g}, F_s = "
-              f"{op.F_s:g} N, omega_p = {op.omega_p:g} rad/s (moderate damping, "
-              "torque-controlled drive and load). The table below separates the two choices "
-              "the paper leaves open: the sheave kinematics (Sec. 2.1 'actuation', or Sec. 1 / "
-              "2.3 'equal-translation', where the primary servo alone translates both sheaves "
-              "equally) and the slip signal (eq. 2 on the current radii, or the speed slip "
-              "1 - omega_s / (r_g0 omega_p) at the operating ratio). The equal-translation "
-              "kinematics cannot give Sec. 2.1's mode shapes (README, 'Paper "
-              "inconsistencies'). With eq. 2's slip, the slip the model outputs, the pattern "
-              f"appears under {' and '.join(eq2_pattern) or 'neither kinematics'}.</p>"
-            + ctx.table("nmp_conventions", ["kinematics", "slip"]
-                        + [f"RHP zeros at r_g = {x:g} [Hz]" for x in rep.RATIOS], combo_rows,
-                        "Right-half-plane zeros of T_mp -> nu by kinematics and slip signal"))
+            + f"<p>Zeros of the exactly linearised T_mp -> slip channel at nu = {op.nu:g}, "
+              f"F_s = {op.F_s:g} N, omega_p = {op.omega_p:g} rad/s (moderate damping, "
+              "torque-controlled drive and load, creep law). The paper names neither the slip "
+              "signal nor, consistently, the kinematics; the table separates both: the machine "
+              "(equal translation) and the paper's Sec. 2.1 rows, and the slip nu of eq. 2 on "
+              "the current radii or nu_r = 1 - omega_s / (r_g0 omega_p) at the operating ratio "
+              "(eq. 3, Fig. 12). A real right-half-plane zero gives the inverse initial "
+              "response Sec. 2.3 describes; complex right-half-plane pairs are listed "
+              "apart.</p>"
+            + ctx.table("nmp_conventions", ["rows", "slip"]
+                        + [f"real RHP zeros, r_g = {x:g} [Hz]" for x in rep.RATIOS]
+                        + [f"complex RHP pairs, r_g = {x:g} [Hz]" for x in rep.RATIOS],
+                        combo_rows,
+                        "Right-half-plane zeros of T_mp -> slip by row set and slip signal"))
 
 
 def simulation(ctx: Context, res: rep.SimulationSection) -> str:
@@ -54,14 +60,21 @@ def simulation(ctx: Context, res: rep.SimulationSection) -> str:
 
 
 def exact_plant(ctx: Context, res: rep.PlantSection) -> str:
-    """The exact plant's magnitudes and operating points."""
+    """The exact plant's magnitudes, operating points and the load -> ratio gains."""
     op = ctx.params.operating
     return (ctx.figure(plot_plant_magnitude(res.responses, title=r"Exact linearised plant, $\nu$ = "
                                             f"{op.nu:g}, $F_s$ = {op.F_s / 1e3:g} kN, "
                                             rf"$\omega_p$ = {op.omega_p:g} rad/s"),
-                       "fig2_exact_plant", "Fig. 2 (exact): magnitudes of T_mp, T_ms -> r_g, nu "
-                       "at r_g = 0.5, 1, 2, from the complex-step linearisation of the "
-                       "nonlinear model")
+                       "fig2_exact_plant", "Fig. 2 (exact): magnitudes of T_mp, T_ms, T_l -> "
+                       "r_g, nu, nu_r at r_g = 0.5, 1, 2, from the complex-step linearisation of "
+                       "the nonlinear model (the machine, creep law)")
             + ctx.table("fig2_operating_points", ["r_g", "T_l [N m]", "T_mp [N m]",
                                                   "T_ms [N m]", "max Re(pole) [1/s]"], res.rows,
-                        "Operating points of the exact plant"))
+                        "Operating points of the exact plant")
+            + ctx.table("load_to_ratio", ["r_g", "T_l [N m]", "DC gain T_l -> r_g [1/(N m)]",
+                                          "from two trims [1/(N m)]", "max Re(pole) [1/s]"],
+                        res.dc_rows,
+                        "Static load -> ratio sensitivity with the servo torques held (test "
+                        "bench: drive speed-controlled, load torque-controlled; torque ratio "
+                        "0.5)")
+            + ctx.claims(res.claims))
