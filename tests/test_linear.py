@@ -117,15 +117,29 @@ def test_actuation_rigid_mode_keeps_thrust_bearings_unloaded(params, r_g):
     assert_allclose(modes.derived_shapes[:, 0], 0.0, atol=1e-12)
 
 
-def test_frf_matches_python_control(params):
+def test_frf_matches_state_space_evaluation(params):
+    """The direct second-order solve against the first-order state space: evaluated as
+    C (jwI - A)^-1 B + D on the balanced realisation (scipy.linalg.matrix_balance) to 1e-8
+    (measured 2e-11), and by python-control to 1e-3: with slycot installed python-control
+    evaluates with tb05ad, which loses digits on this stiff realisation (stiffness ratio
+    ~1e9; measured 2.5e-4 even balanced)."""
+    from scipy.linalg import matrix_balance
+
     lm = actuation_model(params, 1.0, "moderate")
     w = 2 * np.pi * np.logspace(-1, 3, 50)
-    ours = lm.frequency_response(w, ["T_mp", "T_ms"], ["theta_mp", "theta_ms", "x_np_dot"])
-    ref = control.frequency_response(lm.state_space(["T_mp", "T_ms"],
-                                                    ["theta_mp", "theta_ms", "x_np_dot"]), w)
+    names = (["T_mp", "T_ms"], ["theta_mp", "theta_ms", "x_np_dot"])
+    ours = lm.frequency_response(w, *names).H
+    ss = lm.state_space(*names)
+    A, B, C, D = (np.asarray(M) for M in (ss.A, ss.B, ss.C, ss.D))
+    Ab, T = matrix_balance(A, permute=False, separate=False)
+    Bb, Cb = np.linalg.solve(T, B), C @ T
+    direct = np.stack([Cb @ np.linalg.solve(1j * wk * np.eye(len(A)) - Ab, Bb) + D
+                       for wk in w], axis=-1)
+    assert_allclose(ours, direct, rtol=1e-8, atol=1e-14 * np.abs(direct).max())
+    ref = control.frequency_response(ss, w)
     H_ref = ref.magnitude * np.exp(1j * ref.phase)
-    # 1e-8 relative: same linear system, direct solve vs state-space evaluation
-    assert_allclose(ours.H, H_ref, rtol=1e-8, atol=1e-14 * np.abs(H_ref).max())
+    big = np.abs(H_ref) > 1e-6 * np.abs(H_ref).max()
+    assert_allclose(ours[big], H_ref[big], rtol=1e-3)
 
 
 def test_low_frequency_frf_rigid_body_asymptote(params):

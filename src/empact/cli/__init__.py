@@ -37,6 +37,10 @@ COMMANDS = {
                      "FRFs with coherence from measured records (CSV)."),
     "reproduce": ("empact.cli.report_cmd:reproduce",
                   "Reproduce every table and figure of the paper."),
+    "plants": ("empact.cli.control:plants_cmd",
+               "Plant family: the exact plant over a grid of operating points."),
+    "control": ("empact.cli.control:control_group",
+                "Slip and ratio control: design, robustness, closed loop."),
 }
 
 

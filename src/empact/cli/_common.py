@@ -163,6 +163,15 @@ UNITS = {
     "values": "unit of the swept variable", "mu_peak": "-", "nu_peak": "-", "nu_range": "-",
     "residual": "-", "coulomb_sp": "N m", "coulomb_ss": "N m", "coulomb_omega": "rad/s",
     "drive_bandwidth": "Hz", "load_bandwidth": "Hz", "ratio_bandwidth": "Hz", "step": "N m",
+    "omega_p_fixed": "rad/s", "wall_time_s": "s", "max_real_pole": "1/s", "disk_margin": "-",
+    "gain_margin_db": "dB", "phase_margin_deg": "deg", "kp": "N m per unit error",
+    "ki": "N m/s per unit error", "wi_rad_s": "rad/s", "crossover_hz": "Hz", "roll_off_hz": "Hz",
+    "kappa": "-", "bandwidth_scale": "-", "alpha_min": "-", "gamma": "-", "gamma_opt": "-",
+    "bandwidth_hz": "Hz", "f_keep_hz": "Hz", "mu_peak": "-", "omega_peak": "rad/s",
+    "captured": "-", "slip_error_pp": "percentage points", "peak_slip_pp": "%",
+    "slip_setpoint_pp": "%", "ratio_error": "-", "ratio_rate": "1/s", "ratio_span": "-",
+    "mean_clamping_force": "N", "mean_slip_power": "W", "mean_actuation_power": "W",
+    "mean_losses": "W", "shape": "-", "points": "-", "trimmed": "-",
 }
 
 

@@ -460,3 +460,45 @@ def _input_direction(x, u, du, p, ix, out):
     _eval(xc, uc, p, ix, dx, y)
     for i in range(n):
         out[i] = dx[i].imag / h
+
+
+# -- batches over operating points (plant families) ------------------------------------------
+@njit(cache=True)
+def traction_many(nu, r_g, p, out):
+    """``out[k] = traction_mu(nu[k], r_g[k])`` for 1-D arrays."""
+    for k in range(nu.shape[0]):
+        out[k] = traction_mu(nu[k], r_g[k], p)
+
+
+@njit(cache=True)
+def mu_max_many(r_g, p, out):
+    """Peak traction coefficient D(r_g) (the magic formula's) for a 1-D array of ratios."""
+    for k in range(r_g.shape[0]):
+        out[k] = _interp3(np.log(r_g[k]), p[P_LLOW], p[P_LMED], p[P_LOD], p[P_D0], p[P_D1],
+                          p[P_D2])
+
+
+@njit(cache=True)
+def creep_many(r_g, R_p, R_s, phi, F_s, tau, p, lam, keq):
+    """The creep law at rest for 1-D arrays: ``lam[k], keq[k]`` (Lambda [N m], kappa*)."""
+    for k in range(r_g.shape[0]):
+        lk, _, kq = creep_force(r_g[k], R_p[k], R_s[k], phi[k], F_s[k], tau[k], 0.0, 1.0, p)
+        lam[k] = lk
+        keq[k] = kq
+
+
+@njit(cache=True)
+def linearize_batch(X, U, p, ix, DX, A, B, C, D):
+    """For every point k: ``DX[k] = f(X[k], U[k])`` and the exact Jacobians ``A[k] = df/dx``,
+    ``B[k]``, ``C[k]``, ``D[k]`` (complex step), in one compiled loop."""
+    y = np.empty(NY)
+    for k in range(X.shape[0]):
+        _eval(X[k], U[k], p, ix, DX[k], y)
+        _jacobian(X[k], U[k], p, ix, A[k], B[k], C[k], D[k])
+
+
+@njit(cache=True)
+def eval_batch(X, U, p, ix, DX, Y):
+    """``DX[k], Y[k] = f(X[k], U[k]), y(X[k], U[k])`` for every point k."""
+    for k in range(X.shape[0]):
+        _eval(X[k], U[k], p, ix, DX[k], Y[k])

@@ -20,12 +20,12 @@ from scipy.optimize import brentq, minimize_scalar
 
 from .._validate import check_number
 from ..errors import TrimError
-from ..geometry import belt_length, check_ratio, radii, wrap_angle
+from ..geometry import belt_length, check_ratio, radii, ratio_range, wrap_angle
 from ..traction import traction_from_params
 from . import _kernel as K
 from .model import EmpactModel
 
-__all__ = ["TrimError", "TrimResult", "trim", "traction_peak"]
+__all__ = ["TrimError", "TrimResult", "TrimGrid", "trim", "trim_grid", "traction_peak"]
 
 RESIDUAL_TOL = 1e-8
 
@@ -308,3 +308,202 @@ def _residual(model: EmpactModel, x, u, named) -> float:
     scale[12:14] = 1.0  # speed differences [rad/s]
     scale[14:18] = [torque_dl / d.J_d, torque_dl / d.J_p, torque_dl / d.J_s, torque_dl / d.J_l]
     return float(np.max(np.abs(dx) / scale))
+
+
+# -- many points at once (plant families) ----------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class TrimGrid:
+    """Trimmed operating points of one model, many at once (`trim_grid`).
+
+    Attributes
+    ----------
+    model : EmpactModel
+    x : array, shape (N, n)
+        States (NaN where ``ok`` is False).
+    u : array, shape (N, 4)
+        Inputs.
+    r_g, omega_p, nu, F_s, T_l : arrays, shape (N,)
+        The operating variables (requested and solved).
+    ok : bool array, shape (N,)
+        Trimmed with a normalised residual below `RESIDUAL_TOL`.
+    reason : tuple of str, length N
+        Why a point failed ('' where ok).
+    """
+
+    model: EmpactModel
+    x: NDArray[np.float64]
+    u: NDArray[np.float64]
+    r_g: NDArray[np.float64]
+    omega_p: NDArray[np.float64]
+    nu: NDArray[np.float64]
+    F_s: NDArray[np.float64]
+    T_l: NDArray[np.float64]
+    ok: NDArray[np.bool_]
+    reason: tuple[str, ...]
+
+
+def _radii_many(model, r, F_el, tol=1e-15):
+    """Vectorised `_belt_radii`: Newton on R_s for the stretched belt carrying `F_el`."""
+    v, k, tb = model.params.variator, model.p[K.P_KBELT], model.p[K.P_TB]
+    _, R_s = radii(r, v.L_belt, v.a)
+    R_s = np.array(R_s, float)
+    for _ in range(30):
+        phi = np.arcsin((r - 1) * R_s / v.a)
+        L = 2 * v.a * np.cos(phi) + (np.pi + 2 * phi) * r * R_s + (np.pi - 2 * phi) * R_s
+        g = np.pi - 2 * phi
+        f = L - v.L_belt - F_el * tb / (k * g)
+        dphi = (r - 1) / (v.a * np.cos(phi))
+        df = r * (np.pi + 2 * phi) + g - F_el * tb / k * 2 * dphi / g**2
+        step = f / df
+        R_s = R_s - step
+        if np.all(np.abs(step) <= tol * R_s):
+            break
+    phi = np.arcsin((r - 1) * R_s / v.a)
+    return r * R_s, R_s, phi, F_el * tb / (k * (np.pi - 2 * phi))
+
+
+def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None) -> TrimGrid:
+    """`trim` at many points at once (1-D arrays, broadcast): the same equations, solved
+    vectorised (Newton on the belt radii, bisection on the rising branch of the traction
+    curve, the creep law's fixed point), then checked by the same residual.  Traction belt
+    only.  Points that cannot be trimmed are marked (``ok``, ``reason``), never dropped.
+
+    Parameters as `trim`: exactly two of `nu`, `F_s`, `T_l`.
+    """
+    if model.options.belt != "traction":
+        raise TrimError("trim_grid: only the traction belt (belt = 'traction')")
+    if sum(v is not None for v in (nu, F_s, T_l)) != 2:
+        raise TrimError("trim_grid: give exactly two of nu, F_s, T_l")
+    arrays = [np.atleast_1d(np.asarray(v, float)) for v in (r_g, omega_p, nu if nu is not None
+              else np.nan, F_s if F_s is not None else np.nan, T_l if T_l is not None
+              else np.nan)]
+    r, w, nu_, Fs, Tl = (np.array(a, float) for a in np.broadcast_arrays(*arrays))
+    N = r.size
+    p, tb = model.p, model.p[K.P_TB]
+    cosb = np.cos(model.params.variator.beta)
+    lo, hi = ratio_range(model.params.variator)
+    reason = np.full(N, "", dtype=object)
+    reason[(r < lo) | (r > hi)] = "r_g outside the variator's range"
+    reason[~(w > 0)] = "omega_p must be > 0"
+    good = reason == ""
+    r = np.where(good, r, 1.0)
+    mu_max = np.empty(N)
+    K.mu_max_many(r, p, mu_max)
+    mu = np.full(N, np.nan)
+    if nu is not None:
+        K.traction_many(np.nan_to_num(nu_), r, p, mu)
+
+    def contact(F_contact, tau_of):
+        """Radii for the clamping force (fixed point on the belt element's force)."""
+        F_el = F_contact.copy()
+        for _ in range(60):
+            R_p, R_s, phi, e = _radii_many(model, r, F_el)
+            if p[K.P_LAW] == K.LAW_SHAFAI:
+                return R_p, R_s, phi, e
+            kgeo = (np.pi + 2 * phi) / (np.pi - 2 * phi)
+            lam, keq = np.empty(N), np.empty(N)
+            K.creep_many(r, R_p, R_s, phi, F_el, tau_of(R_s, F_el), p, lam, keq)
+            a, b = r / (tb * R_p), r / (tb * R_s)
+            new = F_contact * (a + keq * b) / (a + kgeo * b)
+            done = np.all(np.abs(new - F_el) <= 1e-13 * np.abs(F_contact))
+            F_el = new
+            if done:
+                break
+        return _radii_many(model, r, F_el)
+
+    if nu is not None and F_s is not None:
+        R_p, R_s, phi, e = contact(Fs, lambda R_s, F_el: mu / mu_max)
+        Tl = 2 * mu * Fs * R_s / cosb
+    elif nu is not None:  # nu and T_l
+        reason[good & ~(mu * Tl > 0)] = "mu(nu) cannot carry T_l with a positive clamping force"
+        good = reason == ""
+        R_s = radii(r, model.params.variator.L_belt, model.params.variator.a)[1]
+        for _ in range(40):
+            Fs = np.where(good, Tl * cosb / (2 * mu * R_s), 1e4)
+            R_p, R_s_new, phi, e = contact(Fs, lambda R_s, F_el: mu / mu_max)
+            done = np.all(np.abs(R_s_new - R_s) < 1e-15)
+            R_s = R_s_new
+            if done:
+                break
+        Fs = np.where(good, Tl * cosb / (2 * mu * R_s), 1e4)
+        R_p, R_s, phi, e = contact(Fs, lambda R_s, F_el: mu / mu_max)
+    else:  # F_s and T_l: the slip on the rising branch
+        R_p, R_s, phi, e = contact(Fs, lambda R_s, F_el: Tl * cosb / (2 * Fs * R_s) / mu_max)
+        need = Tl * cosb / (2 * Fs * R_s)
+        nu_pk = np.empty(N)
+        mu_pk = np.empty(N)
+        for rr in np.unique(r):
+            sel = r == rr
+            nu_pk[sel], mu_pk[sel] = traction_peak(model, float(rr))
+        reason[good & (np.abs(need) > mu_pk)] = "the load needs mu above the traction peak"
+        good = reason == ""
+        a_, b_ = np.zeros(N), np.where(good, nu_pk, 0.0)
+        target = np.abs(need)
+        m_ = np.empty(N)
+        for _ in range(64):
+            mid = 0.5 * (a_ + b_)
+            K.traction_many(mid, r, p, m_)
+            below = m_ < target
+            a_, b_ = np.where(below, mid, a_), np.where(below, b_, mid)
+        nu_ = np.sign(need) * 0.5 * (a_ + b_)
+        K.traction_many(nu_, r, p, mu)
+    reason[good & ~(Fs > 0)] = "clamping force must be > 0"
+    good = reason == ""
+    # assemble (vectorised `_assemble`)
+    a = model.params.actuation
+    k_w, k_c, k_belt, k_tp, k_ts = (p[K.P_KW], p[K.P_KC], p[K.P_KBELT], p[K.P_KTP], p[K.P_KTS])
+    N_b = k_belt * e
+    F_p = N_b * (np.pi + 2 * phi) / tb
+    F_el = N_b * (np.pi - 2 * phi) / tb
+    q5 = (R_p - model.params.variator.R_min) * tb
+    sig = p[K.P_SIG]
+    q6 = sig * (p[K.P_RS0] - R_s) * tb
+    lam, keq = np.zeros(N), np.zeros(N)
+    if p[K.P_LAW] != K.LAW_SHAFAI:
+        K.creep_many(r, R_p, R_s, phi, F_el, mu / mu_max, p, lam, keq)
+    F_p_act = F_p + lam * r / (tb * R_p)
+    F_s_act = F_el - lam * r / (tb * R_s)
+    q3 = (-F_p_act / k_tp - q5) / a.s
+    q4 = q3 + (sig * F_s_act / k_ts - q6) / a.s
+    T_c = a.i_e * a.s * sig * F_s_act
+    q2 = a.i_c * (T_c / k_c + q4 / a.i_e)
+    T_w = -a.i_e * a.s * (F_p_act + sig * F_s_act)
+    q1 = a.i_w * (T_w / k_w + q3 / a.i_e)
+    T_mp, T_ms = T_w / a.i_w, T_c / a.i_c
+    omega_s = (1 - nu_) * r * w
+    d = model.params.driveline
+    T_d = r * Tl
+    x = np.zeros((N, model.n))
+    x[:, :6] = np.column_stack([q1, q2, q3, q4, q5, q6])
+    x[:, 12], x[:, 13] = T_d / d.k_tc, Tl / d.k_ds
+    x[:, 14:18] = np.column_stack([w, w, omega_s, omega_s])
+    u = np.column_stack([T_mp, T_ms, T_d, Tl])
+    ix = model.ix
+    if ix[1] >= 0:
+        x[:, ix[1]], u[:, 2] = T_d, w
+    if ix[2] >= 0:
+        x[:, ix[2]], u[:, 3] = Tl, omega_s
+    if ix[3] >= 0:
+        x[:, ix[3]], u[:, 0] = T_mp, r
+    # the same check as `trim`: every derivative zero, normalised by the forces on each body
+    residual = np.full(N, np.inf)
+    g = np.flatnonzero(good)
+    xg, ug = np.ascontiguousarray(x[g]), np.ascontiguousarray(u[g])
+    dx, y = np.empty_like(xg), np.empty((len(g), K.NY))
+    K.eval_batch(xg, ug, p, ix, dx, y)
+    F = np.abs(F_p_act[g]) + np.abs(y[:, K.Y_FS]) + 1.0
+    torque_act = a.s * F
+    torque_dl = np.abs(T_d[g]) + np.abs(ug[:, 3]) + 1.0
+    scale = np.ones_like(xg)
+    scale[:, 6:12] = np.column_stack([torque_act / a.J_mp, torque_act / a.J_ms,
+                                      torque_act / a.J_sp, torque_act / a.J_ss, F / a.m_p,
+                                      F / a.m_s])
+    scale[:, 14:18] = np.column_stack([torque_dl / d.J_d, torque_dl / d.J_p,
+                                       torque_dl / d.J_s, torque_dl / d.J_l])
+    residual[g] = np.max(np.abs(dx) / scale, axis=1)
+    reason[good & ~(residual < RESIDUAL_TOL)] = "steady-state residual above the tolerance"
+    good = reason == ""
+    x[~good] = np.nan
+    u[~good] = np.nan
+    return TrimGrid(model=model, x=x, u=u, r_g=r, omega_p=w, nu=nu_, F_s=Fs, T_l=Tl, ok=good,
+                    reason=tuple(reason.tolist()))

@@ -15,8 +15,12 @@ nonlinear
     NMP geometry and zeros, simulation time histories, exact plant magnitudes.
 identification
     FRF estimates with coherence, identified plants (Figs. 2, 14).
+control
+    Plant families' poles and zeros, loop shapes, robustness maps, closed-loop runs.
 """
 from ._common import FORMATS, STYLE, Plot, save_figure, save_plot, symbol
+from .control import (plot_closed_loop, plot_family_poles, plot_loop_shapes,
+                      plot_robustness_maps)
 from .identification import plot_frf_estimate, plot_identified_plant
 from .linear import plot_bode, plot_modal_energy, plot_mode_shapes
 from .nonlinear import plot_nmp, plot_plant_magnitude, plot_simulation
@@ -27,4 +31,5 @@ __all__ = ["Plot", "STYLE", "FORMATS", "save_figure", "save_plot", "symbol", "pl
            "plot_modal_energy", "plot_bode", "plot_belt_root_locus", "plot_traction",
            "plot_pole_sweep", "plot_slip_bode", "plot_zero_locus", "plot_stability_map",
            "plot_nmp", "plot_simulation", "plot_plant_magnitude", "plot_frf_estimate",
-           "plot_identified_plant"]
+           "plot_identified_plant", "plot_family_poles", "plot_loop_shapes",
+           "plot_robustness_maps", "plot_closed_loop"]

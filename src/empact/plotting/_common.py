@@ -90,6 +90,7 @@ def save_figure(fig: Figure, stem: str | os.PathLike[str],
     paths = []
     for fmt in formats:
         check_choice("format", fmt, FORMATS)
+    _quiet_minor_labels(fig)
     for fmt in formats:
         path = stem.with_name(f"{stem.name}.{fmt}")
         with atomic_file(path) as tmp:
@@ -98,6 +99,17 @@ def save_figure(fig: Figure, stem: str | os.PathLike[str],
             fig.set_layout_engine("none")
         paths.append(path)
     return paths
+
+
+def _quiet_minor_labels(fig: Figure) -> None:
+    """No tick labels at the minor ticks of log axes spanning more than two decades: the
+    major labels suffice there, and laying out hundreds of minor labels is most of a dense
+    figure's drawing time."""
+    for ax in fig.axes:
+        for axis, lim in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+            lo, hi = sorted(lim)
+            if axis.get_scale() == "log" and lo > 0 and hi / lo > 100:
+                axis.set_minor_formatter(mpl.ticker.NullFormatter())
 
 
 def save_plot(fig: Figure, path: str | os.PathLike[str], dpi: int = 150) -> Path:

@@ -1,11 +1,12 @@
 """The report's sections, in order: title, anchor, computation, rendering."""
 from __future__ import annotations
 
+from ..reproduction import control as rctl
 from ..reproduction import identification as rid
 from ..reproduction import linear as rlin
 from ..reproduction import nonlinear as rnl
 from ..reproduction import slip as rslip
-from . import identification, linear, nonlinear, slip
+from . import control, identification, linear, nonlinear, slip
 from .context import Section
 
 __all__ = ["SECTIONS"]
@@ -16,9 +17,9 @@ SECTIONS: tuple[Section, ...] = (
     Section("Table 2: undamped driveline eigenfrequencies", "table2", rlin.table2,
             linear.table2),
     Section("Figures 4 and 5: actuation mode shapes and modal energy at r_g = 1", "fig4-5",
-            rlin.fig4_5, linear.fig4_5),
+            rlin.fig4_5, linear.fig4_5, cost=1.9),
     Section("Figure 6: damped actuation transfer functions", "fig6", rlin.fig6, linear.fig6,
-            cost=1.8),
+            cost=2.3),
     Section("Figure 8: driveline mode shapes and modal energy at r_g = 1", "fig8", rlin.fig8,
             linear.fig8),
     Section("Figure 9: root locus over the belt damping c_b", "fig9", rslip.fig9, slip.fig9),
@@ -33,13 +34,16 @@ SECTIONS: tuple[Section, ...] = (
     Section("Figure 13: zeros of F_s -> slip over the ratio", "fig13", rslip.fig13, slip.fig13),
     Section("Stability map over slip and ratio", "stability", rslip.stability, slip.stability),
     Section("Sec. 2.3: non-minimum-phase behaviour of T_mp -> nu (nonlinear model, exact)",
-            "nmp", rnl.nmp, nonlinear.nmp, cost=2.6),
+            "nmp", rnl.nmp, nonlinear.nmp, cost=1.6),
     Section("Nonlinear simulation: LOW -> OD shift and a load step", "simulation",
             rnl.simulation, nonlinear.simulation, cost=1.7),
-    Section("Exact linear plant (T_mp, T_ms) -> (r_g, nu): the counterpart of Fig. 2",
-            "exact-plant", rnl.exact_plant, nonlinear.exact_plant, cost=2.4),
-    Section("Figure 2: (T_mp, T_ms) -> (r_g, nu) by approximate realisation from step "
-            "responses", "fig2", rid.fig2, identification.fig2, cost=5.0),
+    Section("Exact linear plant (T_mp, T_ms; T_l) -> (r_g, nu, nu_r): the counterpart of "
+            "Fig. 2",
+            "exact-plant", rnl.exact_plant, nonlinear.exact_plant, cost=2.5),
+    Section("Figure 2: (T_mp, T_ms) -> (r_g, nu, nu_r) by approximate realisation from step "
+            "responses", "fig2", rid.fig2, identification.fig2, cost=3.3),
     Section("Figure 14: FRFs on the virtual test rig (r_g = 0.5, nu0 = 0)", "fig14", rid.fig14,
-            identification.fig14, cost=6.0),
+            identification.fig14, cost=2.7),
+    Section("Beyond the paper: plant family, robust slip and ratio control, closed loop on "
+            "the machine", "control", rctl.control, control.control, cost=6.3),
 )

@@ -99,7 +99,7 @@ def fig2(params: Params) -> Fig2:
     """Fig. 2 by realisation at r_g = 0.5, 1, 2 (``params.operating`` slip, force, speed)."""
     op = params.operating
     results = [identify_plant(params, op.replace(r_g=r)) for r in RATIOS]
-    f = np.logspace(-1, np.log10(200), 500)
+    f = np.logspace(-1, np.log10(200), 300)
     rows, ok_fit, ok_frf = [], True, True
     worst_fit, worst_frf = 100.0, 0.0
     for res in results:

@@ -206,7 +206,7 @@ def held_servo_ratio(op, dT: float, dr: float) -> float:
 def exact_plant(params: Params) -> PlantSection:
     """The exact plant at r_g = 0.5, 1, 2 (``params.operating``) and the load -> ratio
     sensitivity."""
-    f = np.logspace(-1, 3, 600)
+    f = np.logspace(-1, 3, 300)
     resps, rows, dc_rows = [], [], []
     for r in RATIOS:
         sys, op = plant(params, params.operating.replace(r_g=r))

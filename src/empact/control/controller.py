@@ -1,0 +1,167 @@
+"""The controller record: a named state space from tracking errors to servo torques, and its
+files.
+
+A controller maps the errors ``e = reference - measured`` of the measured outputs (``r_g`` and
+a slip signal) to deviations of the servo torques (``T_mp``, ``T_ms``) from their holding
+values::
+
+    dx_c/dt = A x_c + B e,   du = C x_c + D e          (continuous, dt = 0)
+    x_c[k+1] = A x_c[k] + B e[k],   du[k] = C x_c[k] + D e[k]   (discrete, sample time dt)
+
+Files: JSON (schema ``empact.controller``) with A, B, C, D, the names, units, ``dt`` and the
+design data; ``.mat`` with the same fields (in MATLAB: ``k = load('c.mat'); K = ss(k.A, k.B,
+k.C, k.D, k.dt)``, ``dt = 0`` for continuous).
+"""
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._io import atomic_file, atomic_write_text
+from .._lazy import lazy_module
+from .._validate import check_number
+from ..errors import ParameterError
+from ..export import jsonable
+from ..lti import statespace
+from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS
+
+signal = lazy_module("scipy.signal")
+sio = lazy_module("scipy.io")
+
+__all__ = ["Controller", "load_controller"]
+
+SCHEMA = {"name": "empact.controller", "version": 1}
+
+
+@dataclass(frozen=True, eq=False)
+class Controller:
+    """A linear controller from tracking errors to servo-torque deviations.
+
+    Attributes
+    ----------
+    A, B, C, D : arrays, shapes (n_c, n_c), (n_c, n_e), (n_u, n_c), (n_u, n_e)
+    measured : tuple of str
+        The measured outputs whose errors are the inputs (e.g. ``("r_g", "nu")``).
+    outputs : tuple of str
+        The servo torques driven (``("T_mp", "T_ms")``), deviations [N m].
+    dt : float
+        Sample time [s]; 0 for a continuous controller.
+    method : str
+        How it was designed (``"pi"``, ``"hinf"``, ...).
+    design : dict
+        Design data (gains, weights, margins, the family's grid, the nominal point).
+    """
+
+    A: NDArray[np.float64]
+    B: NDArray[np.float64]
+    C: NDArray[np.float64]
+    D: NDArray[np.float64]
+    measured: tuple[str, ...]
+    outputs: tuple[str, ...]
+    dt: float = 0.0
+    method: str = ""
+    design: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        A, B, C, D = (np.atleast_2d(np.asarray(M, float)) for M in (self.A, self.B, self.C,
+                                                                      self.D))
+        n = A.shape[0] if A.size else 0
+        A = A.reshape(n, n)
+        B = B.reshape(n, len(self.measured))
+        C = C.reshape(len(self.outputs), n)
+        D = D.reshape(len(self.outputs), len(self.measured))
+        for name, M in (("A", A), ("B", B), ("C", C), ("D", D)):
+            if not np.all(np.isfinite(M)):
+                raise ParameterError(f"controller {name}: entries must be finite")
+        for name, M in (("A", A), ("B", B), ("C", C), ("D", D)):
+            object.__setattr__(self, name, M)
+        object.__setattr__(self, "measured", tuple(self.measured))
+        object.__setattr__(self, "outputs", tuple(self.outputs))
+        object.__setattr__(self, "dt", check_number("dt", self.dt, 0.0, unit="s"))
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        """Input names: ``e_<measured>`` (reference minus measurement)."""
+        return tuple(f"e_{m}" for m in self.measured)
+
+    @property
+    def n(self) -> int:
+        """Number of controller states."""
+        return self.A.shape[0]
+
+    def statespace(self):
+        """The controller as a named `control.StateSpace`."""
+        return statespace(self.A, self.B, self.C, self.D, inputs=self.inputs,
+                          outputs=self.outputs, states=[f"xc{i}" for i in range(self.n)],
+                          name=f"controller_{self.method}", dt=self.dt or None)
+
+    def discretize(self, dt: float, method: str = "tustin") -> "Controller":
+        """The controller at sample time `dt` [s] (Tustin by default; ``scipy.signal.
+        cont2discrete``)."""
+        if self.dt:
+            raise ParameterError(f"controller is already discrete (dt = {self.dt:g} s)")
+        dt = check_number("dt", dt, 0.0, 1.0, lo_open=True, unit="s")
+        if self.n == 0:
+            return Controller(self.A, self.B, self.C, self.D, self.measured, self.outputs,
+                              dt, self.method, self.design)
+        Ad, Bd, Cd, Dd, _ = signal.cont2discrete((self.A, self.B, self.C, self.D), dt,
+                                                 method=method)
+        return Controller(Ad, Bd, Cd, Dd, self.measured, self.outputs, dt, self.method,
+                          {**self.design, "discretized": method})
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data (the file layout)."""
+        return {"A": self.A, "B": self.B, "C": self.C, "D": self.D,
+                "inputs": list(self.inputs), "measured": list(self.measured),
+                "outputs": list(self.outputs), "dt": self.dt, "method": self.method,
+                "inputs_units": [OUTPUT_UNITS.get(m, "-") for m in self.measured],
+                "outputs_units": [INPUT_UNITS[o] for o in self.outputs],
+                "design": dict(self.design)}
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write JSON or ``.mat`` (by the suffix) atomically."""
+        suffix = Path(path).suffix.lower()
+        data = self.to_dict()
+        if suffix == ".json":
+            atomic_write_text(path, json.dumps(jsonable({"schema": SCHEMA, **data}),
+                                               indent=1) + "\n")
+        elif suffix == ".mat":
+            flat = {k: v for k, v in data.items() if k != "design"}
+            for k in ("inputs", "measured", "outputs", "inputs_units", "outputs_units"):
+                flat[k] = np.array(flat[k], dtype=object)
+            flat["design_json"] = json.dumps(jsonable(data["design"]))
+            with atomic_file(path) as tmp:
+                sio.savemat(tmp, flat)
+        else:
+            raise ParameterError(f"{path}: a controller is written as .json or .mat, not "
+                                 f"{suffix or 'no suffix'!r}")
+        return Path(path)
+
+
+def load_controller(path: str | os.PathLike[str]) -> Controller:
+    """Read a controller JSON file (`Controller.save`); one-line errors for bad files."""
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterError(f"{p}: no such controller file")
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ParameterError(f"{p}: not a controller JSON file ({exc})") from None
+    if not isinstance(doc, dict) or doc.get("schema", {}).get("name") != SCHEMA["name"]:
+        raise ParameterError(f"{p}: not a controller file (schema {SCHEMA['name']!r} "
+                             "expected)")
+    try:
+        return Controller(A=np.array(doc["A"] or np.zeros((0, 0)), float),
+                          B=np.array(doc["B"] or np.zeros((0, len(doc["measured"]))), float),
+                          C=np.array(doc["C"] or np.zeros((len(doc["outputs"]), 0)), float),
+                          D=np.array(doc["D"], float), measured=tuple(doc["measured"]),
+                          outputs=tuple(doc["outputs"]), dt=float(doc.get("dt", 0.0)),
+                          method=str(doc.get("method", "")), design=doc.get("design", {}))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ParameterError(f"{p}: bad controller data ({exc})") from None
