@@ -8,7 +8,7 @@ from scipy.io import loadmat
 
 from empact.control.closed_loop import (control_example_path, load_control_scenario,
                                         run_closed_loop)
-from empact.control.controller import Controller, load_controller
+from empact.control.controller import load_controller
 from empact.control.family import PlantFamily, load_family, plant_family, save_family
 from empact.control.hinf import check_wellposed, design_hinf, mixed_sensitivity_plant
 from empact.control.pi import design_pi, pi_controller
