@@ -329,6 +329,17 @@ def files(tmp_path, monkeypatch):
     (tmp_path / "rec_latin1.csv").write_bytes(("time,u,\xfc\n" + "1,2,3\n" * 20)
                                               .encode("latin-1"))
     w("existing.png", "not yours to overwrite")
+    sp = '[spread."actuation.k_w"]\n'
+    w("sp_ok.toml", sp + 'distribution = "normal"\nrel_std = 0.05\n')
+    w("sp_kind.toml", sp + 'distribution = "gaussian"\nstd = 1\n')
+    w("sp_name.toml", '[spread."actuation.k_x"]\ndistribution = "uniform"\nlower = 1\n'
+                      'upper = 2\n')
+    w("sp_std.toml", sp + 'distribution = "normal"\n')
+    w("sp_bounds.toml", sp + 'distribution = "uniform"\nlower = 2\nupper = 1\n')
+    w("sp_tail.toml", sp + 'distribution = "normal"\nstd = 1\nlower = 100\nupper = 101\n')
+    w("sp_key.toml", sp + 'distribution = "normal"\nstd = 1\nsigma = 2\n')
+    w("sp_empty.toml", "# nothing\n")
+    w("sp_ln.toml", sp + 'distribution = "lognormal"\n')
     (tmp_path / "full").mkdir()
     w("full/thesis.tex", "precious")
     return tmp_path
@@ -393,6 +404,33 @@ BAD_INPUT = [
     (["plants", "--slip", "0.01", "--clamp", "1e4", "--load", "50"], "give at most two of"),
     (["plants", "--out", "x.txt"], "--out x.txt: file suffix '.txt' must be one of"),
     (["plants", "--clamp", "-3"], "--clamp = -3"),
+    (["plants", "--scheduler", ""], "--scheduler '': give none, local or a scheduler address"),
+    (["plants", "--scheduler", "local", "--workers", "0"], "--workers = 0: must be a whole"),
+    (["plants", "--scheduler-timeout", "0"], "--scheduler-timeout = 0: allowed range"),
+    (["slip", "map", "--slip", "0.001:0.02:4", "--ratio", "0.5:2:3", "--workers", "0"],
+     "--workers = 0"),
+    # Monte Carlo
+    (["montecarlo"], "--spread: give a spread file (--example-spread prints one)"),
+    (["montecarlo", "--spread", "nosuch.toml"], "nosuch.toml: no such spread file"),
+    (["montecarlo", "--spread", "sp_kind.toml"], "distribution = 'gaussian'; choose one of"),
+    (["montecarlo", "--spread", "sp_name.toml"], "unknown parameter 'actuation.k_x'"),
+    (["montecarlo", "--spread", "sp_std.toml"], "give one of std or rel_std"),
+    (["montecarlo", "--spread", "sp_bounds.toml"], "lower = 2 must be below upper = 1"),
+    (["montecarlo", "--spread", "sp_tail.toml"], "keep no probability"),
+    (["montecarlo", "--spread", "sp_key.toml"], "unknown key 'sigma' for a normal"),
+    (["montecarlo", "--spread", "sp_empty.toml"], "no [spread.\"section.name\"] table"),
+    (["montecarlo", "--spread", "sp_ln.toml"], "a lognormal distribution needs sigma"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--runs", "0"], "--runs = 0: must be a whole"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--seed", "-2"], "--seed = -2"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--analysis", "closed-loop"],
+     "give exactly one of --scenario FILE or --example NAME"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--example", "slip-load-step-r1"],
+     "--analysis plant: --scenario, --example and --controller belong to"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--analysis", "closed-loop", "--example",
+      "nosuch"], "unknown control example 'nosuch'"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--out", "full"], "not empty"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--scheduler", "local", "--workers", "999"],
+     "--workers = 999"),
     (["control", "design", "--bandwidth", "1", "--out", "c.json"],
      "--bandwidth '1': two numbers RATIO,SLIP"),
     (["control", "design", "--bandwidth", "0,1", "--out", "c.json"], "--bandwidth = 0"),

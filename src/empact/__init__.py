@@ -59,6 +59,18 @@ Identification and experiments (Secs. 3, 4)
    identify_plant     -- Fig. 2 by realisation of the nonlinear model's steps
    run_rig, rig_frf   -- the virtual test rig (Fig. 14)
 
+Control and sweeps (beyond the paper)
+=====================================
+   plant_family       -- trimmed, exactly linearised plants on a grid (LPV)
+   design_pi, design_hinf
+                      -- robust decentralised PI; mixed-sensitivity H-infinity (slycot)
+   robustness_map     -- disk margins of a controller over a family
+   run_closed_loop, load_control_scenario
+                      -- a controller on the nonlinear machine
+   monte_carlo, load_spread
+                      -- an analysis over a parameter spread (failures kept with reasons)
+   SweepOptions       -- where a sweep runs: in process, a local Dask cluster, a scheduler
+
 LTI tools
 =========
    frequency_response -- C (jwI - A)^-1 B + D, vectorised
@@ -98,6 +110,11 @@ _CATALOGUE = {
     "estimate_frf": "identification.frf_estimation",
     "identify_plant": "experiments.plant_id", "run_rig": "experiments.rig",
     "rig_frf": "experiments.rig",
+    "plant_family": "control.family", "design_pi": "control.pi",
+    "design_hinf": "control.hinf", "robustness_map": "control.robustness",
+    "run_closed_loop": "control.closed_loop", "load_control_scenario": "control.closed_loop",
+    "monte_carlo": "montecarlo.study", "load_spread": "montecarlo.spread",
+    "SweepOptions": "sweep",
     "frequency_response": "lti", "transmission_zeros": "lti", "root_locus": "lti",
 }
 

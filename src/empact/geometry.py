@@ -63,14 +63,18 @@ def radii(r_g: ArrayLike, L_belt: float, a: float, *, tol: float = 1e-13,
     """
     r = check_values("r_g", r_g, 0.0, lo_open=True)
     R_s = (L_belt - 2 * a) / (np.pi * (1 + r))  # exact for phi = 0
+    # each point stops on its own convergence, so its radius does not depend on the others
+    # (a sweep's chunks give bitwise the same result)
+    active = np.ones(np.shape(R_s), dtype=bool)
     with np.errstate(invalid="ignore"):
         for _ in range(max_iter):
             R_p = r * R_s
             phi = wrap_angle(R_p, R_s, a)
             f = 2 * a * np.cos(phi) + (np.pi + 2 * phi) * R_p + (np.pi - 2 * phi) * R_s - L_belt
-            step = f / (r * (np.pi + 2 * phi) + (np.pi - 2 * phi))
+            step = np.where(active, f / (r * (np.pi + 2 * phi) + (np.pi - 2 * phi)), 0.0)
             R_s = R_s - step
-            if np.all(np.abs(step) <= tol * L_belt):
+            active = active & ~(np.abs(step) <= tol * L_belt)
+            if not active.any():
                 break
         else:
             R_s = np.full_like(R_s, np.nan)

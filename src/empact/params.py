@@ -430,6 +430,16 @@ class Params:
             raise ParameterError(f"parameter {dotted!r} is a section, not a value")
         return node
 
+    def unit(self, dotted: str) -> str:
+        """The unit of a dotted parameter name, e.g. ``"N m/rad"`` for ``"actuation.k_w"``."""
+        self.get(dotted)
+        *path, last = dotted.split(".")
+        node: Any = self
+        for part in path:
+            node = getattr(node, part)
+        meta = {f.name: f.metadata for f in fields(node)}[last]
+        return str(meta.get("unit", ""))
+
 
 def _schema() -> dict[str, Any]:
     """Nested dict of the allowed keys (values None) of a parameter file."""

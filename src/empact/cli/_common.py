@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import importlib
 import json
-import math
 import os
 import sys
 import tempfile
@@ -20,13 +19,15 @@ import click
 import numpy as np
 
 from .._io import atomic_write_text
-from .._validate import check_values
+from .._validate import check_int, check_number, check_values
 from ..errors import ParameterError
+from ..export import jsonable as to_jsonable
 from ..geometry import check_ratio
 from ..params import OperatingPoint, Params, load_params
 from ..traction import traction_from_params
 
-__all__ = ["InputError", "Failed", "ErrorGroup", "LazyGroup", "to_jsonable", "emit_json",
+__all__ = ["sweep_options", "sweep_from_options",
+           "InputError", "Failed", "ErrorGroup", "LazyGroup", "to_jsonable", "emit_json",
            "params_option", "json_options", "force_option", "get_params", "operating_point",
            "operating_values", "PLOT_SUFFIXES",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION"]
@@ -120,25 +121,6 @@ class LazyGroup(ErrorGroup):
         sys.exit(rv if isinstance(rv, int) else 0)
 
 
-def to_jsonable(obj: Any) -> Any:
-    """numpy arrays and scalars to lists and floats; complex to ``[re, im]``; NaN to None."""
-    if isinstance(obj, Mapping):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, (complex, np.complexfloating)):
-        return [to_jsonable(float(obj.real)), to_jsonable(float(obj.imag))]
-    if isinstance(obj, (np.floating, float)):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
-
-
 #: Version of every JSON document the commands print (``schema.version``).
 JSON_VERSION = 1
 
@@ -167,11 +149,13 @@ UNITS = {
     "gain_margin_db": "dB", "phase_margin_deg": "deg", "kp": "N m per unit error",
     "ki": "N m/s per unit error", "wi_rad_s": "rad/s", "crossover_hz": "Hz", "roll_off_hz": "Hz",
     "kappa": "-", "bandwidth_scale": "-", "alpha_min": "-", "gamma": "-", "gamma_opt": "-",
-    "bandwidth_hz": "Hz", "f_keep_hz": "Hz", "mu_peak": "-", "omega_peak": "rad/s",
+    "bandwidth_hz": "Hz", "f_keep_hz": "Hz", "omega_peak": "rad/s",
     "captured": "-", "slip_error_pp": "percentage points", "peak_slip_pp": "%",
     "slip_setpoint_pp": "%", "ratio_error": "-", "ratio_rate": "1/s", "ratio_span": "-",
     "mean_clamping_force": "N", "mean_slip_power": "W", "mean_actuation_power": "W",
     "mean_losses": "W", "shape": "-", "points": "-", "trimmed": "-",
+    "f_slow_hz": "Hz", "zeta_slow": "-", "n_rhp_zeros": "-", "rhp_zero_hz": "Hz", "runs": "-",
+    "succeeded": "-", "failures": "-",
 }
 
 
@@ -211,6 +195,33 @@ def json_options(fn: Callable) -> Callable:
     fn = click.option("--json-out", "json_out", type=click.Path(dir_okay=False), default=None,
                       help="Write the JSON to FILE (atomically) instead of stdout.")(fn)
     return click.option("--json", "as_json", is_flag=True, help="Print JSON on stdout.")(fn)
+
+
+def sweep_options(fn: Callable) -> Callable:
+    """``--scheduler none|local|ADDRESS``, ``--workers N`` and ``--scheduler-timeout S``."""
+    fn = click.option("--scheduler-timeout", "scheduler_timeout", type=float, default=10.0,
+                      show_default=True, help="Seconds to wait for a scheduler ADDRESS.")(fn)
+    fn = click.option("--workers", type=int, default=None,
+                      help="Worker processes of --scheduler local (in process, 'slip map' "
+                           "uses this many threads); default: one per core.")(fn)
+    fn = click.option("--scheduler", default="none", show_default=True,
+                      metavar="none|local|ADDRESS",
+                      help="Where the sweep runs: in process, a local Dask cluster, or a "
+                           "running Dask scheduler (tcp://host:8786); Dask is the optional "
+                           "'dask' extra.")(fn)
+    return fn
+
+
+def sweep_from_options(scheduler: str, workers: int | None, timeout: float):
+    """The `empact.sweep.SweepOptions` of the sweep options (each checked under its name);
+    a progress bar on stderr for a Dask scheduler or an interactive terminal."""
+    from ..sweep import SweepOptions
+
+    if workers is not None:
+        check_int("--workers", workers, 1, 256)
+    check_number("--scheduler-timeout", timeout, 0.1, 3600.0, unit="s")
+    return SweepOptions(scheduler=scheduler, workers=workers, timeout=timeout,
+                        progress=scheduler.strip() != "none" or sys.stderr.isatty())
 
 
 def get_params(path: str | None) -> Params:

@@ -9,7 +9,8 @@ import numpy as np
 
 from .._validate import check_number
 from ._common import (ErrorGroup, Failed, InputError, emit_json, force_option, get_params,
-                      json_options, output_file, params_option)
+                      json_options, output_file, params_option, sweep_from_options,
+                      sweep_options)
 from .slip import parse_values
 
 #: the grid options of `plants` and `control design`: option -> (variable, unit, help)
@@ -37,7 +38,8 @@ def grid_options(fn):
     return fn
 
 
-def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_law: str):
+def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_law: str,
+                        sweep=None):
     """Parse the grid options (each checked under its name) and build the family."""
     from ..control.family import plant_family
     from ..geometry import check_ratio
@@ -63,7 +65,7 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
         raise InputError("give at most two of --slip, --clamp, --load (the trim solves the "
                          "third)")
     return plant_family(params, damping=damping, kinematics=kinematics, shift_law=shift_law,
-                        **values)
+                        sweep=sweep, **values)
 
 
 def _summary(fam) -> dict:
@@ -77,22 +79,24 @@ def _summary(fam) -> dict:
 @grid_options
 @click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
               help="Write the family (.npz, .json or .mat).")
+@sweep_options
 @params_option
 @json_options
 @force_option
-def plants_cmd(ratio, slip, clamp, speed, load, damping, kinematics, shift_law, out,
-               params_file, as_json, json_out, force) -> None:
+def plants_cmd(ratio, slip, clamp, speed, load, damping, kinematics, shift_law, out, scheduler,
+               workers, scheduler_timeout, params_file, as_json, json_out, force) -> None:
     """Trim and exactly linearise the machine over a grid of operating points (a plant
     family: T_mp, T_ms and the load -> r_g, nu, nu_r), for control design and LPV models."""
     from ..control.family import save_family
 
     output_file(out, "--out", force=force, suffixes=("npz", "json", "mat"))
     output_file(json_out, "--json-out", force=True)
+    sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
     params = get_params(params_file)
     t0 = time.perf_counter()
     fam = family_from_options(params, {"ratio": ratio, "slip": slip, "clamp": clamp,
                                        "speed": speed, "load": load}, damping, kinematics,
-                              shift_law)
+                              shift_law, sweep)
     wall = time.perf_counter() - t0
     if out:
         save_family(fam, out)

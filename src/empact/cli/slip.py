@@ -22,7 +22,7 @@ from ..slip import (INPUTS, OUTPUTS, VARIABLES, belt_root_locus, pole_sweep,
 from ..traction import TractionModel, load_traction, traction_curves, traction_from_params
 from ._common import (OPTION_VARIABLE, PLOT_SUFFIXES, ErrorGroup, InputError, emit_json,
                       force_option, get_params, json_options, operating_values, output_file,
-                      params_option)
+                      params_option, sweep_from_options, sweep_options)
 from .linear import frequency_grid, plot_option
 
 VARIABLE_OPTION = {v: k for k, v in OPTION_VARIABLE.items()}
@@ -343,12 +343,12 @@ def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_o
               show_default=True, help="Stacked 5x5 reduced matrices or the full 8x8 ones.")
 @click.option("--chunk", "chunk", type=int, default=4096, show_default=True,
               help="Points per batched eigenvalue call (bounds memory).")
-@click.option("--workers", type=int, default=None, help="Threads (default: one per CPU core).")
+@sweep_options
 @json_options
 @plot_option
 @force_option
-def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk, workers,
-            as_json, json_out, plot, force) -> None:
+def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk, scheduler,
+            workers, scheduler_timeout, as_json, json_out, plot, force) -> None:
     """Stability map over two ranges (--slip 0.001:0.06:200 --ratio 0.5:2.2:200)."""
     _outputs(plot, json_out, force)
     params, tr = _setup(params_file, traction_file)
@@ -359,10 +359,10 @@ def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk
     if x.size * y.size > MAX_MAP:
         raise InputError(f"--{VARIABLE_OPTION[x_name]} x --{VARIABLE_OPTION[y_name]}: "
                          f"{x.size} x {y.size} = {x.size * y.size} points; at most {MAX_MAP}")
+    sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
     sm = stability_map(params, x_name, x, y_name, y, base=base,  # type: ignore[arg-type]
                        traction=tr, method=method, chunk_size=check_int("--chunk", chunk, 1),
-                       workers=None if workers is None else check_int("--workers", workers, 1,
-                                                                      256))
+                       workers=workers, sweep=sweep)
     if plot:
         from ..plotting import plot_stability_map
 

@@ -34,6 +34,7 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -52,6 +53,7 @@ from ..nonlinear.linearization import PLANT_INPUTS, PLANT_OUTPUTS, disturbance_i
 from ..nonlinear.model import (INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel,
                                nonlinear_model)
 from ..params import Params
+from ..sweep import SweepOptions, chunk_count, chunk_slices, run_chunks
 
 interpolate = lazy_module("scipy.interpolate")
 sio = lazy_module("scipy.io")
@@ -198,7 +200,8 @@ def _axis(name: str, value) -> NDArray[np.float64]:
 
 
 def plant_family(params: Params, *, r_g=None, nu=None, F_s=None, omega_p=None, T_l=None,
-                 model: EmpactModel | None = None, **options) -> PlantFamily:
+                 model: EmpactModel | None = None, sweep: SweepOptions | None = None,
+                 **options) -> PlantFamily:
     """Trim and exactly linearise the machine on a grid of operating points.
 
     Parameters
@@ -209,6 +212,9 @@ def plant_family(params: Params, *, r_g=None, nu=None, F_s=None, omega_p=None, T
         which two of nu, F_s, T_l the trim uses; the rest come from ``params.operating``.
     model : EmpactModel, optional
         A built model with torque servo inputs (then `options` must be empty).
+    sweep : SweepOptions, optional
+        Where the points are computed (`empact.sweep`: in process by default, or on Dask);
+        the result is bitwise the same.
     **options
         `empact.nonlinear.model.ModelOptions` fields (default `BENCH_OPTIONS`).
 
@@ -244,20 +250,16 @@ def plant_family(params: Params, *, r_g=None, nu=None, F_s=None, omega_p=None, T
         raise ParameterError(f"{n_pts} grid points; at most {MAX_POINTS}")
     mesh = dict(zip(axes, np.meshgrid(*axes.values(), indexing="ij"))) if axes else {}
     flat = {n: (mesh[n].ravel() if n in mesh else np.full(n_pts, fixed[n])) for n in values}
-    tg = trim_grid(model, flat["r_g"], flat["omega_p"],
-                   **{k: flat[k] for k in pair})
-    n, m_all = model.n, 4
-    A = np.full((n_pts, n, n), np.nan)
-    B = np.full((n_pts, n, m_all), np.nan)
-    C = np.full((n_pts, K.NY, n), np.nan)
-    D = np.full((n_pts, K.NY, m_all), np.nan)
-    g = np.flatnonzero(tg.ok)
-    if g.size:  # linearise the points that trimmed, in one compiled loop
-        Ag, Bg = np.empty((g.size, n, n)), np.empty((g.size, n, m_all))
-        Cg, Dg = np.empty((g.size, K.NY, n)), np.empty((g.size, K.NY, m_all))
-        K.linearize_batch(np.ascontiguousarray(tg.x[g]), np.ascontiguousarray(tg.u[g]),
-                          model.p, model.ix, np.empty((g.size, n)), Ag, Bg, Cg, Dg)
-        A[g], B[g], C[g], D[g] = Ag, Bg, Cg, Dg
+    n_chunks = chunk_count(n_pts, SECONDS_PER_POINT, (sweep.workers or 2)
+                           if sweep is not None and sweep.scheduler != "none" else 1)
+    tasks = [(model, pair, {k: v[s] for k, v in flat.items()})
+             for s in chunk_slices(n_pts, n_chunks)]
+    parts = run_chunks(_linearise_points, tasks, sweep, desc="plant family")
+    res = {k: np.concatenate([part[k] for part in parts]) for k in parts[0]}
+    A, B, C, D = res["A"], res["B"], res["C"], res["D"]
+    tg = SimpleNamespace(**{k: res[k] for k in ("r_g", "omega_p", "nu", "F_s", "T_l", "ok")},
+                         reason=tuple(res["reason"].tolist()))
+    n = model.n
     # nu_r at each point's own ratio: d nu_r = d nu - (1 - nu0) d r_g / r_g0
     w = ((1 - tg.nu) / tg.r_g)[:, None]
     C[:, K.Y_NUR] = C[:, K.Y_NU] - w * C[:, K.Y_RG]
@@ -277,6 +279,34 @@ def plant_family(params: Params, *, r_g=None, nu=None, F_s=None, omega_p=None, T
         ok=tg.ok.reshape(grid), reason=np.array(tg.reason, dtype=object).reshape(grid),
         options={k: getattr(model.options, k) for k in ("drive", "load", "damping",
                                                         "kinematics", "shift_law")})
+
+
+#: measured cost of one point (trim + linearisation), for sizing chunks [s]
+SECONDS_PER_POINT = 4e-5
+
+
+def _linearise_points(task) -> dict[str, NDArray]:
+    """Trim and linearise the points of one chunk (`run_chunks` task: model, the trim pair,
+    flat arrays of the operating variables).  Each point's result depends on that point only
+    (per-point convergence in `trim_grid`; one compiled loop here), so chunking does not
+    change a bit."""
+    model, pair, flat = task
+    tg = trim_grid(model, flat["r_g"], flat["omega_p"], **{k: flat[k] for k in pair})
+    N, n, m_all = tg.r_g.size, model.n, 4
+    A = np.full((N, n, n), np.nan)
+    B = np.full((N, n, m_all), np.nan)
+    C = np.full((N, K.NY, n), np.nan)
+    D = np.full((N, K.NY, m_all), np.nan)
+    g = np.flatnonzero(tg.ok)
+    if g.size:  # linearise the points that trimmed, in one compiled loop
+        Ag, Bg = np.empty((g.size, n, n)), np.empty((g.size, n, m_all))
+        Cg, Dg = np.empty((g.size, K.NY, n)), np.empty((g.size, K.NY, m_all))
+        K.linearize_batch(np.ascontiguousarray(tg.x[g]), np.ascontiguousarray(tg.u[g]),
+                          model.p, model.ix, np.empty((g.size, n)), Ag, Bg, Cg, Dg)
+        A[g], B[g], C[g], D[g] = Ag, Bg, Cg, Dg
+    return {"A": A, "B": B, "C": C, "D": D, "r_g": tg.r_g, "omega_p": tg.omega_p,
+            "nu": tg.nu, "F_s": tg.F_s, "T_l": tg.T_l, "ok": tg.ok,
+            "reason": np.array(tg.reason, dtype=object)}
 
 
 def save_family(family: PlantFamily, path: str | os.PathLike[str], fmt: str | None = None

@@ -347,16 +347,18 @@ def _radii_many(model, r, F_el, tol=1e-15):
     v, k, tb = model.params.variator, model.p[K.P_KBELT], model.p[K.P_TB]
     _, R_s = radii(r, v.L_belt, v.a)
     R_s = np.array(R_s, float)
-    for _ in range(30):
+    active = np.ones(R_s.shape, dtype=bool)  # each point stops on its own convergence, so
+    for _ in range(30):                      # its result does not depend on the others
         phi = np.arcsin((r - 1) * R_s / v.a)
         L = 2 * v.a * np.cos(phi) + (np.pi + 2 * phi) * r * R_s + (np.pi - 2 * phi) * R_s
         g = np.pi - 2 * phi
         f = L - v.L_belt - F_el * tb / (k * g)
         dphi = (r - 1) / (v.a * np.cos(phi))
         df = r * (np.pi + 2 * phi) + g - F_el * tb / k * 2 * dphi / g**2
-        step = f / df
+        step = np.where(active, f / df, 0.0)
         R_s = R_s - step
-        if np.all(np.abs(step) <= tol * R_s):
+        active &= np.abs(step) > tol * R_s
+        if not active.any():
             break
     phi = np.arcsin((r - 1) * R_s / v.a)
     return r * R_s, R_s, phi, F_el * tb / (k * (np.pi - 2 * phi))
@@ -396,6 +398,7 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None) 
     def contact(F_contact, tau_of):
         """Radii for the clamping force (fixed point on the belt element's force)."""
         F_el = F_contact.copy()
+        active = np.ones(N, dtype=bool)  # per-point convergence (chunk-independent results)
         for _ in range(60):
             R_p, R_s, phi, e = _radii_many(model, r, F_el)
             if p[K.P_LAW] == K.LAW_SHAFAI:
@@ -404,10 +407,10 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None) 
             lam, keq = np.empty(N), np.empty(N)
             K.creep_many(r, R_p, R_s, phi, F_el, tau_of(R_s, F_el), p, lam, keq)
             a, b = r / (tb * R_p), r / (tb * R_s)
-            new = F_contact * (a + keq * b) / (a + kgeo * b)
-            done = np.all(np.abs(new - F_el) <= 1e-13 * np.abs(F_contact))
+            new = np.where(active, F_contact * (a + keq * b) / (a + kgeo * b), F_el)
+            active &= np.abs(new - F_el) > 1e-13 * np.abs(F_contact)
             F_el = new
-            if done:
+            if not active.any():
                 break
         return _radii_many(model, r, F_el)
 
@@ -418,12 +421,14 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None) 
         reason[good & ~(mu * Tl > 0)] = "mu(nu) cannot carry T_l with a positive clamping force"
         good = reason == ""
         R_s = radii(r, model.params.variator.L_belt, model.params.variator.a)[1]
+        active = np.ones(N, dtype=bool)
         for _ in range(40):
             Fs = np.where(good, Tl * cosb / (2 * mu * R_s), 1e4)
             R_p, R_s_new, phi, e = contact(Fs, lambda R_s, F_el: mu / mu_max)
-            done = np.all(np.abs(R_s_new - R_s) < 1e-15)
+            R_s_new = np.where(active, R_s_new, R_s)
+            active &= np.abs(R_s_new - R_s) >= 1e-15
             R_s = R_s_new
-            if done:
+            if not active.any():
                 break
         Fs = np.where(good, Tl * cosb / (2 * mu * R_s), 1e4)
         R_p, R_s, phi, e = contact(Fs, lambda R_s, F_el: mu / mu_max)

@@ -22,6 +22,7 @@ from .._validate import check_choice, check_int
 from ..errors import ParameterError
 from ..lti import damping_ratio
 from ..params import OperatingPoint, Params
+from ..sweep import SweepOptions, chunk_count, chunk_slices, run_chunks
 from ..traction import TractionModel, traction_from_params
 from .coupling import VARIABLES, linearisation_terms
 from .loci import Variable, grid_values
@@ -100,7 +101,7 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
                   y: ArrayLike, *, base: OperatingPoint | None = None,
                   traction: TractionModel | None = None, method: MapMethod = "reduced",
                   chunk_size: int = 4096, workers: int | None = None,
-                  tol: float = 1e-6) -> StabilityMap:
+                  tol: float = 1e-6, sweep: SweepOptions | None = None) -> StabilityMap:
     """Stability of the slip model over a grid of two operating-point variables.
 
     The grid (``len(y) * len(x)`` points) is processed in chunks of `chunk_size` points: for
@@ -124,6 +125,10 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
     workers : threads working on chunks in parallel (>= 1; default: one per CPU core; numpy's
         eigenvalue routine releases the GIL)
     tol : real parts above this [1/s] count as unstable (absorbs rounding only)
+    sweep : SweepOptions, optional
+        Run the chunks on Dask (`empact.sweep`); then `workers` is ignored (the cluster's
+        workers are ``sweep.workers``).  Default: in process, with `workers` threads.  The map
+        is bitwise the same either way (each point's eigenvalues are its own LAPACK call).
 
     Returns
     -------
@@ -147,30 +152,56 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
     J, K = mass_stiffness(params)
     nx = xv.size
     n = nx * yv.size
-    max_real = np.empty(n)
-    min_damp = np.empty(n)
-
-    def work(start: int) -> None:
-        idx = np.arange(start, min(start + chunk_size, n))
-        op = dict(fixed)
-        op[x_name], op[y_name] = xv[idx % nx], yv[idx // nx]
-        t = linearisation_terms(params, op["r_g"], op["nu"], op["F_s"], op["omega_p"], tr)
-        r, rho, c_s = (np.broadcast_to(t[k], idx.shape) for k in ("r_g", "rho", "c_s"))
-        if method == "full":
-            eig = np.linalg.eigvals(assemble_A(J, K, r, rho, c_s))
-            max_real[idx], min_damp[idx] = stability_measures(eig)
-        else:
-            eig = np.linalg.eigvals(assemble_reduced(J, K, r, rho, c_s))
-            max_real[idx], min_damp[idx] = _measures(eig)
-
-    starts = range(0, n, chunk_size)
-    if workers == 1:
-        for s0 in starts:
-            work(s0)
+    task = (params, tr, J, K, method, x_name, y_name, xv, yv, fixed)
+    bounds = [(s0, min(s0 + chunk_size, n)) for s0 in range(0, n, chunk_size)]
+    if sweep is not None and sweep.scheduler != "none":
+        # chunks of >= 50 ms for the Dask task overhead; the points of a chunk are still
+        # computed `chunk_size` at a time, so memory stays bounded on every worker
+        n_chunks = chunk_count(n, SECONDS_PER_POINT, sweep.workers or os.cpu_count() or 1)
+        parts = run_chunks(_map_chunk, [(task, sl.start, sl.stop, chunk_size)
+                                        for sl in chunk_slices(n, n_chunks)], sweep,
+                           desc="stability map")
+        max_real, min_damp = (np.concatenate([p[k] for p in parts]) for k in (0, 1))
     else:
-        with ThreadPoolExecutor(workers) as pool:
-            list(pool.map(work, starts))
+        max_real, min_damp = np.empty(n), np.empty(n)
+
+        def work(b: tuple[int, int]) -> None:
+            max_real[b[0]:b[1]], min_damp[b[0]:b[1]] = _map_points(task, *b)
+
+        if workers == 1:
+            for b in bounds:
+                work(b)
+        else:
+            with ThreadPoolExecutor(workers) as pool:
+                list(pool.map(work, bounds))
     shape = (yv.size, nx)
     return StabilityMap(x_name=x_name, y_name=y_name, x=xv, y=yv, base=base,
                         max_real=max_real.reshape(shape), min_damping=min_damp.reshape(shape),
                         tol=float(tol), method=method)
+
+
+#: measured cost of one map point (reduced method, stacked eigenvalues), for sizing chunks [s]
+SECONDS_PER_POINT = 3e-6
+
+
+def _map_points(task, start: int, stop: int) -> tuple[NDArray, NDArray]:
+    """Largest real part and smallest damping of the flat grid points ``start:stop``."""
+    params, tr, J, K, method, x_name, y_name, xv, yv, fixed = task
+    idx = np.arange(start, stop)
+    nx = xv.size
+    op = dict(fixed)
+    op[x_name], op[y_name] = xv[idx % nx], yv[idx // nx]
+    t = linearisation_terms(params, op["r_g"], op["nu"], op["F_s"], op["omega_p"], tr)
+    r, rho, c_s = (np.broadcast_to(t[k], idx.shape) for k in ("r_g", "rho", "c_s"))
+    if method == "full":
+        return stability_measures(np.linalg.eigvals(assemble_A(J, K, r, rho, c_s)))
+    return _measures(np.linalg.eigvals(assemble_reduced(J, K, r, rho, c_s)))
+
+
+def _map_chunk(arg) -> tuple[NDArray, NDArray]:
+    """A sweep chunk of the map (module level, picklable): its points `chunk_size` at a time,
+    each from its own eigenvalue problem, so the result does not depend on the chunking."""
+    task, start, stop, chunk_size = arg
+    parts = [_map_points(task, a, min(a + chunk_size, stop))
+             for a in range(start, stop, chunk_size)]
+    return tuple(np.concatenate([p[k] for p in parts]) for k in (0, 1))  # type: ignore

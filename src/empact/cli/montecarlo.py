@@ -1,0 +1,94 @@
+"""``empact montecarlo``: an analysis over a parameter spread, in process or on Dask."""
+from __future__ import annotations
+
+import click
+
+from ._common import (InputError, emit_json, force_option, get_params, json_options,
+                      output_file, output_folder, params_option, sweep_from_options,
+                      sweep_options)
+
+
+@click.command("montecarlo")
+@click.option("--spread", "spread_file", type=click.Path(dir_okay=False), default=None,
+              help="TOML file of parameter distributions (see --example-spread).")
+@click.option("--example-spread", "example_spread", is_flag=True,
+              help="Print the shipped example spread file and exit.")
+@click.option("--runs", type=int, default=100, show_default=True, help="Number of runs.")
+@click.option("--analysis", type=click.Choice(["plant", "slip", "closed-loop"]),
+              default="plant", show_default=True,
+              help="What each run evaluates: the plant at the operating point, the slip "
+                   "model's stability, or a closed-loop scenario's metrics.")
+@click.option("--scenario", "scenario", type=click.Path(dir_okay=False), default=None,
+              help="Closed-loop scenario file (closed-loop analysis).")
+@click.option("--example", default=None,
+              help="A shipped closed-loop scenario (see 'empact control simulate "
+                   "--list-examples').")
+@click.option("--controller", default=None, type=click.Path(dir_okay=False),
+              help="Controller file (or shipped:pi, shipped:hinf) replacing the scenario's.")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of the study (run i draws from its own stream of it).")
+@click.option("--out", "out", type=click.Path(file_okay=False), default=None,
+              help="Folder for runs.csv, runs.json and summary.json.")
+@sweep_options
+@params_option
+@json_options
+@force_option
+def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, example, controller,
+                   seed, out, scheduler, workers, scheduler_timeout, params_file, as_json,
+                   json_out, force) -> None:
+    """Monte Carlo over parameter spread: each run draws the spread's parameters, evaluates
+    the analysis and is recorded (a failed run with its reason); prints the summary
+    (quantiles, failure count)."""
+    from importlib import resources
+
+    from .._validate import check_int
+    from ..montecarlo import load_spread, monte_carlo, save_montecarlo
+
+    if example_spread:
+        click.echo(resources.files("empact.data").joinpath("montecarlo", "example-spread.toml")
+                   .read_text(), nl=False)
+        return
+    if spread_file is None:
+        raise InputError("--spread: give a spread file (--example-spread prints one)")
+    runs = check_int("--runs", runs, 1, 1_000_000)
+    seed = check_int("--seed", seed, 0, 2**63 - 1)
+    closed = analysis == "closed-loop"
+    if not closed and (scenario or example or controller):
+        raise InputError(f"--analysis {analysis}: --scenario, --example and --controller "
+                         "belong to --analysis closed-loop")
+    if closed and (scenario is None) == (example is None):
+        raise InputError("--analysis closed-loop: give exactly one of --scenario FILE or "
+                         "--example NAME")
+    if out:
+        output_folder(out, "--out", force=force)
+    output_file(json_out, "--json-out", force=True)
+    sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
+    params = get_params(params_file)
+    spread = load_spread(spread_file, params)
+    sc = ctrl = None
+    if closed:
+        from ..control.closed_loop import (control_example_path, load_control_scenario,
+                                           resolve_controller)
+
+        sc = load_control_scenario(control_example_path(example) if example else scenario)
+        ctrl = resolve_controller(controller or sc.controller)
+    result = monte_carlo(params, spread, runs, analysis, seed=seed, scenario=sc,
+                         controller=ctrl, sweep=sweep)
+    if out:
+        save_montecarlo(result, out)
+    summary = result.summary()
+    if as_json or json_out:
+        emit_json(summary, "montecarlo", json_out)
+        return
+    click.echo(f"{result.runs} runs of the {analysis} analysis (seed {seed}): "
+               f"{result.failures} failed" + (f"; written to {out}" if out else ""))
+    for kind, f in summary["failure_reasons"].items():
+        click.echo(f"  {f['count']} x {kind}, e.g. {f['example']}")
+    click.echo(f"{'output':22s} {'unit':18s} {'n':>6s} {'q05':>11s} {'median':>11s} "
+               f"{'q95':>11s}")
+    for name, s in summary["outputs"].items():
+        if s["n"]:
+            click.echo(f"{name:22s} {s['unit']:18s} {s['n']:6d} {s['q05']:11.4g} "
+                       f"{s['q50']:11.4g} {s['q95']:11.4g}")
+        else:
+            click.echo(f"{name:22s} {s['unit']:18s} {0:6d}   (no finite value)")

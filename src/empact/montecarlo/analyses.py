@@ -1,0 +1,117 @@
+"""What one Monte Carlo run evaluates on its parameter set.
+
+``"plant"``
+    The exact plant of Fig. 2 (servo torques -> ratio and slip) at the parameter set's
+    operating point (``[operating]``, so a spread of ``operating.*`` moves it): the trimmed
+    servo torques and load, the largest pole real part, the slowest oscillatory mode and the
+    right-half-plane zeros of ``T_mp -> nu`` (the non-minimum-phase behaviour of Sec. 2.3).
+    Model options as `empact.nonlinear.nmp.nmp_zeros`: moderate damping, torque-controlled
+    drive and load.
+``"slip"``
+    The slip model (Sec. 2.2) at the operating point: largest real part and smallest damping
+    ratio of its poles, the belt damper ``c_b`` and the traction coefficient.
+``"closed-loop"``
+    A closed-loop scenario with a controller on the nonlinear machine
+    (`empact.control.closed_loop`): its metrics.  The scenario sets its own operating point, so
+    ``operating.*`` spreads do not act here.  A run whose simulation stops early fails with the
+    solver's message.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..control.closed_loop import run_closed_loop
+from ..errors import ParameterError
+from ..lti import channel_zeros, oscillatory
+from ..nonlinear.linearization import plant
+from ..params import OperatingPoint, Params
+from ..slip.coupling import linearise_belt
+from ..slip.stability import stability_map
+
+__all__ = ["ANALYSES", "OUTPUTS", "AnalysisContext", "RunFailed", "evaluate"]
+
+ANALYSES = ("plant", "slip", "closed-loop")
+
+#: output name -> unit, per analysis (table columns, in this order)
+OUTPUTS: dict[str, dict[str, str]] = {
+    "plant": {"T_mp": "N m", "T_ms": "N m", "T_l": "N m", "max_real_pole": "1/s",
+              "f_slow_hz": "Hz", "zeta_slow": "-", "n_rhp_zeros": "-",
+              "rhp_zero_hz": "Hz"},
+    "slip": {"max_real": "1/s", "min_damping": "-", "c_b": "N m s/rad", "mu": "-"},
+    "closed-loop": {"slip_error_pp": "percentage points", "peak_slip_pp": "%",
+                    "ratio_error": "-", "mean_clamping_force": "N", "mean_slip_power": "W",
+                    "mean_actuation_power": "W", "mean_losses": "W"},
+}
+
+#: measured wall time of one run [s] (sizes the sweep's chunks)
+SECONDS_PER_RUN = {"plant": 0.03, "slip": 2e-3, "closed-loop": 0.5}
+
+#: zeros of T_mp -> nu above this are not reported [Hz] (as `empact nmp`)
+F_MAX_ZEROS = 100.0
+
+
+class RunFailed(RuntimeError):
+    """A run that produced no result (the message says why)."""
+
+
+@dataclass(frozen=True)
+class AnalysisContext:
+    """What an analysis needs besides the parameters (picklable: it travels to workers).
+
+    Attributes
+    ----------
+    kind : one of `ANALYSES`
+    scenario : `empact.control.closed_loop.ControlScenario` (closed loop only)
+    controller : `empact.control.controller.Controller` (closed loop only)
+    """
+
+    kind: str
+    scenario: Any = None
+    controller: Any = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in ANALYSES:
+            raise ParameterError(f"analysis {self.kind!r}: choose one of {', '.join(ANALYSES)}")
+        if self.kind == "closed-loop" and self.scenario is None:
+            raise ParameterError("the closed-loop analysis needs a scenario")
+
+
+def evaluate(params: Params, context: AnalysisContext) -> dict[str, float]:
+    """The outputs (`OUTPUTS`) of one run; raises on failure (the caller records why)."""
+    return _EVALUATE[context.kind](params, context)
+
+
+def _plant(params: Params, context: AnalysisContext) -> dict[str, float]:
+    sys, op = plant(params, params.operating, disturbance=False)
+    poles = np.linalg.eigvals(sys.A)
+    f, zeta = oscillatory(poles)
+    z = channel_zeros(sys, "T_mp", "nu", max_abs=1e7)
+    z = z[np.abs(z) < 2 * np.pi * F_MAX_ZEROS]
+    rhp = z[(z.real > 1e-3 * np.abs(z)) & (np.abs(z) > 1e-3)]
+    return {"T_mp": op.T_mp, "T_ms": op.T_ms, "T_l": op.T_l,
+            "max_real_pole": float(poles.real.max()),
+            "f_slow_hz": float(f[0]) if f.size else np.nan,
+            "zeta_slow": float(zeta[0]) if f.size else np.nan,
+            "n_rhp_zeros": float(rhp.size),
+            "rhp_zero_hz": float(np.abs(rhp).min() / (2 * np.pi)) if rhp.size else np.nan}
+
+
+def _slip(params: Params, context: AnalysisContext) -> dict[str, float]:
+    op: OperatingPoint = params.operating
+    sm = stability_map(params, "nu", [op.nu], "r_g", [op.r_g], base=op, workers=1)
+    belt = linearise_belt(params, op)
+    return {"max_real": float(sm.max_real[0, 0]), "min_damping": float(sm.min_damping[0, 0]),
+            "c_b": belt.c_b, "mu": belt.mu}
+
+
+def _closed_loop(params: Params, context: AnalysisContext) -> dict[str, float]:
+    run = run_closed_loop(context.scenario, params, context.controller)
+    if not run.metrics["complete"]:
+        raise RunFailed(run.metrics["message"])
+    return {k: float(run.metrics[k]) for k in OUTPUTS["closed-loop"]}
+
+
+_EVALUATE = {"plant": _plant, "slip": _slip, "closed-loop": _closed_loop}

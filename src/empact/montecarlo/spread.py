@@ -1,0 +1,215 @@
+"""Parameter spread: distributions of parameters, read from TOML and sampled reproducibly.
+
+A spread file has one table per parameter, keyed by the parameter's dotted name (any value
+of a parameter file, the operating point included)::
+
+    [spread."actuation.k_w"]
+    distribution = "normal"      # normal | uniform | lognormal
+    rel_std = 0.05               # or std = 2.4 [unit of the parameter]; mean defaults to
+    lower = 40.0                 #   the parameter's value; optional bounds truncate
+    upper = 55.0
+
+    [spread."traction.D_med"]
+    distribution = "uniform"
+    lower = 0.09
+    upper = 0.11
+
+    [spread."driveline.k_ds"]
+    distribution = "lognormal"   # ln X ~ N(ln median, sigma^2)
+    sigma = 0.1                  # median defaults to the parameter's value
+    upper = 60.0
+
+Sampling is by inverse transform of the (truncated) distribution, one uniform number per
+parameter and run: run ``i`` draws from its own stream ``SeedSequence(seed, spawn_key=(i,))``,
+so a run's sample depends on the seed and its index only, never on how the runs are chunked
+or on the number of workers.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.special import ndtr, ndtri
+
+from .._validate import check_number, fmt
+from ..errors import ParameterError
+from ..params import Params, read_toml
+
+__all__ = ["Distribution", "Spread", "load_spread", "spread_from_dict", "DISTRIBUTIONS"]
+
+DISTRIBUTIONS = ("normal", "uniform", "lognormal")
+
+#: the keys each distribution accepts (besides ``distribution``)
+_KEYS = {"normal": ("mean", "std", "rel_std", "lower", "upper"),
+         "uniform": ("lower", "upper"),
+         "lognormal": ("median", "sigma", "lower", "upper")}
+
+#: a truncation keeping less probability than this is refused (bounds far in a tail)
+_MIN_MASS = 1e-9
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """One parameter's distribution.
+
+    Attributes
+    ----------
+    name : dotted parameter name, e.g. ``"actuation.k_w"``
+    kind : "normal", "uniform" or "lognormal"
+    loc : mean (normal), median (lognormal) or lower bound (uniform) [unit of the parameter]
+    scale : standard deviation (normal) [unit], sigma of ``ln X`` (lognormal) [-], or the
+        upper bound (uniform) [unit]
+    lower, upper : truncation bounds [unit] (infinite when not given)
+    """
+
+    name: str
+    kind: str
+    loc: float
+    scale: float
+    lower: float = -math.inf
+    upper: float = math.inf
+
+    def _cdf_bounds(self) -> tuple[float, float]:
+        if self.kind == "normal":
+            z = lambda x: (x - self.loc) / self.scale  # noqa: E731
+        else:  # lognormal
+            z = lambda x: ((math.log(x) if x > 0 else -math.inf) - math.log(self.loc)) \
+                / self.scale  # noqa: E731
+        return float(ndtr(z(self.lower))), float(ndtr(z(self.upper)))
+
+    def ppf(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Inverse CDF of the truncated distribution at `u` in (0, 1) (any shape)."""
+        u = np.asarray(u, float)
+        if self.kind == "uniform":
+            return self.loc + u * (self.scale - self.loc)
+        lo, hi = self._cdf_bounds()
+        z = ndtri(lo + u * (hi - lo))
+        x = self.loc + self.scale * z if self.kind == "normal" \
+            else self.loc * np.exp(self.scale * z)
+        return np.clip(x, self.lower, self.upper)  # rounding at a bound only
+
+    def describe(self) -> str:
+        """One line, e.g. ``normal(mean 47.3, std 2.36) in [40, 55]``."""
+        if self.kind == "uniform":
+            return f"uniform on [{fmt(self.loc)}, {fmt(self.scale)}]"
+        head = (f"normal(mean {fmt(self.loc)}, std {fmt(self.scale)})" if self.kind == "normal"
+                else f"lognormal(median {fmt(self.loc)}, sigma {fmt(self.scale)})")
+        if math.isinf(self.lower) and math.isinf(self.upper):
+            return head
+        return f"{head} in [{fmt(self.lower)}, {fmt(self.upper)}]"
+
+
+@dataclass(frozen=True)
+class Spread:
+    """The distributions of a Monte Carlo study, in file order."""
+
+    distributions: tuple[Distribution, ...]
+    source: str = ""
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The dotted parameter names."""
+        return tuple(d.name for d in self.distributions)
+
+    def sample(self, seed: int, runs: Sequence[int] | NDArray[np.int64]) -> NDArray[np.float64]:
+        """The parameter values of runs `runs` (indices), shape ``(len(runs), n_parameters)``.
+
+        Run ``i`` uses the stream ``SeedSequence(seed, spawn_key=(i,))``: its values do not
+        depend on which other runs are drawn with it.
+        """
+        runs = np.asarray(runs, dtype=np.int64).ravel()
+        k = len(self.distributions)
+        u = np.empty((runs.size, k))
+        for j, i in enumerate(runs):
+            rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(i),)))
+            u[j] = rng.random(k)
+        return np.column_stack([d.ppf(u[:, c]) for c, d in enumerate(self.distributions)]) \
+            if k else u
+
+
+def _distribution(name: str, table: Any, params: Params, src: str) -> Distribution:
+    where = f"{src}: spread.{name!r}" if src else f"spread.{name!r}"
+    if not isinstance(table, Mapping):
+        raise ParameterError(f"{where} must be a table with a distribution, not {table!r}")
+    try:
+        nominal = params.get(name)
+    except ParameterError:
+        raise ParameterError(f"{where}: unknown parameter {name!r} (use a dotted name of a "
+                             "parameter file, e.g. 'actuation.k_w')") from None
+    kind = table.get("distribution")
+    if kind not in DISTRIBUTIONS:
+        raise ParameterError(f"{where}: distribution = {kind!r}; choose one of "
+                             f"{', '.join(DISTRIBUTIONS)}")
+    extra = sorted(set(table) - {"distribution", *_KEYS[kind]})
+    if extra:
+        raise ParameterError(f"{where}: unknown key {extra[0]!r} for a {kind} distribution "
+                             f"(allowed: {', '.join(_KEYS[kind])})")
+    v = {k: check_number(k, table[k], where=where) for k in table if k != "distribution"}
+    lower, upper = v.get("lower", -math.inf), v.get("upper", math.inf)
+    if kind == "uniform":
+        if "lower" not in v or "upper" not in v:
+            raise ParameterError(f"{where}: a uniform distribution needs lower and upper")
+        loc, scale = lower, upper
+    elif kind == "normal":
+        loc = v.get("mean", nominal)
+        if ("std" in v) == ("rel_std" in v):
+            raise ParameterError(f"{where}: give one of std or rel_std")
+        scale = v["std"] if "std" in v else v["rel_std"] * abs(loc)
+        check_number("std", scale, 0.0, lo_open=True, where=where)
+    else:
+        loc = check_number("median", v.get("median", nominal), 0.0, lo_open=True, where=where)
+        if "sigma" not in v:
+            raise ParameterError(f"{where}: a lognormal distribution needs sigma (the standard "
+                                 "deviation of ln X)")
+        scale = check_number("sigma", v["sigma"], 0.0, lo_open=True, where=where)
+        if "lower" in v and lower < 0:
+            raise ParameterError(f"{where}: lower = {fmt(lower)} is negative; a log-normal "
+                                 "value is positive")
+    if not lower < upper:
+        raise ParameterError(f"{where}: lower = {fmt(lower)} must be below upper = "
+                             f"{fmt(upper)}")
+    d = Distribution(name, kind, float(loc), float(scale), lower, upper)
+    if kind != "uniform":
+        lo, hi = d._cdf_bounds()
+        if hi - lo < _MIN_MASS:
+            raise ParameterError(f"{where}: the bounds [{fmt(lower)}, {fmt(upper)}] keep "
+                                 f"no probability of {d.describe().split(' in ')[0]}")
+    return d
+
+
+def spread_from_dict(data: Mapping[str, Any], params: Params, source: str = "") -> Spread:
+    """Validate a parsed spread document against a parameter set (names, distributions)."""
+    where = source or "spread"
+    extra = sorted(set(data) - {"spread"})
+    if extra:
+        raise ParameterError(f"{where}: unknown table or key {extra[0]!r} (a spread file has "
+                             "only [spread.\"section.name\"] tables)")
+    tables = data.get("spread")
+    if not isinstance(tables, Mapping) or not tables:
+        raise ParameterError(f"{where}: no [spread.\"section.name\"] table; give at least one "
+                             "parameter's distribution")
+    flat: dict[str, Any] = {}
+
+    def collect(prefix: str, node: Mapping[str, Any]) -> None:
+        # [spread."actuation.k_w"] and [spread.actuation.k_w] are the same parameter
+        for key, value in node.items():
+            name = f"{prefix}.{key}" if prefix else key
+            if isinstance(value, Mapping) and "distribution" not in value:
+                collect(name, value)
+            else:
+                if name in flat:
+                    raise ParameterError(f"{where}: parameter {name!r} given twice")
+                flat[name] = value
+
+    collect("", tables)
+    return Spread(tuple(_distribution(n, t, params, source) for n, t in flat.items()),
+                  source=source)
+
+
+def load_spread(path: str | os.PathLike[str], params: Params) -> Spread:
+    """Read and validate a spread TOML file; errors are one line naming file and parameter."""
+    return spread_from_dict(read_toml(path, "spread"), params, str(path))

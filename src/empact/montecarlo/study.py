@@ -1,0 +1,212 @@
+"""A Monte Carlo study: runs over a parameter spread, their table and its summary.
+
+`monte_carlo` draws run ``i``'s parameters from its own random stream (`Spread.sample`),
+evaluates the analysis (`empact.montecarlo.analyses`) and records the outputs, or, when the run
+fails (a parameter out of its allowed range, a trim that does not converge, a solver that
+stops), the reason: a failed run is never dropped and never stops the others.  The runs are
+computed in chunks by the sweep layer (`empact.sweep`), in process or on Dask; as each run
+depends only on the seed and its index, the table is the same whatever the scheduler and the
+number of workers.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._io import atomic_folder
+from .._validate import check_int
+from ..control.closed_loop import resolve_controller
+from ..export import jsonable
+from ..params import Params
+from ..sweep import SweepOptions, chunk_count, chunk_slices, run_chunks
+from .analyses import OUTPUTS, SECONDS_PER_RUN, AnalysisContext, evaluate
+from .spread import Spread
+
+__all__ = ["MonteCarloResult", "monte_carlo", "save_montecarlo", "QUANTILES", "MAX_RUNS"]
+
+#: quantiles of the summary
+QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
+
+#: most runs of one study
+MAX_RUNS = 1_000_000
+
+#: files of a saved study (the folder's own files, replaced by ``--force``)
+FILES = ("runs.csv", "runs.json", "summary.json")
+
+
+@dataclass(frozen=True, eq=False)
+class MonteCarloResult:
+    """The runs of a study.
+
+    Attributes
+    ----------
+    analysis : the analysis evaluated ("plant", "slip", "closed-loop")
+    seed : the study's seed
+    spread : the parameter distributions
+    samples : parameter values, shape (runs, n_parameters), columns `spread.names`
+    outputs : output names (`OUTPUTS`)
+    units : output and parameter name -> unit
+    values : outputs, shape (runs, n_outputs); NaN for a failed run (and where an output does
+        not exist, e.g. no right-half-plane zero)
+    ok : run succeeded, shape (runs,)
+    reasons : why each run failed ("" for a run that succeeded)
+    """
+
+    analysis: str
+    seed: int
+    spread: Spread
+    samples: NDArray[np.float64]
+    outputs: tuple[str, ...]
+    units: dict[str, str]
+    values: NDArray[np.float64]
+    ok: NDArray[np.bool_]
+    reasons: tuple[str, ...]
+
+    @property
+    def runs(self) -> int:
+        """Number of runs."""
+        return int(self.ok.size)
+
+    @property
+    def failures(self) -> int:
+        """Number of failed runs."""
+        return int(np.count_nonzero(~self.ok))
+
+    def summary(self, quantiles: Sequence[float] = QUANTILES) -> dict[str, Any]:
+        """Failure count (by exception type, with the first run's reason) and, per output,
+        the statistics of the successful runs where it is finite: ``n``, ``mean``, ``std``,
+        ``min``, quantiles ``q05`` ..., ``max``."""
+        stats: dict[str, Any] = {}
+        for j, name in enumerate(self.outputs):
+            v = self.values[self.ok, j]
+            v = v[np.isfinite(v)]
+            s: dict[str, Any] = {"unit": self.units[name], "n": int(v.size)}
+            if v.size:
+                qs = np.quantile(v, quantiles)
+                s.update(mean=float(v.mean()), std=float(v.std(ddof=1)) if v.size > 1 else 0.0,
+                         min=float(v.min()))
+                s.update({f"q{round(100 * q):02d}": float(x) for q, x in zip(quantiles, qs)})
+                s["max"] = float(v.max())
+            stats[name] = s
+        failed = [r for r, ok in zip(self.reasons, self.ok) if not ok]
+        kinds = Counter(r.split(":")[0] for r in failed)
+        reasons = {k: {"count": n, "example": next(r for r in failed if r.startswith(k + ":"))}
+                   for k, n in sorted(kinds.items(), key=lambda kv: (-kv[1], kv[0]))}
+        return {"analysis": self.analysis, "seed": self.seed, "runs": self.runs,
+                "succeeded": self.runs - self.failures, "failures": self.failures,
+                "failure_reasons": reasons,
+                "spread": {d.name: d.describe() for d in self.spread.distributions},
+                "outputs": stats}
+
+    def table(self) -> list[dict[str, Any]]:
+        """One dict per run: ``run``, ``status``, the parameters, the outputs, ``reason``."""
+        rows = []
+        for i in range(self.runs):
+            row: dict[str, Any] = {"run": i, "status": "ok" if self.ok[i] else "failed"}
+            row.update({n: float(x) for n, x in zip(self.spread.names, self.samples[i])})
+            row.update({n: float(x) for n, x in zip(self.outputs, self.values[i])})
+            row["reason"] = self.reasons[i]
+            rows.append(row)
+        return rows
+
+    def to_csv(self) -> str:
+        """The table as CSV: ``#`` comment lines, then a header with units in brackets
+        (readable by `empact.identification.records`' conventions); empty cells for NaN."""
+        buf = io.StringIO()
+        buf.write(f"# empact Monte Carlo: analysis {self.analysis}, seed {self.seed}, "
+                  f"{self.runs} runs, {self.failures} failed\n")
+        for d in self.spread.distributions:
+            buf.write(f"# {d.name}: {d.describe()}\n")
+        w = csv.writer(buf, lineterminator="\n")
+        names = list(self.spread.names) + list(self.outputs)
+        w.writerow(["run", "status"] + [f"{n} [{self.units[n]}]" if self.units[n] else n
+                                        for n in names] + ["reason"])
+        for row in self.table():
+            w.writerow([row["run"], row["status"]]
+                       + ["" if not np.isfinite(row[n]) else repr(row[n]) for n in names]
+                       + [row["reason"]])
+        return buf.getvalue()
+
+
+def _run_chunk(task) -> tuple[NDArray, NDArray, NDArray, list[str]]:
+    """Runs ``start:stop`` of a study (a sweep chunk; module level, picklable)."""
+    params, spread, context, seed, start, stop = task
+    samples = spread.sample(seed, np.arange(start, stop))
+    names, outputs = spread.names, tuple(OUTPUTS[context.kind])
+    values = np.full((stop - start, len(outputs)), np.nan)
+    ok = np.zeros(stop - start, dtype=bool)
+    reasons = [""] * (stop - start)
+    for k, row in enumerate(samples):
+        try:
+            p = params.from_dotted(dict(zip(names, row.tolist())))
+            out = evaluate(p, context)
+            values[k] = [out[n] for n in outputs]
+            ok[k] = True
+        except Exception as exc:  # noqa: BLE001 - recorded with its reason, never dropped
+            text = " ".join(str(exc).split()) or "no message"
+            reasons[k] = f"{type(exc).__name__}: {text}"[:500]
+    return samples, values, ok, reasons
+
+
+def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plant", *,
+                seed: int = 0, scenario: Any = None, controller: Any = None,
+                sweep: SweepOptions | None = None) -> MonteCarloResult:
+    """Evaluate an analysis over `runs` parameter sets drawn from `spread`.
+
+    Parameters
+    ----------
+    params : the nominal parameter set (the spread's parameters replace its values)
+    spread : `Spread` (see `load_spread`)
+    runs : number of runs (1 ... `MAX_RUNS`)
+    analysis : "plant", "slip" or "closed-loop" (`empact.montecarlo.analyses`)
+    seed : the study's seed (>= 0); run ``i`` draws from ``SeedSequence(seed, spawn_key=(i,))``
+    scenario, controller : the closed-loop scenario (`ControlScenario`) and controller
+        (`Controller`, default the scenario's own)
+    sweep : where the runs are computed (`empact.sweep.SweepOptions`; default in process)
+
+    Returns
+    -------
+    MonteCarloResult
+    """
+    runs = check_int("runs", runs, 1, MAX_RUNS)
+    seed = check_int("seed", seed, 0, 2**63 - 1)
+    context = AnalysisContext(analysis, scenario, controller)
+    if analysis == "closed-loop" and controller is None:
+        context = AnalysisContext(analysis, scenario, resolve_controller(scenario.controller))
+    workers = (sweep.workers or os.cpu_count() or 1) \
+        if sweep is not None and sweep.scheduler != "none" else 1
+    n_chunks = chunk_count(runs, SECONDS_PER_RUN[analysis], workers)
+    tasks = [(params, spread, context, seed, s.start, s.stop)
+             for s in chunk_slices(runs, n_chunks)]
+    parts = run_chunks(_run_chunk, tasks, sweep, desc=f"monte carlo ({analysis})")
+    samples = np.concatenate([p[0] for p in parts]).reshape(runs, len(spread.names))
+    outputs = tuple(OUTPUTS[analysis])
+    units = {**{n: params.unit(n) for n in spread.names}, **OUTPUTS[analysis]}
+    return MonteCarloResult(analysis=analysis, seed=seed, spread=spread, samples=samples,
+                            outputs=outputs, units=units,
+                            values=np.concatenate([p[1] for p in parts]),
+                            ok=np.concatenate([p[2] for p in parts]),
+                            reasons=tuple(r for p in parts for r in p[3]))
+
+
+def save_montecarlo(result: MonteCarloResult, folder: str | os.PathLike[str]) -> Path:
+    """Write ``runs.csv``, ``runs.json`` (the table; null for NaN) and ``summary.json`` into
+    `folder`, all or nothing (a temporary folder moved into place)."""
+    with atomic_folder(folder) as tmp:
+        (tmp / "runs.csv").write_text(result.to_csv())
+        doc = {"analysis": result.analysis, "seed": result.seed, "units": result.units,
+               "parameters": list(result.spread.names), "outputs": list(result.outputs),
+               "runs": result.table()}
+        (tmp / "runs.json").write_text(json.dumps(jsonable(doc), indent=1) + "\n")
+        (tmp / "summary.json").write_text(json.dumps(jsonable(result.summary()), indent=1)
+                                          + "\n")
+    return Path(folder)

@@ -1,0 +1,306 @@
+"""The sweep layer (issue 14): in process and on Dask, bitwise the same; Monte Carlo over
+parameter spread; faults (a killed worker, an unreachable scheduler); the core without Dask.
+
+The Dask tests use a local cluster of worker *processes* (the `dask` extra is installed by the
+Makefile's test set-up, so they run in CI); each is bounded by a pytest-timeout.
+"""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from empact.cli import main
+from empact.control import family as family_mod
+from empact.control.family import plant_family
+from empact.montecarlo import monte_carlo, spread_from_dict
+from empact.montecarlo.spread import Distribution
+from empact.params import default_params
+from empact.slip.stability import stability_map
+from empact.sweep import SweepError, SweepOptions, chunk_count, chunk_slices, run_chunks
+
+P = default_params()
+
+#: a spread that makes some runs fail (a negative stiffness is out of its allowed range)
+FAILING = {"spread": {"actuation.k_w": {"distribution": "normal", "mean": 10.0, "std": 12.0},
+                      "operating.nu": {"distribution": "uniform", "lower": 0.003,
+                                       "upper": 0.008}}}
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """A local Dask cluster (2 worker processes) shared by the tests that use an address."""
+    distributed = pytest.importorskip("distributed", reason="the 'dask' extra (Makefile "
+                                      "installs it)")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0", silence_logs=50) as c:
+        yield c.scheduler_address
+
+
+def family_arrays(fam):
+    return [fam.A, fam.B, fam.C, fam.D]
+
+
+# -- the layer itself ------------------------------------------------------------------------
+def test_chunks_cover_the_items_in_order():
+    for n, k in [(1, 1), (10, 3), (400, 7), (5, 9)]:
+        sl = chunk_slices(n, k)
+        assert [i for s in sl for i in range(n)[s]] == list(range(n))
+        sizes = [s.stop - s.start for s in sl]
+        assert max(sizes) - min(sizes) <= 1
+    # >= 50 ms of compute per chunk: 400 points of 40 us are one chunk in process
+    assert chunk_count(400, 4e-5, 1) == 1
+    # 200 runs of 0.5 s: one run per chunk (each already >= 50 ms)
+    assert chunk_count(200, 0.5, 2) == 200
+
+
+def test_core_never_imports_dask():
+    """`import empact` and a default (in-process) sweep of each kind leave Dask unimported."""
+    code = ("import sys, empact, empact.sweep, empact.montecarlo, empact.cli\n"
+            "from empact.params import default_params\n"
+            "from empact.control.family import plant_family\n"
+            "from empact.slip.stability import stability_map\n"
+            "p = default_params()\n"
+            "plant_family(p, r_g=[0.8, 1.2])\n"
+            "stability_map(p, 'nu', [0.004, 0.01], 'r_g', [0.8, 1.2])\n"
+            "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('dask', 'distributed'))\n"
+            "print(bad)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, check=True)
+    assert out.stdout.strip() == "[]", out.stdout
+
+
+def test_missing_dask_is_one_line(monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import fails as if not installed
+    with pytest.raises(SweepError, match=r"^--scheduler local: Dask is not installed \(pip "
+                                         r"install 'empact\[dask\]'\)$"):
+        run_chunks(abs, [1], SweepOptions(scheduler="local"))
+
+
+def test_family_chunking_does_not_change_a_bit(monkeypatch):
+    """The family computed in one chunk and in 13 chunks: bitwise equal (per-point trim
+    convergence, one compiled linearisation per point)."""
+    kw = dict(r_g=np.geomspace(0.5, 2.0, 13), nu=[0.004, 0.008, 0.012])
+    one = plant_family(P, **kw)
+    monkeypatch.setattr(family_mod, "SECONDS_PER_POINT", 1.0)  # one point per chunk
+    many = plant_family(P, **kw)
+    assert one.ok.all()
+    for a, b in zip(family_arrays(one), family_arrays(many)):
+        np.testing.assert_array_equal(a, b)
+
+
+# -- Dask: bitwise equal to the serial run ---------------------------------------------------
+@pytest.mark.timeout(180)
+def test_family_on_dask_is_bitwise_the_serial_one(cluster):
+    kw = dict(r_g=np.geomspace(0.5, 2.0, 20), nu=np.linspace(0.004, 0.012, 20))
+    serial = plant_family(P, **kw)
+    dask = plant_family(P, sweep=SweepOptions(scheduler=cluster), **kw)
+    assert serial.size == 400
+    for a, b in zip(family_arrays(serial), family_arrays(dask)):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(serial.ok, dask.ok)
+
+
+@pytest.mark.timeout(180)
+def test_stability_map_on_dask_is_bitwise_the_serial_one(cluster):
+    args = (P, "nu", np.linspace(0.001, 0.06, 120), "r_g", np.linspace(0.5, 2.2, 150))
+    serial = stability_map(*args, workers=1)
+    dask = stability_map(*args, chunk_size=1000, sweep=SweepOptions(scheduler=cluster))
+    np.testing.assert_array_equal(serial.max_real, dask.max_real)
+    np.testing.assert_array_equal(serial.min_damping, dask.min_damping)
+    assert 0 < serial.unstable_fraction < 1  # the map crosses the traction peak
+
+
+@pytest.mark.timeout(180)
+def test_montecarlo_does_not_depend_on_workers_or_chunks(cluster, monkeypatch):
+    """Serial, serial in one-run chunks, and on the 2-worker cluster: the same table to the
+    bit, failures (out-of-range samples) included with the same reasons."""
+    from empact.montecarlo import analyses
+
+    spread = spread_from_dict(FAILING, P)
+    serial = monte_carlo(P, spread, 60, "slip", seed=7)
+    on_dask = monte_carlo(P, spread, 60, "slip", seed=7, sweep=SweepOptions(scheduler=cluster))
+    monkeypatch.setitem(analyses.SECONDS_PER_RUN, "slip", 1.0)  # one run per chunk
+    chunked = monte_carlo(P, spread, 60, "slip", seed=7)
+    assert 0 < serial.failures < 60  # some runs fail, the others are kept
+    for other in (on_dask, chunked):
+        np.testing.assert_array_equal(serial.samples, other.samples)
+        np.testing.assert_array_equal(serial.values, other.values)
+        np.testing.assert_array_equal(serial.ok, other.ok)
+        assert serial.reasons == other.reasons
+
+
+# -- Monte Carlo itself ----------------------------------------------------------------------
+def test_failed_runs_are_recorded_with_their_reason():
+    res = monte_carlo(P, spread_from_dict(FAILING, P), 40, "slip", seed=1)
+    k_w = res.samples[:, 0]
+    # a run fails exactly when its k_w is outside the allowed range (0.001, 1e8] N m/rad
+    np.testing.assert_array_equal(res.ok, k_w > 1e-3)
+    for i in np.flatnonzero(~res.ok):
+        assert res.reasons[i].startswith("ParameterError: parameters: actuation.k_w = ")
+        assert np.isnan(res.values[i]).all()
+    assert np.isfinite(res.values[res.ok]).all()
+    s = res.summary()
+    assert s["failures"] == res.failures and s["succeeded"] + s["failures"] == 40
+    assert s["failure_reasons"]["ParameterError"]["count"] == res.failures
+    assert s["outputs"]["max_real"]["n"] == 40 - res.failures
+
+
+def test_a_run_is_its_own_stream():
+    """Run i's sample depends on the seed and i only (not on the runs drawn with it)."""
+    spread = spread_from_dict(FAILING, P)
+    all_runs = spread.sample(11, np.arange(50))
+    np.testing.assert_array_equal(spread.sample(11, [17, 3]), all_runs[[17, 3]])
+    assert not np.array_equal(spread.sample(12, np.arange(50)), all_runs)
+
+
+def test_truncated_distributions_match_closed_forms():
+    """Means and bounds of 40,000 samples against the closed forms of the truncated
+    distributions (tolerance: 5 standard errors)."""
+    from scipy import stats
+
+    n = 40_000
+    u = np.random.default_rng(0).random(n)
+    cases = [Distribution("x", "normal", 10.0, 2.0, 9.0, 15.0),
+             Distribution("x", "lognormal", 3.0, 0.4, -np.inf, 4.0),
+             Distribution("x", "uniform", 2.0, 5.0)]
+    ref_means = [stats.truncnorm((9 - 10) / 2, (15 - 10) / 2, loc=10, scale=2).mean(),
+                 _trunc_lognormal_mean(3.0, 0.4, 4.0), 3.5]
+    for d, ref_mean in zip(cases, ref_means):
+        x = d.ppf(u)
+        assert x.min() >= d.lower and x.max() <= d.upper
+        assert abs(x.mean() - ref_mean) < 5 * x.std() / np.sqrt(n), (d, x.mean(), ref_mean)
+
+
+def _trunc_lognormal_mean(median, sigma, upper):
+    """E[X | X < upper] for ln X ~ N(ln median, sigma^2), in closed form."""
+    from scipy.special import ndtr
+
+    m = np.log(median)
+    b = (np.log(upper) - m) / sigma
+    return np.exp(m + sigma**2 / 2) * ndtr(b - sigma) / ndtr(b)
+
+
+def test_plant_analysis_nominal_run_is_the_plant():
+    """A spread of (almost) zero width reproduces `empact nmp` at the operating point: the
+    same right-half-plane zeros of T_mp -> nu (to 1e-6 relative: k_w moves by < 1e-12)."""
+    from empact.nonlinear.nmp import nmp_analysis
+
+    spread = spread_from_dict({"spread": {"actuation.k_w": {
+        "distribution": "uniform", "lower": P.actuation.k_w, "upper": P.actuation.k_w * (1 +
+                                                                                   1e-12)}}}, P)
+    res = monte_carlo(P, spread, 1, "plant", seed=0)
+    ref = nmp_analysis(P, [P.operating.r_g], f_max=100.0)
+    assert res.ok.all()
+    assert res.values[0, res.outputs.index("n_rhp_zeros")] == ref.n_rhp[0] > 0
+    np.testing.assert_allclose(res.values[0, res.outputs.index("rhp_zero_hz")],
+                               np.abs(ref.rhp_zeros[0]).min() / (2 * np.pi), rtol=1e-6)
+
+
+# -- faults ----------------------------------------------------------------------------------
+@pytest.mark.timeout(240)
+def test_a_worker_killed_mid_sweep_is_survived():
+    """Kill one of two worker processes while a 1,500-run sweep is running: Dask reruns its
+    chunks elsewhere and the table equals the serial one."""
+    distributed = pytest.importorskip("distributed")
+    spread = spread_from_dict(FAILING, P)
+    serial = monte_carlo(P, spread, 1500, "slip", seed=3)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0", silence_logs=50) as c, \
+            distributed.Client(c) as client:
+        opts = SweepOptions(scheduler=c.scheduler_address)
+        monte_carlo(P, spread, 4, "slip", seed=3, sweep=opts)  # workers have imported empact
+        pids = sorted(client.run(os.getpid).values())
+        killed: dict[str, float] = {}
+
+        def kill() -> None:
+            os.kill(pids[0], signal.SIGKILL)
+            killed["t"] = time.perf_counter()
+
+        timer = threading.Timer(0.5, kill)
+        t_start = time.perf_counter()
+        timer.start()
+        res = monte_carlo(P, spread, 1500, "slip", seed=3, sweep=opts)
+        t_end = time.perf_counter()
+        timer.join()
+        print(f"sweep {t_end - t_start:.2f} s, kill at {killed.get('t', 0) - t_start:.2f} s")
+        assert "t" in killed and killed["t"] < t_end  # the kill came while the sweep ran
+        with pytest.raises(ProcessLookupError):
+            os.kill(pids[0], 0)  # that worker is gone
+    np.testing.assert_array_equal(serial.values, res.values)
+    np.testing.assert_array_equal(serial.ok, res.ok)
+    assert serial.reasons == res.reasons
+
+
+@pytest.mark.timeout(120)
+def test_unreachable_scheduler_one_line_exit_2(tmp_path):
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    exe = Path(sys.executable).with_name("empact")
+    out = subprocess.run([str(exe), "plants", "--ratio", "0.5:2:4", "--scheduler",
+                          f"tcp://127.0.0.1:{port}", "--scheduler-timeout", "2",
+                          "--out", str(tmp_path / "f.npz")],
+                         capture_output=True, text=True, timeout=90)
+    assert out.returncode == 2, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1, out.stderr
+    assert lines[0].startswith(f"error: --scheduler tcp://127.0.0.1:{port}: cannot reach the "
+                               "scheduler within 2 s")
+    assert not list(tmp_path.iterdir())  # nothing written
+
+
+# -- the command line ------------------------------------------------------------------------
+@pytest.mark.timeout(180)
+def test_montecarlo_cli_local_cluster_equals_serial(tmp_path):
+    """`empact montecarlo` in process and with --scheduler local --workers 2: the same files
+    to the byte; progress on stderr; the summary's counts and quantiles."""
+    spread = tmp_path / "spread.toml"
+    res = CliRunner().invoke(main, ["montecarlo", "--example-spread"])
+    assert res.exit_code == 0
+    spread.write_text(res.output)
+    args = ["montecarlo", "--spread", str(spread), "--runs", "40", "--analysis", "slip",
+            "--seed", "5"]
+    a = CliRunner().invoke(main, args + ["--out", str(tmp_path / "a")])
+    assert a.exit_code == 0, a.output
+    exe = Path(sys.executable).with_name("empact")
+    b = subprocess.run([str(exe)] + args + ["--out", str(tmp_path / "b"), "--scheduler",
+                                            "local", "--workers", "2"],
+                       capture_output=True, text=True, timeout=150)
+    assert b.returncode == 0, b.stderr
+    assert "chunk" in b.stderr  # the progress bar
+    for name in ("runs.csv", "runs.json", "summary.json"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
+    summary = json.loads((tmp_path / "a" / "summary.json").read_text())
+    assert summary["runs"] == 40 and summary["failures"] == 0
+    q = summary["outputs"]["min_damping"]
+    assert q["min"] <= q["q05"] <= q["q50"] <= q["q95"] <= q["max"]
+    rows = (tmp_path / "a" / "runs.csv").read_text().splitlines()
+    assert rows[0].startswith("# empact Monte Carlo: analysis slip, seed 5, 40 runs, 0 failed")
+    header = next(r for r in rows if not r.startswith("#"))
+    assert header.startswith("run,status,actuation.k_w [N m/rad],")
+    assert len([r for r in rows if r[:1].isdigit()]) == 40
+
+
+def test_montecarlo_closed_loop_cli(tmp_path):
+    """Two closed-loop runs of a shipped scenario with the shipped PI controller."""
+    spread = tmp_path / "s.toml"
+    spread.write_text('[spread."traction.D_med"]\ndistribution = "uniform"\nlower = 0.095\n'
+                      'upper = 0.105\n')
+    res = CliRunner().invoke(main, ["montecarlo", "--spread", str(spread), "--runs", "2",
+                                    "--analysis", "closed-loop", "--example",
+                                    "slip-load-step-r1", "--json"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.output)
+    assert doc["schema"]["name"] == "empact.montecarlo" and doc["runs"] == 2
+    assert doc["outputs"]["ratio_error"]["n"] + doc["failures"] == 2
