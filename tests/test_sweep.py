@@ -2,7 +2,8 @@
 parameter spread; faults (a killed worker, an unreachable scheduler); the core without Dask.
 
 The Dask tests use a local cluster of worker *processes* (the `dask` extra is installed by the
-Makefile's test set-up, so they run in CI); each is bounded by a pytest-timeout.
+Makefile's test set-up, so they run in CI, and fail rather than skip without it); each is
+bounded by a pytest-timeout.
 """
 from __future__ import annotations
 
@@ -40,8 +41,7 @@ FAILING = {"spread": {"actuation.k_w": {"distribution": "normal", "mean": 10.0, 
 @pytest.fixture(scope="module")
 def cluster():
     """A local Dask cluster (2 worker processes) shared by the tests that use an address."""
-    distributed = pytest.importorskip("distributed", reason="the 'dask' extra (Makefile "
-                                      "installs it)")
+    import distributed  # the 'dask' extra: the Makefile installs it, so a missing one fails
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=":0", silence_logs=50) as c:
         yield c.scheduler_address
@@ -212,7 +212,7 @@ def test_plant_analysis_nominal_run_is_the_plant():
 def test_a_worker_killed_mid_sweep_is_survived():
     """Kill one of two worker processes while a 1,500-run sweep is running: Dask reruns its
     chunks elsewhere and the table equals the serial one."""
-    distributed = pytest.importorskip("distributed")
+    import distributed
     spread = spread_from_dict(FAILING, P)
     serial = monte_carlo(P, spread, 1500, "slip", seed=3)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
