@@ -28,16 +28,15 @@ Compute only.
 """
 from __future__ import annotations
 
-import csv
 import math
 import os
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._tables import read_curves
 from .errors import ParameterError
 from .geometry import radii, wrap_angle
 from .params import Params, ThrustRatioParams, VariatorParams
@@ -206,81 +205,12 @@ def load_thrust_ratio(path: str | os.PathLike[str]) -> TabulatedThrustRatio:
     """Read a thrust-ratio map from ``.csv`` (header ``r_g,tau,kappa``, rows with the same
     ``r_g`` form one curve) or ``.toml`` (``[[curve]]`` tables with ``r_g``, ``tau``,
     ``kappa``).  Raises `ParameterError` naming the file, row and value."""
-    p = Path(path)
-    if not p.is_file():
-        raise ParameterError(f"{p}: no such thrust-ratio table")
-    suffix = p.suffix.lower()
-    if suffix == ".csv":
-        curves = _read_csv(p)
-    elif suffix == ".toml":
-        curves = _read_toml(p)
-    else:
-        raise ParameterError(f"{p}: thrust-ratio table must be .csv or .toml, not "
-                             f"{suffix or 'no suffix'!r}")
+    curves = read_curves(path, "thrust-ratio table", "tau", "kappa")
     items = sorted(curves.items())
     return TabulatedThrustRatio(ratios=tuple(r for r, _ in items),
                                 tau_data=tuple(np.asarray(c[0], float) for _, c in items),
                                 kappa_data=tuple(np.asarray(c[1], float) for _, c in items),
-                                source=str(p))
-
-
-def _number(text: str, where: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        raise ParameterError(f"{where}: {text!r} is not a number") from None
-
-
-def _read_csv(p: Path) -> dict[float, tuple[list[float], list[float]]]:
-    try:
-        with open(p, newline="", encoding="utf-8-sig") as fh:
-            rows = [row for row in csv.reader(fh) if row and not row[0].lstrip().startswith("#")]
-    except UnicodeDecodeError:
-        raise ParameterError(f"{p}: not a UTF-8 text file") from None
-    if not rows:
-        raise ParameterError(f"{p}: empty thrust-ratio table")
-    header = [h.strip() for h in rows[0]]
-    if sorted(header) != ["kappa", "r_g", "tau"]:
-        raise ParameterError(f"{p}: header {','.join(header)!r} must name exactly the columns "
-                             "r_g, tau, kappa")
-    col = {name: header.index(name) for name in ("r_g", "tau", "kappa")}
-    curves: dict[float, tuple[list[float], list[float]]] = {}
-    for line, row in enumerate(rows[1:], start=2):
-        if len(row) != 3:
-            raise ParameterError(f"{p}, row {line}: {len(row)} fields, expected 3 (r_g, tau, "
-                                 "kappa)")
-        where = f"{p}, row {line}"
-        r = _number(row[col["r_g"]], where)
-        taus, kaps = curves.setdefault(r, ([], []))
-        taus.append(_number(row[col["tau"]], where))
-        kaps.append(_number(row[col["kappa"]], where))
-    if not curves:
-        raise ParameterError(f"{p}: no data rows")
-    return curves
-
-
-def _read_toml(p: Path) -> dict[float, tuple[list[float], list[float]]]:
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ParameterError(f"{p}: not valid TOML ({exc})") from None
-    if set(data) != {"curve"} or not isinstance(data["curve"], list) or not data["curve"]:
-        raise ParameterError(f"{p}: expected only [[curve]] tables with r_g, tau, kappa")
-    curves: dict[float, tuple[list[float], list[float]]] = {}
-    for i, c in enumerate(data["curve"]):
-        keys = set(c) if isinstance(c, dict) else set()
-        if keys != {"r_g", "tau", "kappa"}:
-            raise ParameterError(f"{p}: curve {i + 1} has keys {sorted(keys)}, expected r_g, "
-                                 "tau, kappa")
-        if isinstance(c["r_g"], bool) or not isinstance(c["r_g"], (int, float)):
-            raise ParameterError(f"{p}: curve {i + 1}: r_g = {c['r_g']!r} must be a number")
-        r = float(c["r_g"])
-        if r in curves:
-            raise ParameterError(f"{p}: curve {i + 1}: ratio r_g = {r:g} given twice")
-        if not isinstance(c["tau"], list) or not isinstance(c["kappa"], list):
-            raise ParameterError(f"{p}: curve {i + 1}: tau and kappa must be arrays")
-        curves[r] = (c["tau"], c["kappa"])
-    return curves
+                                source=str(Path(path)))
 
 
 def thrust_ratio_from_params(params: Params) -> AnalyticThrustRatio:

@@ -42,10 +42,8 @@ Compute only: plots are in `empact.plotting_slip`.
 """
 from __future__ import annotations
 
-import csv
 import math
 import os
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Protocol, Sequence, runtime_checkable
@@ -53,6 +51,7 @@ from typing import Mapping, Protocol, Sequence, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from ._lazy import lazy_module
+from ._tables import read_curves
 from .errors import ParameterError
 from .params import Params, TractionParams
 
@@ -363,74 +362,8 @@ def load_traction(path: str | os.PathLike[str]) -> TabulatedTraction:
     ParameterError
         For a missing file, a bad format, or a curve that `TabulatedTraction` refuses.
     """
-    p = Path(path)
-    if not p.is_file():
-        raise ParameterError(f"{p}: no such traction table")
-    suffix = p.suffix.lower()
-    if suffix == ".csv":
-        curves = _read_csv(p)
-    elif suffix == ".toml":
-        curves = _read_toml(p)
-    else:
-        raise ParameterError(f"{p}: traction table must be .csv or .toml, not "
-                             f"{suffix or 'no suffix'!r}")
-    return TabulatedTraction.from_curves(curves, source=str(p))
-
-
-def _number(text: str, where: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        raise ParameterError(f"{where}: {text!r} is not a number") from None
-
-
-def _read_csv(p: Path) -> dict[float, tuple[list[float], list[float]]]:
-    with open(p, newline="") as fh:
-        rows = [row for row in csv.reader(fh) if row and not row[0].lstrip().startswith("#")]
-    if not rows:
-        raise ParameterError(f"{p}: empty traction table")
-    header = [h.strip() for h in rows[0]]
-    if sorted(header) != ["mu", "nu", "r_g"]:
-        raise ParameterError(f"{p}: header {','.join(header)!r} must name exactly the columns "
-                             "r_g, nu, mu")
-    col = {name: header.index(name) for name in ("r_g", "nu", "mu")}
-    curves: dict[float, tuple[list[float], list[float]]] = {}
-    for line, row in enumerate(rows[1:], start=2):
-        if len(row) != 3:
-            raise ParameterError(f"{p}, row {line}: {len(row)} fields, expected 3 (r_g, nu, mu)")
-        where = f"{p}, row {line}"
-        r = _number(row[col["r_g"]], where)
-        nu_list, mu_list = curves.setdefault(r, ([], []))
-        nu_list.append(_number(row[col["nu"]], where))
-        mu_list.append(_number(row[col["mu"]], where))
-    if not curves:
-        raise ParameterError(f"{p}: no data rows")
-    return curves
-
-
-def _read_toml(p: Path) -> dict[float, tuple[list[float], list[float]]]:
-    try:
-        data = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"{p}: not valid TOML ({exc})") from None
-    extra = set(data) - {"curve"}
-    if extra or not isinstance(data.get("curve"), list) or not data["curve"]:
-        raise ParameterError(f"{p}: expected only [[curve]] tables with r_g, nu, mu")
-    curves: dict[float, tuple[list[float], list[float]]] = {}
-    for i, c in enumerate(data["curve"]):
-        keys = set(c) if isinstance(c, dict) else set()
-        if keys != {"r_g", "nu", "mu"}:
-            raise ParameterError(f"{p}: curve {i + 1} has keys {sorted(keys)}, expected r_g, nu, "
-                                 "mu")
-        if isinstance(c["r_g"], bool) or not isinstance(c["r_g"], (int, float)):
-            raise ParameterError(f"{p}: curve {i + 1}: r_g = {c['r_g']!r} must be a number")
-        r = float(c["r_g"])
-        if r in curves:
-            raise ParameterError(f"{p}: curve {i + 1}: ratio r_g = {r:g} given twice")
-        if not isinstance(c["nu"], list) or not isinstance(c["mu"], list):
-            raise ParameterError(f"{p}: curve {i + 1}: nu and mu must be arrays")
-        curves[r] = (c["nu"], c["mu"])
-    return curves
+    curves = read_curves(path, "traction table", "nu", "mu")
+    return TabulatedTraction.from_curves(curves, source=str(Path(path)))
 
 
 def traction_from_params(params: Params) -> MagicFormulaTraction:
