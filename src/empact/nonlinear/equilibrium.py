@@ -249,11 +249,25 @@ def _contact_radii(model: EmpactModel, r_g: float, F_s: float, tau_of, request: 
                     "static force")
 
 
+def _servo_statics(model: EmpactModel, F_p_act, F_s_act, q5, q6):
+    """Servo-side coordinates q1..q4 [rad] and holding torques T_mp, T_ms [N m] that carry the
+    actuator forces `F_p_act`, `F_s_act` [N] with the sheaves at `q5`, `q6` [m] (scalars or
+    arrays: `_assemble` and `trim_grid` share it)."""
+    a, p = model.params.actuation, model.p
+    sig = p[K.P_SIG]
+    q3 = (-F_p_act / p[K.P_KTP] - q5) / a.s
+    q4 = q3 + (sig * F_s_act / p[K.P_KTS] - q6) / a.s
+    T_c = a.i_e * a.s * sig * F_s_act
+    q2 = a.i_c * (T_c / p[K.P_KC] + q4 / a.i_e)
+    T_w = -a.i_e * a.s * (F_p_act + sig * F_s_act)
+    q1 = a.i_w * (T_w / p[K.P_KW] + q3 / a.i_e)
+    return q1, q2, q3, q4, T_w / a.i_w, T_c / a.i_c
+
+
 def _assemble(model: EmpactModel, r_g, omega_p, nu, F_s, T_l, R_p, R_s, phi, e):
-    v, a, d = model.params.variator, model.params.actuation, model.params.driveline
+    v, d = model.params.variator, model.params.driveline
     p = model.p
-    k_w, k_c, k_belt, k_tp, k_ts = (p[K.P_KW], p[K.P_KC], p[K.P_KBELT], p[K.P_KTP],
-                                    p[K.P_KTS])
+    k_belt = p[K.P_KBELT]
     tb = np.tan(v.beta)
     N = k_belt * e
     F_p = N * (np.pi + 2 * phi) / tb
@@ -268,13 +282,7 @@ def _assemble(model: EmpactModel, r_g, omega_p, nu, F_s, T_l, R_p, R_s, phi, e):
     lam, _ = _static_creep(model, r_g, R_p, R_s, phi, F_el, tau)
     F_p_act = F_p + lam * r_g / (tb * R_p)
     F_s_act = F_el - lam * r_g / (tb * R_s)
-    q3 = (-F_p_act / k_tp - q5) / a.s
-    q4 = q3 + (sig * F_s_act / k_ts - q6) / a.s
-    T_c = a.i_e * a.s * sig * F_s_act
-    q2 = a.i_c * (T_c / k_c + q4 / a.i_e)
-    T_w = -a.i_e * a.s * (F_p_act + sig * F_s_act)
-    q1 = a.i_w * (T_w / k_w + q3 / a.i_e)
-    T_mp, T_ms = T_w / a.i_w, T_c / a.i_c
+    q1, q2, q3, q4, T_mp, T_ms = _servo_statics(model, F_p_act, F_s_act, q5, q6)
     omega_s = (1 - nu) * r_g * omega_p
     T_d = r_g * T_l
     x = np.zeros(model.n)
@@ -456,8 +464,7 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None) 
     good = reason == ""
     # assemble (vectorised `_assemble`)
     a = model.params.actuation
-    k_w, k_c, k_belt, k_tp, k_ts = (p[K.P_KW], p[K.P_KC], p[K.P_KBELT], p[K.P_KTP], p[K.P_KTS])
-    N_b = k_belt * e
+    N_b = p[K.P_KBELT] * e
     F_p = N_b * (np.pi + 2 * phi) / tb
     F_el = N_b * (np.pi - 2 * phi) / tb
     q5 = (R_p - model.params.variator.R_min) * tb
@@ -468,13 +475,7 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None) 
         K.creep_many(r, R_p, R_s, phi, F_el, mu / mu_max, p, lam, keq)
     F_p_act = F_p + lam * r / (tb * R_p)
     F_s_act = F_el - lam * r / (tb * R_s)
-    q3 = (-F_p_act / k_tp - q5) / a.s
-    q4 = q3 + (sig * F_s_act / k_ts - q6) / a.s
-    T_c = a.i_e * a.s * sig * F_s_act
-    q2 = a.i_c * (T_c / k_c + q4 / a.i_e)
-    T_w = -a.i_e * a.s * (F_p_act + sig * F_s_act)
-    q1 = a.i_w * (T_w / k_w + q3 / a.i_e)
-    T_mp, T_ms = T_w / a.i_w, T_c / a.i_c
+    q1, q2, q3, q4, T_mp, T_ms = _servo_statics(model, F_p_act, F_s_act, q5, q6)
     omega_s = (1 - nu_) * r * w
     d = model.params.driveline
     T_d = r * Tl
