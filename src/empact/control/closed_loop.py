@@ -59,7 +59,7 @@ from ..nonlinear import _kernel as K
 from ..nonlinear._rosenbrock import STATUS, integrate
 from ..nonlinear.equilibrium import TrimResult, trim
 from ..nonlinear.model import ModelOptions, nonlinear_model
-from ..nonlinear.scenario import _signal
+from ..nonlinear.scenario import _signal, check_tables
 from ..nonlinear.simulation import SimulationResult, state_tolerances
 from ..params import Params, read_toml
 from .controller import Controller, load_controller
@@ -120,16 +120,7 @@ def load_control_scenario(path: str | os.PathLike[str]) -> ControlScenario:
     """Read and validate a closed-loop scenario; one-line errors naming file and key."""
     src = str(path)
     data = read_toml(path, "control scenario")
-    for key, value in data.items():
-        if key not in _KEYS:
-            raise ParameterError(f"{src}: unknown table [{key}] (allowed: {', '.join(_KEYS)})")
-        if not isinstance(value, Mapping):
-            raise ParameterError(f"{src}: {key!r} must be a table")
-        allowed = _KEYS[key]
-        for sub in value:
-            if allowed is not None and sub not in allowed:
-                raise ParameterError(f"{src}: unknown key {key}.{sub} (allowed: "
-                                     f"{', '.join(sorted(allowed))})")
+    check_tables(data, _KEYS, src)
     head = data.get("scenario", {})
     for key in ("duration", "controller"):
         if key not in head:

@@ -126,19 +126,24 @@ def load_scenario(path: str | os.PathLike[str]) -> Scenario:
     return scenario_from_dict(data, src)
 
 
-def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenario:
-    """Validate a scenario given as a nested mapping (the parsed TOML)."""
+def check_tables(data: Mapping[str, Any], schema: Mapping[str, Any], src: str) -> None:
+    """Refuse a table not in `schema` (table -> allowed keys, or None for any), a value where
+    a table belongs, and a key not allowed in its table: one line naming `src`."""
     for key, value in data.items():
-        if key not in _SCENARIO_KEYS:
-            raise ParameterError(f"{src}: unknown table [{key}] (allowed: "
-                                 f"{', '.join(_SCENARIO_KEYS)})")
+        if key not in schema:
+            raise ParameterError(f"{src}: unknown table [{key}] (allowed: {', '.join(schema)})")
         if not isinstance(value, Mapping):
             raise ParameterError(f"{src}: {key!r} must be a table")
-        allowed = _SCENARIO_KEYS[key]
+        allowed = schema[key]
         for sub in value:
             if allowed is not None and sub not in allowed:
                 raise ParameterError(f"{src}: unknown key {key}.{sub} (allowed: "
                                      f"{', '.join(sorted(allowed))})")
+
+
+def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenario:
+    """Validate a scenario given as a nested mapping (the parsed TOML)."""
+    check_tables(data, _SCENARIO_KEYS, src)
     head = data.get("scenario", {})
     if "duration" not in head:
         raise ParameterError(f"{src}: missing scenario.duration [s]")
