@@ -103,10 +103,15 @@ def save_system(sys, path: str | os.PathLike[str], *, fmt: str | None = None,
             flat[k] = np.array(v, dtype=object if fmt == "mat" else str)
         else:
             flat[k] = np.asarray(v)
+    return write_arrays(path, flat, fmt)
+
+
+def write_arrays(path: str | os.PathLike[str], arrays: Mapping[str, Any], fmt: str) -> Path:
+    """Write named arrays atomically as MATLAB ``.mat`` (fmt "mat") or numpy ``.npz``."""
     with atomic_file(path) as tmp:
         if fmt == "mat":
-            sio.savemat(tmp, flat)
+            sio.savemat(tmp, dict(arrays))
         else:
             with open(tmp, "wb") as fh:
-                np.savez(fh, **flat)
+                np.savez(fh, **arrays)
     return Path(path)

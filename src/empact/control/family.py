@@ -41,11 +41,11 @@ from typing import Any, Mapping
 import numpy as np
 from numpy.typing import NDArray
 
-from .._io import atomic_file, atomic_write_text
+from .._io import atomic_write_text
 from .._lazy import lazy_module
 from .._validate import check_choice, check_values
 from ..errors import ParameterError
-from ..export import jsonable
+from ..export import jsonable, write_arrays
 from ..lti import statespace
 from ..nonlinear import _kernel as K
 from ..nonlinear.equilibrium import trim_grid
@@ -56,7 +56,6 @@ from ..params import Params
 from ..sweep import SweepOptions, chunk_count, chunk_slices, run_chunks
 
 interpolate = lazy_module("scipy.interpolate")
-sio = lazy_module("scipy.io")
 
 __all__ = ["VARIABLES", "PlantFamily", "plant_family", "save_family", "load_family",
            "BENCH_OPTIONS"]
@@ -332,13 +331,7 @@ def save_family(family: PlantFamily, path: str | os.PathLike[str], fmt: str | No
         nd = len(family.shape)
         for key in ("A", "B", "C", "D"):
             flat[key] = np.moveaxis(flat[key], (nd, nd + 1), (0, 1))
-    with atomic_file(path) as tmp:
-        if fmt == "mat":
-            sio.savemat(tmp, flat)
-        else:
-            with open(tmp, "wb") as fh:
-                np.savez(fh, **flat)
-    return Path(path)
+    return write_arrays(path, flat, fmt)
 
 
 def load_family(path: str | os.PathLike[str]) -> PlantFamily:
