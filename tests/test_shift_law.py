@@ -191,6 +191,28 @@ def test_tabulated_thrust_ratio_kernel_equals_python(params, tmp_path):
     assert y["F_p_act"] / y["F_s_act"] == pytest.approx(0.75, rel=1e-9)
 
 
+def test_scenario_thrust_ratio_path_is_relative_to_the_scenario(tmp_path, monkeypatch):
+    """A ``[model] thrust_ratio`` file named relative to an open-loop or a closed-loop scenario
+    is read from the scenario's folder, whatever the working directory (both loaders)."""
+    from empact.control.closed_loop import load_control_scenario
+    from empact.nonlinear.scenario import load_scenario
+    folder = tmp_path / "study"
+    folder.mkdir()
+    table(folder)
+    (folder / "open.toml").write_text(
+        '[scenario]\nduration = 0.1\n[model]\nthrust_ratio = "kappa.csv"\n'
+        "[initial]\nr_g = 1\nomega_p = 300.0\nF_s = 10000.0\nT_l = 50.0\n")
+    (folder / "closed.toml").write_text(
+        '[scenario]\nduration = 0.1\ncontroller = "shipped:pi"\n[model]\n'
+        'thrust_ratio = "kappa.csv"\n[initial]\nr_g = 1\nomega_p = 300.0\nnu = 0.01\n'
+        "T_l = 50.0\n")
+    monkeypatch.chdir(tmp_path)  # not the scenario's folder
+    for sc in (load_scenario(folder / "open.toml"), load_control_scenario(folder / "closed.toml")):
+        kmap = sc.options.thrust_ratio
+        # the table's own value at (tau = 0, r_g = 0.5), exact
+        assert float(kmap.kappa(0.0, 0.5)) == pytest.approx(0.75, rel=1e-12)
+
+
 @pytest.mark.parametrize("text, match", [
     ("r_g,tau\n1,0\n", "must name exactly the columns r_g, tau, kappa"),
     ("r_g,tau,kappa\n1,0,1\n", "1 points, need at least 2"),

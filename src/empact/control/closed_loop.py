@@ -59,7 +59,7 @@ from ..nonlinear import _kernel as K
 from ..nonlinear._rosenbrock import STATUS, integrate
 from ..nonlinear.equilibrium import TrimResult, trim
 from ..nonlinear.model import ModelOptions, nonlinear_model
-from ..nonlinear.scenario import _signal, check_tables
+from ..nonlinear.scenario import _signal, check_tables, model_options
 from ..nonlinear.simulation import SimulationResult, state_tolerances
 from ..params import Params, read_toml
 from .controller import Controller, load_controller
@@ -135,11 +135,7 @@ def load_control_scenario(path: str | os.PathLike[str]) -> ControlScenario:
                             ("feedback", "safety-factor"))
     sf = check_number("scenario.safety_factor", head.get("safety_factor", 1.3), 1.0, 3.0,
                       where=src)
-    model = {**{"drive": "speed", "load": "torque"}, **dict(data.get("model", {}))}
-    try:
-        options = ModelOptions.from_mapping(model)
-    except ParameterError as exc:
-        raise ParameterError(f"{src}: [model] {exc}") from None
+    options = model_options(data.get("model", {}), src, {"drive": "speed", "load": "torque"})
     if options.ratio_control:
         raise ParameterError(f"{src}: [model] ratio_control must be false: the controller "
                              "drives the servo torques")

@@ -141,6 +141,20 @@ def check_tables(data: Mapping[str, Any], schema: Mapping[str, Any], src: str) -
                                      f"{', '.join(sorted(allowed))})")
 
 
+def model_options(table: Mapping[str, Any], src: str,
+                  defaults: Mapping[str, Any] | None = None) -> ModelOptions:
+    """A scenario file's ``[model]`` table as `ModelOptions` (over `defaults`); a relative
+    ``thrust_ratio`` path is read relative to the scenario file."""
+    model = {**(defaults or {}), **dict(table)}
+    path = model.get("thrust_ratio")
+    if isinstance(path, str) and not Path(path).is_absolute() and Path(src).is_file():
+        model["thrust_ratio"] = str(Path(src).parent / path)
+    try:
+        return ModelOptions.from_mapping(model)
+    except ParameterError as exc:
+        raise ParameterError(f"{src}: [model] {exc}") from None
+
+
 def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenario:
     """Validate a scenario given as a nested mapping (the parsed TOML)."""
     check_tables(data, _SCENARIO_KEYS, src)
@@ -151,14 +165,7 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
                             unit="s", where=src)
     rate = check_number("scenario.sample_rate", head.get("sample_rate", 1000.0), 0.0, 1e6,
                         lo_open=True, unit="Hz", where=src)
-    model = dict(data.get("model", {}))
-    table = model.get("thrust_ratio")
-    if isinstance(table, str) and not Path(table).is_absolute() and Path(src).is_file():
-        model["thrust_ratio"] = str(Path(src).parent / table)  # relative to the scenario
-    try:
-        options = ModelOptions.from_mapping(model)
-    except ParameterError as exc:
-        raise ParameterError(f"{src}: [model] {exc}") from None
+    options = model_options(data.get("model", {}), src)
     initial = dict(data.get("initial", {}))
     for key in ("r_g", "omega_p"):
         if key not in initial:
