@@ -1,4 +1,4 @@
-"""Reading tabulated curves ``y(x)`` at several ratios from CSV or TOML (one reader for the
+"""Tabulated curves ``y(x)`` at several ratios: read from CSV or TOML and checked (one reader for the
 traction tables and the thrust-ratio maps).
 
 CSV: a header naming exactly the columns ``r_g``, `x`, `y` (any order; a UTF-8 BOM and ``#``
@@ -13,9 +13,12 @@ import os
 import tomllib
 from pathlib import Path
 
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
 from .errors import ParameterError
 
-__all__ = ["read_curves"]
+__all__ = ["check_curve", "read_curves"]
 
 Curves = dict[float, tuple[list[float], list[float]]]
 
@@ -34,6 +37,35 @@ def read_curves(path: str | os.PathLike[str], what: str, x: str, y: str) -> Curv
     if suffix == ".toml":
         return _read_toml(p, x, y)
     raise ParameterError(f"{p}: {what} must be .csv or .toml, not {suffix or 'no suffix'!r}")
+
+
+def check_curve(where: str, x: ArrayLike, y: ArrayLike, names: tuple[str, str],
+                min_points: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """One curve as float arrays: lists of numbers of equal length, at least `min_points`,
+    finite, `x` strictly increasing; otherwise a one-line `ParameterError` from `where`
+    naming the entry (`names` are the columns' names).  Ranges are the caller's to check."""
+    xn, yn = names
+    try:
+        xa = np.asarray(x, float).ravel()
+        ya = np.asarray(y, float).ravel()
+    except (TypeError, ValueError):
+        raise ParameterError(f"{where}: {xn} and {yn} must be lists of numbers") from None
+    if xa.size != ya.size:
+        raise ParameterError(f"{where}: {xa.size} {xn} values but {ya.size} {yn} values")
+    if xa.size < min_points:
+        raise ParameterError(f"{where}: {xa.size} points, need at least {min_points}")
+    for name, arr in ((xn, xa), (yn, ya)):
+        bad = np.flatnonzero(~np.isfinite(arr))
+        if bad.size:
+            i = int(bad[0])
+            raise ParameterError(f"{where}: {name}[{i}] = {float(arr[i])!r}: must be a finite "
+                                 "number")
+    step = np.flatnonzero(np.diff(xa) <= 0)
+    if step.size:
+        i = int(step[0]) + 1
+        raise ParameterError(f"{where}: {xn} must increase strictly, but {xn}[{i}] = "
+                             f"{xa[i]:g} follows {xn}[{i - 1}] = {xa[i - 1]:g}")
+    return xa, ya
 
 
 def _number(text: str, where: str) -> float:

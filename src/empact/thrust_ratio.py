@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._tables import read_curves
+from ._tables import check_curve, read_curves
 from .errors import ParameterError
 from .geometry import radii, wrap_angle
 from .params import Params, ThrustRatioParams, VariatorParams
@@ -168,26 +168,7 @@ class TabulatedThrustRatio:
 
 def _validate_curve(r: float, tau: ArrayLike, kap: ArrayLike, source: str):
     where = f"{source}, curve r_g = {r:g}"
-    try:
-        t = np.asarray(tau, float).ravel()
-        k = np.asarray(kap, float).ravel()
-    except (TypeError, ValueError):
-        raise ParameterError(f"{where}: tau and kappa must be lists of numbers") from None
-    if t.size != k.size:
-        raise ParameterError(f"{where}: {t.size} tau values but {k.size} kappa values")
-    if t.size < 2:
-        raise ParameterError(f"{where}: {t.size} points, need at least 2")
-    for name, arr in (("tau", t), ("kappa", k)):
-        bad = np.flatnonzero(~np.isfinite(arr))
-        if bad.size:
-            i = int(bad[0])
-            raise ParameterError(f"{where}: {name}[{i}] = {float(arr[i])!r}: must be a finite "
-                                 "number")
-    step = np.flatnonzero(np.diff(t) <= 0)
-    if step.size:
-        i = int(step[0]) + 1
-        raise ParameterError(f"{where}: tau must increase strictly, but tau[{i}] = {t[i]:g} "
-                             f"follows tau[{i - 1}] = {t[i - 1]:g}")
+    t, k = check_curve(where, tau, kap, ("tau", "kappa"), 2)
     out = np.flatnonzero((t < TAU_RANGE[0]) | (t > TAU_RANGE[1]))
     if out.size:
         i = int(out[0])

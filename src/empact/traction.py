@@ -51,7 +51,7 @@ from typing import Mapping, Protocol, Sequence, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from ._lazy import lazy_module
-from ._tables import read_curves
+from ._tables import check_curve, read_curves
 from .errors import ParameterError
 from .params import Params, TractionParams
 
@@ -315,26 +315,7 @@ def _validate_curve(r: float, nu: ArrayLike, mu: ArrayLike, source: str) \
         -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Check one tabulated curve; raise `ParameterError` with a one-line reason."""
     where = f"{source}, curve r_g = {r:g}"
-    try:
-        nu_a = np.asarray(nu, float).ravel()
-        mu_a = np.asarray(mu, float).ravel()
-    except (TypeError, ValueError):
-        raise ParameterError(f"{where}: nu and mu must be lists of numbers") from None
-    if nu_a.size != mu_a.size:
-        raise ParameterError(f"{where}: {nu_a.size} nu values but {mu_a.size} mu values")
-    if nu_a.size < MIN_POINTS:
-        raise ParameterError(f"{where}: {nu_a.size} points, need at least {MIN_POINTS}")
-    for name, arr in (("nu", nu_a), ("mu", mu_a)):
-        bad = np.flatnonzero(~np.isfinite(arr))
-        if bad.size:
-            i = int(bad[0])
-            raise ParameterError(f"{where}: {name}[{i}] = {float(arr[i])!r}: must be a finite "
-                                 "number")
-    step = np.flatnonzero(np.diff(nu_a) <= 0)
-    if step.size:
-        i = int(step[0]) + 1
-        raise ParameterError(f"{where}: nu must increase strictly, but nu[{i}] = {nu_a[i]:g} "
-                             f"follows nu[{i - 1}] = {nu_a[i - 1]:g}")
+    nu_a, mu_a = check_curve(where, nu, mu, ("nu", "mu"), MIN_POINTS)
     if np.any(np.abs(nu_a) >= 1):
         i = int(np.flatnonzero(np.abs(nu_a) >= 1)[0])
         raise ParameterError(f"{where}: nu[{i}] = {nu_a[i]:g}: allowed range is (-1, 1)")
