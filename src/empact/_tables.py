@@ -1,5 +1,5 @@
-"""Tabulated curves ``y(x)`` at several ratios: read from CSV or TOML and checked (one reader for the
-traction tables and the thrust-ratio maps).
+"""Tabulated curves ``y(x)`` at several ratios, read from CSV or TOML and checked (one reader
+for the traction tables and the thrust-ratio maps).
 
 CSV: a header naming exactly the columns ``r_g``, `x`, `y` (any order; a UTF-8 BOM and ``#``
 comment lines are allowed), one sample per row; rows with the same ``r_g`` form one curve, in
