@@ -32,7 +32,8 @@ Scenario file (TOML)::
     safety_factor = 1.3
     load_step_time = 0.5          # [s] for the metrics (optional)
 
-    [model]                       # ModelOptions (default: test bench, drive speed-controlled)
+    [model]                       # ModelOptions (default: test bench, drive speed-controlled;
+                                  # a thrust_ratio file is relative to this file)
     [initial]                     # trim: r_g, omega_p and two of nu, F_s, T_l
     [references]                  # [[t, value], ...]; default: the trimmed values held
     r_g = [[0.0, 1.0]]
