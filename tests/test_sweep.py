@@ -28,7 +28,8 @@ from empact.montecarlo import monte_carlo, spread_from_dict
 from empact.montecarlo.spread import Distribution
 from empact.params import default_params
 from empact.slip.stability import stability_map
-from empact.sweep import SweepError, SweepOptions, chunk_count, chunk_slices, run_chunks
+from empact.sweep import (SweepError, SweepOptions, chunk_count, chunk_slices, plan_chunks,
+                          run_chunks)
 
 P = default_params()
 
@@ -62,6 +63,17 @@ def test_chunks_cover_the_items_in_order():
     assert chunk_count(400, 4e-5, 1) == 1
     # 200 runs of 0.5 s: one run per chunk (each already >= 50 ms)
     assert chunk_count(200, 0.5, 2) == 200
+    # the parallelism the chunks are planned for: 1 in process, else the workers
+    assert SweepOptions().parallelism == 1
+    assert SweepOptions("none", workers=4).parallelism == 1
+    assert SweepOptions("local", workers=3).parallelism == 3
+    # 20000 points of 40 us (0.8 s) on 3 workers: 16 chunks of 50 ms, in order; in process
+    # the same arithmetic with one worker
+    sl = plan_chunks(20000, 4e-5, SweepOptions("local", workers=3))
+    assert len(sl) == 16 and [i for s in sl for i in range(20000)[s]] == list(range(20000))
+    assert plan_chunks(20000, 4e-5) == chunk_slices(20000, chunk_count(20000, 4e-5, 1))
+    # 5000 points (0.2 s) on 3 workers: too little work for two chunks per worker -> 4 chunks
+    assert len(plan_chunks(5000, 4e-5, SweepOptions("local", workers=3))) == 4
 
 
 def test_core_never_imports_dask():

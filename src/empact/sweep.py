@@ -38,7 +38,8 @@ from tqdm import tqdm
 from ._validate import check_int, check_number
 from .errors import ParameterError
 
-__all__ = ["SweepError", "SweepOptions", "run_chunks", "chunk_count", "chunk_slices"]
+__all__ = ["SweepError", "SweepOptions", "run_chunks", "plan_chunks", "chunk_count",
+           "chunk_slices"]
 
 
 class SweepError(ParameterError):
@@ -79,6 +80,13 @@ class SweepOptions:
                                                          unit="s"))
         object.__setattr__(self, "retries", check_int("retries", self.retries, 0, 20))
 
+    @property
+    def parallelism(self) -> int:
+        """Chunks that run at once: 1 in process, else `workers` (default one per core)."""
+        if self.scheduler == "none":
+            return 1
+        return self.workers or os.cpu_count() or 1
+
 
 def chunk_count(n_items: int, seconds_per_item: float, workers: int = 1,
                 target: float = 0.05) -> int:
@@ -96,6 +104,14 @@ def chunk_slices(n_items: int, n_chunks: int) -> list[slice]:
     n_chunks = max(1, min(n_chunks, n_items))
     edges = [round(k * n_items / n_chunks) for k in range(n_chunks + 1)]
     return [slice(a, b) for a, b in zip(edges, edges[1:]) if b > a]
+
+
+def plan_chunks(n_items: int, seconds_per_item: float,
+                options: SweepOptions | None = None) -> list[slice]:
+    """Contiguous chunks of ``range(n_items)`` sized by `chunk_count` for `options`'
+    parallelism (in process by default)."""
+    workers = (options or SweepOptions()).parallelism
+    return chunk_slices(n_items, chunk_count(n_items, seconds_per_item, workers))
 
 
 def _one_thread(fn: Callable[[Any], Any], arg: Any) -> Any:
@@ -146,7 +162,7 @@ def _client(opts: SweepOptions):
     """A Dask client (and the local cluster it owns, or None)."""
     distributed = _distributed(opts)
     if opts.scheduler == "local":
-        workers = opts.workers or os.cpu_count() or 1
+        workers = opts.parallelism
         with importlib.import_module("dask").config.set(LOCAL_CONFIG):
             cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
                                                processes=True, dashboard_address=":0",

@@ -53,7 +53,7 @@ from ..nonlinear.linearization import PLANT_INPUTS, PLANT_OUTPUTS, disturbance_i
 from ..nonlinear.model import (INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel,
                                nonlinear_model)
 from ..params import Params
-from ..sweep import SweepOptions, chunk_count, chunk_slices, run_chunks
+from ..sweep import SweepOptions, plan_chunks, run_chunks
 
 interpolate = lazy_module("scipy.interpolate")
 
@@ -249,10 +249,8 @@ def plant_family(params: Params, *, r_g=None, nu=None, F_s=None, omega_p=None, T
         raise ParameterError(f"{n_pts} grid points; at most {MAX_POINTS}")
     mesh = dict(zip(axes, np.meshgrid(*axes.values(), indexing="ij"))) if axes else {}
     flat = {n: (mesh[n].ravel() if n in mesh else np.full(n_pts, fixed[n])) for n in values}
-    n_chunks = chunk_count(n_pts, SECONDS_PER_POINT, (sweep.workers or 2)
-                           if sweep is not None and sweep.scheduler != "none" else 1)
     tasks = [(model, pair, {k: v[s] for k, v in flat.items()})
-             for s in chunk_slices(n_pts, n_chunks)]
+             for s in plan_chunks(n_pts, SECONDS_PER_POINT, sweep)]
     parts = run_chunks(_linearise_points, tasks, sweep, desc="plant family")
     res = {k: np.concatenate([part[k] for part in parts]) for k in parts[0]}
     A, B, C, D = res["A"], res["B"], res["C"], res["D"]

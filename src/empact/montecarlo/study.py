@@ -27,7 +27,7 @@ from .._validate import check_int
 from ..control.closed_loop import resolve_controller
 from ..export import jsonable
 from ..params import Params
-from ..sweep import SweepOptions, chunk_count, chunk_slices, run_chunks
+from ..sweep import SweepOptions, plan_chunks, run_chunks
 from .analyses import OUTPUTS, SECONDS_PER_RUN, AnalysisContext, evaluate
 from .spread import Spread
 
@@ -179,14 +179,11 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
     """
     runs = check_int("runs", runs, 1, MAX_RUNS)
     seed = check_int("seed", seed, 0, 2**63 - 1)
+    if analysis == "closed-loop" and controller is None and scenario is not None:
+        controller = resolve_controller(scenario.controller)
     context = AnalysisContext(analysis, scenario, controller)
-    if analysis == "closed-loop" and controller is None:
-        context = AnalysisContext(analysis, scenario, resolve_controller(scenario.controller))
-    workers = (sweep.workers or os.cpu_count() or 1) \
-        if sweep is not None and sweep.scheduler != "none" else 1
-    n_chunks = chunk_count(runs, SECONDS_PER_RUN[analysis], workers)
     tasks = [(params, spread, context, seed, s.start, s.stop)
-             for s in chunk_slices(runs, n_chunks)]
+             for s in plan_chunks(runs, SECONDS_PER_RUN[analysis], sweep)]
     parts = run_chunks(_run_chunk, tasks, sweep, desc=f"monte carlo ({analysis})")
     samples = np.concatenate([p[0] for p in parts]).reshape(runs, len(spread.names))
     outputs = tuple(OUTPUTS[analysis])

@@ -22,7 +22,7 @@ from .._validate import check_choice, check_int
 from ..errors import ParameterError
 from ..lti import damping_ratio
 from ..params import OperatingPoint, Params
-from ..sweep import SweepOptions, chunk_count, chunk_slices, run_chunks
+from ..sweep import SweepOptions, plan_chunks, run_chunks
 from ..traction import TractionModel, traction_from_params
 from .coupling import VARIABLES, linearisation_terms
 from .loci import Variable, grid_values
@@ -153,17 +153,16 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
     nx = xv.size
     n = nx * yv.size
     task = (params, tr, J, K, method, x_name, y_name, xv, yv, fixed)
-    bounds = [(s0, min(s0 + chunk_size, n)) for s0 in range(0, n, chunk_size)]
     if sweep is not None and sweep.scheduler != "none":
         # chunks of >= 50 ms for the Dask task overhead; the points of a chunk are still
         # computed `chunk_size` at a time, so memory stays bounded on every worker
-        n_chunks = chunk_count(n, SECONDS_PER_POINT, sweep.workers or os.cpu_count() or 1)
         parts = run_chunks(_map_chunk, [(task, sl.start, sl.stop, chunk_size)
-                                        for sl in chunk_slices(n, n_chunks)], sweep,
-                           desc="stability map")
+                                        for sl in plan_chunks(n, SECONDS_PER_POINT, sweep)],
+                           sweep, desc="stability map")
         max_real, min_damp = (np.concatenate([p[k] for p in parts]) for k in (0, 1))
     else:
         max_real, min_damp = np.empty(n), np.empty(n)
+        bounds = [(s0, min(s0 + chunk_size, n)) for s0 in range(0, n, chunk_size)]
 
         def work(b: tuple[int, int]) -> None:
             max_real[b[0]:b[1]], min_damp[b[0]:b[1]] = _map_points(task, *b)
