@@ -81,3 +81,51 @@ def test_symbols_and_save(tmp_path, results):
     assert path.stat().st_size > 1000 and list(tmp_path.iterdir()) == [path]
     with pytest.raises(ValueError, match="plot file suffix = 'gif'"):
         plot.save(tmp_path / "e.gif")
+
+
+def _bode_like_figure():
+    from empact.plotting._common import new_axes
+    fig, axes = new_axes(None, 2, 2, size=(6.0, 4.0))
+    f = np.logspace(-1, 3, 200)
+    for ax in np.ravel(axes):
+        ax.loglog(f, 1.0 / (1.0 + (f / 10.0) ** 4))  # 16 decades of magnitude
+        ax.grid(True, which="both")
+        ax.set_title(plotting.symbol("T_mp") + " -> " + plotting.symbol("nu"))
+        ax.set_xlabel("frequency [Hz]")
+    return fig, np.ravel(axes)
+
+
+def test_save_lays_out_once_and_keeps_the_layout(tmp_path, monkeypatch):
+    """Several formats: constrained layout runs in the first format's save only (one layout
+    pass, then one draw per format), and the later formats keep its axes positions."""
+    from empact.plotting._common import _quiet_minor_labels, save_figure
+    fig, axes = _bode_like_figure()
+    draws = []
+    original = Figure.draw
+    monkeypatch.setattr(Figure, "draw", lambda self, r: (draws.append(1), original(self, r)))
+    save_figure(fig, tmp_path / "b", formats=("png", "svg", "pdf"))
+    assert len(draws) == 3 + 1  # three outputs plus the first one's layout pass
+    assert fig.get_layout_engine() is None
+    # the frozen positions are those a fresh constrained layout gives (independent drawing)
+    ref, ref_axes = _bode_like_figure()
+    _quiet_minor_labels(ref)
+    ref.set_dpi(150)  # the dpi save_figure draws at
+    ref.draw_without_rendering()
+    for a, b in zip(axes, ref_axes):
+        np.testing.assert_allclose(a.get_position().bounds, b.get_position().bounds,
+                                   atol=1e-12)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.pdf", "b.png", "b.svg"]
+
+
+def test_log_value_axes_over_four_decades_lose_minor_ticks(tmp_path):
+    """Minor ticks thinned on log value axes spanning > 4 decades; frequency axes keep them
+    (with labels off beyond two decades)."""
+    import matplotlib.ticker as mt
+    from empact.plotting._common import save_figure
+    fig, axes = _bode_like_figure()
+    save_figure(fig, tmp_path / "b", formats=("png",))
+    for ax in axes:
+        assert isinstance(ax.yaxis.get_minor_locator(), mt.NullLocator)
+        assert not isinstance(ax.xaxis.get_minor_locator(), mt.NullLocator)
+        assert isinstance(ax.xaxis.get_minor_formatter(), mt.NullFormatter)
+        assert len(ax.xaxis.get_minorticklocs()) > 20
