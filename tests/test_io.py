@@ -1,4 +1,5 @@
-"""Atomic output (`empact._io`) and lazy imports (`empact._lazy`)."""
+"""Atomic output (`empact._io`), lazy imports (`empact._lazy`) and progress bars
+(`empact._progress`)."""
 import os
 import stat
 import subprocess
@@ -48,3 +49,18 @@ def test_lazy_module_defers_the_import():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["False", "True"]
+
+
+def test_progress_off_a_terminal_writes_plain_lines(capsys):
+    """Captured or redirected stderr gets whole lines (first and final state), no carriage
+    returns or escapes; disabled, nothing."""
+    from empact._progress import progress
+    assert list(progress(range(7), desc="work", unit="step")) == list(range(7))
+    err = capsys.readouterr().err
+    assert "\r" not in err and "\x1b" not in err
+    lines = err.splitlines()
+    assert lines[0].startswith("work:   0%") and lines[-1].startswith("work: 100%")
+    assert "7/7" in lines[-1] and len(lines) == 2  # at most one line per 10 s in between
+    with progress(total=3, desc="quiet", unit="step", enabled=False) as bar:
+        bar.update(3)
+    assert capsys.readouterr().err == ""

@@ -28,13 +28,12 @@ from __future__ import annotations
 import importlib
 import math
 import os
-import sys
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 from threadpoolctl import threadpool_limits
-from tqdm import tqdm
 
+from ._progress import progress as progress_bar
 from ._validate import check_int, check_number
 from .errors import ParameterError
 
@@ -130,8 +129,7 @@ def run_chunks(fn: Callable[[Any], Any], chunks: Sequence[Any],
     chunks = list(chunks)
     if opts.scheduler == "none":
         out = []
-        for c in tqdm(chunks, desc=desc, unit="chunk", disable=not opts.progress,
-                      file=sys.stderr, leave=False):
+        for c in progress_bar(chunks, desc=desc, unit="chunk", enabled=opts.progress):
             out.append(_one_thread(fn, c))
         return out
     return _run_dask(fn, chunks, opts, desc)
@@ -185,8 +183,8 @@ def _run_dask(fn, chunks, opts: SweepOptions, desc: str) -> list[Any]:
                              retries=opts.retries)
         index = {f.key: k for k, f in enumerate(futures)}
         results: list[Any] = [None] * len(chunks)
-        with tqdm(total=len(chunks), desc=desc, unit="chunk", disable=not opts.progress,
-                  file=sys.stderr, leave=False) as bar:
+        with progress_bar(total=len(chunks), desc=desc, unit="chunk",
+                          enabled=opts.progress) as bar:
             for fut in distributed.as_completed(futures):
                 k = index[fut.key]
                 if fut.status == "error":

@@ -14,7 +14,6 @@ from __future__ import annotations
 import csv
 import io
 import os
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,9 +21,9 @@ from typing import Mapping
 
 import numpy as np
 from numpy.typing import NDArray
-from tqdm import tqdm
 
 from .._io import atomic_write_text
+from .._progress import progress as progress_bar
 from ..params import Params
 from . import _kernel as K
 from ._rosenbrock import STATUS, integrate
@@ -129,7 +128,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     max_steps : int
         Give up (incomplete result) after this many integration steps.
     progress : bool
-        A tqdm progress bar on stderr.
+        A progress bar on stderr (`empact._progress`).
 
     Returns
     -------
@@ -173,8 +172,8 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     chunks = np.linspace(0.0, duration, 101)[1:]
     status, n_steps, n_rej, filled = 0, 0, 0, 1
     wall = time.perf_counter()
-    with tqdm(total=len(chunks), desc=f"simulate {name}".strip(), unit="%", disable=not progress,
-              file=sys.stderr, leave=False) as bar:
+    with progress_bar(total=len(chunks), desc=f"simulate {name}".strip(), unit="%",
+                      enabled=progress) as bar:
         for t_chunk in chunks:
             status, t, h, filled, ns, nr = integrate(
                 x, t, float(t_chunk), h, samples, model.p, model.ix, sig_t, sig_v, sig_n,

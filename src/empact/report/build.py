@@ -6,14 +6,12 @@ import html
 import json
 import multiprocessing
 import os
-import sys
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Sequence
 
-from tqdm import tqdm
-
 from .._io import atomic_folder
+from .._progress import progress as progress_bar
 from .._validate import check_int
 from ..params import Params, dumps_params
 from ..reproduction.claims import Claim, claims_table
@@ -92,8 +90,7 @@ def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool 
         check_int("workers", workers, 1, 64)
     fmts = tuple(formats)
     with atomic_folder(out) as tmp:
-        bar = tqdm(total=len(todo), desc="report", unit="section", disable=not progress,
-                   file=sys.stderr)
+        bar = progress_bar(total=len(todo), desc="report", unit="section", enabled=progress)
         built: dict[str, tuple[str, tuple[Claim, ...]]] = {}
         if n_workers <= 1:
             for sec in todo:
