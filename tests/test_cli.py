@@ -2,6 +2,7 @@
 one line and exit status 2 with nothing written; output folders are never clobbered."""
 import json
 import os
+import re
 import stat
 
 import numpy as np
@@ -218,6 +219,9 @@ def test_reproduce_writes_complete_report(full_report):
     leftovers = [p.name for p in out.parent.iterdir() if p.name != "rep"]
     assert leftovers == []  # the temporary folder was moved into place
     assert max(p.stat().st_size for p in out.glob("*.svg")) < 1_000_000  # rasterised layers
+    # text is escaped: every "<" opens a tag or a comment (a bare "< 0.2" in a caption did not)
+    stray = re.findall(r".{20}<(?![A-Za-z/!]).{20}", html)
+    assert stray == []
 
 
 

@@ -58,7 +58,8 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
                                         "peak slip [%]", "ratio error [%]",
                                         "ratio rate [1/s]", "mean F_s [kN]",
                                         "mean losses [W]"], rows,
-                    "Closed-loop metrics (targets: |nu - nu*| < 0.2 pp, peak slip < 2 x "
-                    "set-point, ratio error < 1 %, shift rate >= 1 /s with slip within "
-                    "0.5 pp, >= 25 % lower mean clamping than the safety-factor strategy)")
+                    "Closed-loop metrics (targets: |&nu; - &nu;*| &lt; 0.2 pp, peak slip &lt; "
+                    "2 &times; set-point, ratio error &lt; 1 %, shift rate &ge; 1 /s with slip "
+                    "within 0.5 pp, &ge; 25 % lower mean clamping than the safety-factor "
+                    "strategy)")
         + ctx.claims(res.claims))
