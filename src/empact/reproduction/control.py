@@ -83,9 +83,10 @@ def control(params: Params) -> ControlSection:
                       * m["slip_setpoint_pp"] and m["ratio_error"] < TARGETS["ratio_error"])
             claims.append(Claim(
                 key=f"control.{name}", source=src,
-                claim="slip held at its set-point through a load step of 50 % of the torque "
-                      "capacity: |nu - nu*| < 0.2 pp from 0.3 s after the step, peak slip "
-                      "below twice the set-point, ratio within 1 %",
+                claim=f"{name} (r_g = {run.op.r_g:.3g}): slip held at its set-point through a "
+                      "load step of 50 % of the torque capacity: |nu - nu*| < 0.2 pp from "
+                      "0.3 s after the step, peak slip below twice the set-point, ratio "
+                      "within 1 %",
                 computed=f"|nu - nu*| up to {m['slip_error_pp']:.3g} pp, peak slip "
                          f"{m['peak_slip_pp']:.3g} % (set-point {m['slip_setpoint_pp']:.3g} %),"
                          f" ratio error {100 * m['ratio_error']:.3g} %; {m['message']}",
