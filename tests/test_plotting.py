@@ -98,7 +98,7 @@ def _bode_like_figure():
 def test_save_lays_out_once_and_keeps_the_layout(tmp_path, monkeypatch):
     """Several formats: constrained layout runs in the first format's save only (one layout
     pass, then one draw per format), and the later formats keep its axes positions."""
-    from empact.plotting._common import _quiet_minor_labels, save_figure
+    from empact.plotting._common import _lighten_log_axes, save_figure
     fig, axes = _bode_like_figure()
     draws = []
     original = Figure.draw
@@ -108,7 +108,7 @@ def test_save_lays_out_once_and_keeps_the_layout(tmp_path, monkeypatch):
     assert fig.get_layout_engine() is None
     # the frozen positions are those a fresh constrained layout gives (independent drawing)
     ref, ref_axes = _bode_like_figure()
-    _quiet_minor_labels(ref)
+    _lighten_log_axes(ref)
     ref.set_dpi(150)  # the dpi save_figure draws at
     ref.draw_without_rendering()
     for a, b in zip(axes, ref_axes):
@@ -129,3 +129,27 @@ def test_log_value_axes_over_four_decades_lose_minor_ticks(tmp_path):
         assert not isinstance(ax.xaxis.get_minor_locator(), mt.NullLocator)
         assert isinstance(ax.xaxis.get_minor_formatter(), mt.NullFormatter)
         assert len(ax.xaxis.get_minorticklocs()) > 20
+
+
+def test_log_tick_labels_are_plain_text_of_the_tick_values(tmp_path):
+    """Log tick labels are plain text with superscripts (no mathtext) and read back as the tick
+    locations, on a many-decade axis and on a sub-decade one (``2×10¹`` labels)."""
+    from empact.plotting._common import save_figure
+    fig, axes = _bode_like_figure()
+    axes[0].set_xlim(12.0, 60.0)  # less than a decade: labels at non-decade ticks
+    save_figure(fig, tmp_path / "b", formats=("png",))
+    digits = str.maketrans("\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079\u207b",
+                           "0123456789-")
+    checked = 0
+    for ax in axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+                text, loc = tick.label1.get_text(), tick.get_loc()
+                if not text or not tick.label1.get_visible():
+                    continue
+                assert "$" not in text, text
+                mant, _, exp = text.partition("10")
+                value = float(mant.rstrip("\u00d7") or 1) * 10.0 ** int(exp.translate(digits))
+                np.testing.assert_allclose(value, loc, rtol=1e-12)
+                checked += 1
+    assert checked > 20

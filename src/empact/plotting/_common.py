@@ -91,7 +91,7 @@ def save_figure(fig: Figure, stem: str | os.PathLike[str],
     paths = []
     for fmt in formats:
         check_choice("format", fmt, FORMATS)
-    _quiet_minor_labels(fig)
+    _lighten_log_axes(fig)
     for fmt in formats:
         path = stem.with_name(f"{stem.name}.{fmt}")
         with atomic_file(path) as tmp:
@@ -106,12 +106,46 @@ def save_figure(fig: Figure, stem: str | os.PathLike[str],
     return paths
 
 
-def _quiet_minor_labels(fig: Figure) -> None:
-    """Thin the minor ticks of log axes: no labels at the minor ticks of an axis spanning
-    more than two decades (the major labels suffice), and no minor ticks (nor minor grid
-    lines) on a value (y) axis spanning more than four decades, where eight per decade are
-    clutter; frequency (x) axes keep theirs to read frequencies off.  Laying out and drawing
-    those ticks was a large part of a dense figure's drawing time."""
+#: superscript digits and minus (DejaVu Sans, matplotlib's default font, has them all)
+_SUPERSCRIPT = str.maketrans("0123456789-\u2212", "\u2070\u00b9\u00b2\u00b3\u2074\u2075"
+                             "\u2076\u2077\u2078\u2079\u207b\u207b")
+#: a log formatter's mathtext label: ``$\mathdefault{10^{-2}}$``, ``$\mathdefault{2\times10^{1}}$``
+_SCI_LABEL = re.compile(r"^\$\\mathdefault\{(?:([0-9.]+)\\times\s*)?10\^\{([-\u2212]?\d+)\}\}\$$")
+
+
+class _PlainLogFormatter(mpl.ticker.Formatter):
+    """A log axis's labels as plain text with superscripts (``10⁻²``, ``2×10¹``) instead of
+    mathtext: the same text, without a mathtext parse per label and renderer (a fifth of the
+    report's drawing time).  Anything else the wrapped formatter returns passes unchanged."""
+
+    def __init__(self, base: mpl.ticker.Formatter) -> None:
+        self.base = base
+
+    def set_axis(self, axis: Any) -> None:
+        super().set_axis(axis)
+        self.base.set_axis(axis)
+
+    def set_locs(self, locs: Any) -> None:
+        self.base.set_locs(locs)
+
+    def __call__(self, x: float, pos: int | None = None) -> str:
+        label = self.base(x, pos)
+        m = _SCI_LABEL.match(label)
+        if m is None:
+            return label
+        return (f"{m.group(1)}\u00d7" if m.group(1) else "") + "10" + \
+            m.group(2).translate(_SUPERSCRIPT)
+
+
+def _lighten_log_axes(fig: Figure) -> None:
+    """Make log axes cheaper to lay out and draw, with the same information.
+
+    * Tick labels as plain text with superscripts instead of mathtext (`_PlainLogFormatter`).
+    * No labels at the minor ticks of an axis spanning more than two decades (the major
+      labels suffice), and no minor ticks (nor minor grid lines) on a value (y) axis spanning
+      more than four decades, where eight per decade are clutter; frequency (x) axes keep
+      theirs to read frequencies off.
+    """
     for ax in fig.axes:
         for axis, lim in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
             lo, hi = sorted(lim)
@@ -121,6 +155,10 @@ def _quiet_minor_labels(fig: Figure) -> None:
                 axis.set_minor_locator(mpl.ticker.NullLocator())
             elif hi / lo > 100:
                 axis.set_minor_formatter(mpl.ticker.NullFormatter())
+            for get, put in ((axis.get_major_formatter, axis.set_major_formatter),
+                             (axis.get_minor_formatter, axis.set_minor_formatter)):
+                if isinstance(get(), mpl.ticker.LogFormatterSciNotation):
+                    put(_PlainLogFormatter(get()))
 
 
 def save_plot(fig: Figure, path: str | os.PathLike[str], dpi: int = 150) -> Path:
