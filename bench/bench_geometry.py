@@ -21,7 +21,7 @@ import time
 import numpy as np
 from scipy.optimize import brentq, newton
 
-from empact.geometry import belt_length, radii, ratio_range, wrap_angle
+from empact.variator.geometry import belt_length, radii, ratio_range, wrap_angle
 from empact.params import default_params
 
 REPEATS = 20

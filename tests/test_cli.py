@@ -67,7 +67,7 @@ def test_cli_poles_json():
     res = run("slip", "poles", "--slip", "0.001,0.04", "--json")
     assert res.exit_code == 0, res.output
     data = json.loads(res.output)
-    assert data["operating_point"] == load_params().operating.as_dict()  # [operating]
+    assert data["operating_point"] == load_params().operating.to_dict()  # [operating]
     assert data["variable"] == "nu" and len(data["points"]) == 2
     poles = np.array(data["points"][1]["poles"])
     assert poles.shape == (8, 2)  # [re, im] in rad/s
@@ -144,8 +144,12 @@ def test_cli_simulate_linearize_nmp(tmp_path):
     assert data["outputs"] == ["r_g", "nu", "nu_r"]
     assert data["disturbance_inputs"] == ["T_l"] and data["control_inputs"] == ["T_mp", "T_ms"]
     assert data["states_units"][4] == "m" and data["inputs_units"] == ["N m"] * 3
-    assert np.array(data["A"]).shape == (18, 18) and len(data["states"]) == 18
+    # the test bench by default (drive speed-controlled: its PI's integral state z_d), as
+    # `empact plants`; --drive torque gives the bare machine's 18 states
+    assert np.array(data["A"]).shape == (19, 19) and data["states"][-1] == "z_d"
     assert data["operating_point"]["r_g"] == pytest.approx(0.5)
+    res = run("linearize", "--drive", "torque")
+    assert len(json.loads(res.output)["states"]) == 18
     res = run("linearize", "--load", "speed")
     assert json.loads(res.output)["inputs"] == ["T_mp", "T_ms", "omega_l_ref"]
     mat = tmp_path / "plant.mat"
@@ -153,7 +157,7 @@ def test_cli_simulate_linearize_nmp(tmp_path):
               "300", "--format", "mat", "--out", str(mat))
     assert res.exit_code == 0, res.output
     from scipy.io import loadmat
-    assert loadmat(mat)["A"].shape == (18, 18)
+    assert loadmat(mat)["A"].shape == (19, 19)
     res = run("nmp", "--json", "--slip-signal", "nu_r")
     assert res.exit_code == 0, res.output
     data = json.loads(res.output)
@@ -405,7 +409,11 @@ BAD_INPUT = [
     (["nmp", "--slip-signal", "eq2"], "invalid value for '--slip-signal'"),
     (["frf", "actuation", "--pulley-damping", "creep", "--clamp", "-5"], "--clamp = -5"),
     (["plants", "--ratio", "0.1:2:3"], "--ratio = 0.1: outside the geometric ratio range"),
-    (["plants", "--slip", "0.01", "--clamp", "1e4", "--load", "50"], "give at most two of"),
+    (["plants", "--slip", "0.01", "--clamp", "1e4", "--load-torque", "50"],
+     "give at most two of"),
+    (["plants", "--load", "50"], "the load torque is --load-torque now"),
+    (["plants", "--slip", "0.01", "--tau", "0.9"], "give --slip or --tau, not both"),
+    (["linearize", "--load-torque", "50"], "also give one of them"),
     (["plants", "--out", "x.txt"], "--out x.txt: file suffix '.txt' must be one of"),
     (["plants", "--clamp", "-3"], "--clamp = -3"),
     (["plants", "--scheduler", ""], "--scheduler '': give none, local or a scheduler address"),

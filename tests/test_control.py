@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from scipy.io import loadmat
 
-from empact.control.closed_loop import (control_example_path, load_control_scenario,
+from empact.nonlinear.scenario import load_scenario
+from empact.control.closed_loop import (control_example_path,
                                         run_closed_loop)
 from empact.control.controller import load_controller
 from empact.control.family import PlantFamily, load_family, plant_family, save_family
@@ -34,8 +35,8 @@ def test_family_points_equal_single_point_linearisation(params):
     assert fam.ok.all() and fam.shape == (3, 2)
     for i in range(3):
         for j in range(2):
-            sys, _ = plant(params, params.operating.replace(r_g=r[i], nu=nu[j], F_s=12e3),
-                           model=m)
+            sys = plant(params, params.operating.replace(r_g=r[i], nu=nu[j], F_s=12e3),
+                        model=m).system
             for got, ref in ((fam.A[i, j], sys.A), (fam.B[i, j], sys.B), (fam.C[i, j], sys.C),
                              (fam.D[i, j], sys.D)):
                 ref = np.asarray(ref)
@@ -64,13 +65,13 @@ def test_lpv_interpolation_error(params):
     for _ in range(12):
         i, j = rng.integers(0, 20), rng.integers(0, 8)
         rm, nm = np.sqrt(r[i] * r[i + 1]), np.sqrt(nu[j] * nu[j + 1])
-        Hi = system_response(fam.interpolated_plant(r_g=rm, nu=nm), w).H[:, :2]
-        exact, _ = plant(params, params.operating.replace(r_g=rm, nu=nm), model=m)
+        Hi = system_response(fam.interpolate(r_g=rm, nu=nm).state_space(), w).H[:, :2]
+        exact = plant(params, params.operating.replace(r_g=rm, nu=nm), model=m).system
         He = system_response(exact, w).H[:, :2]
         err = np.linalg.norm(Hi - He, axis=-1) / np.linalg.norm(He, axis=-1)
         assert err.max() <= 0.02, (rm, nm, err.max())
     with pytest.raises(ParameterError, match="r_g = 3: allowed range"):
-        fam.at(r_g=3.0, nu=0.01)
+        fam.interpolate(r_g=3.0, nu=0.01)
 
 
 def test_family_export_layouts(params, tmp_path):
@@ -185,7 +186,7 @@ def test_controller_file_roundtrip(tmp_path):
 def test_closed_loop_at_rest_stays_at_the_trim(params):
     """No load step, references at the trim: the closed loop holds the operating point (slip
     and ratio errors below 1e-6 after 0.5 s), a check of the runner's bookkeeping."""
-    sc = load_control_scenario(control_example_path("slip-load-step-r1"))
+    sc = load_scenario(control_example_path("slip-load-step-r1"))
     from dataclasses import replace
 
     sc = replace(sc, inputs={}, duration=0.5, load_step_time=None)
@@ -196,8 +197,7 @@ def test_closed_loop_at_rest_stays_at_the_trim(params):
 
 def test_closed_loop_metrics_are_the_runs_numbers(params):
     """The metrics are computed from the run's own time histories (recomputed here)."""
-    run = run_closed_loop(load_control_scenario(control_example_path("slip-load-step-r1")),
-                          params)
+    run = run_closed_loop(load_scenario(control_example_path("slip-load-step-r1")), params)
     res, m = run.result, run.metrics
     after = res.t >= 0.5 + 0.3
     assert m["slip_error_pp"] == pytest.approx(100 * np.abs(res.output("nu") - 0.01)[after].max())

@@ -10,7 +10,8 @@ import empact
 
 def _public():
     for info in pkgutil.walk_packages(empact.__path__, "empact."):
-        if any(part.startswith("_") for part in info.name.split(".")):
+        if any(part.startswith("_") for part in info.name.split(".")) \
+                or info.name in empact.DEPRECATED_MODULES:
             continue
         mod = importlib.import_module(info.name)
         yield info.name, mod, None

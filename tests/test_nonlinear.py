@@ -8,7 +8,7 @@ from empact.linear.actuation import actuation_model
 from empact.linear.driveline import driveline_model
 from empact.nonlinear.nmp import belt_length_change, nmp_analysis
 from empact.nonlinear.model import ModelOptions, nonlinear_model, rhs
-from empact.params import ParameterError
+from empact.params import OperatingPoint, ParameterError
 from empact.nonlinear.scenario import example_path, load_scenario
 from empact.nonlinear.simulation import run_scenario, simulate
 from empact.nonlinear.equilibrium import TrimError, trim
@@ -27,7 +27,7 @@ def hz(ev):
 def test_trim_zero_derivative_and_traction_equals_load(params):
     for r_g in (0.5, 1.0, 2.0):
         m = nonlinear_model(params, drive="speed", load="speed", ratio_control=True)
-        op = trim(m, r_g, 300.0, **OP)
+        op = trim(m, OperatingPoint(r_g=r_g, omega_p=300.0, **OP))
         dx = m.rhs(0.0, op.x, op.u)
         # residual normalised by the forces on each body: below 1e-8 (trim's own check);
         # velocities are exactly zero
@@ -43,22 +43,22 @@ def test_trim_zero_derivative_and_traction_equals_load(params):
 
 def test_trim_from_load_and_clamp_and_failures(params):
     m = nonlinear_model(params)
-    op = trim(m, 1.0, 300.0, F_s=10e3, T_l=50.0)
+    op = trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, F_s=10e3, T_l=50.0))
     # the slip found on the rising branch reproduces the load to 1e-9 relative
     assert op.T_b == pytest.approx(50.0, rel=1e-9) and 0 < op.nu < 0.008
     with pytest.raises(TrimError, match=r"T_l = 500 N m needs mu .* above the traction peak"):
-        trim(m, 1.0, 300.0, F_s=10e3, T_l=500.0)
-    with pytest.raises(TrimError, match="give exactly two of nu, F_s, T_l"):
-        trim(m, 1.0, 300.0, nu=0.004)
+        trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, F_s=10e3, T_l=500.0))
+    with pytest.raises(ParameterError, match=r"give exactly two of nu \(or tau\), F_s, T_l"):
+        trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, nu=0.004))
     with pytest.raises(ParameterError, match="r_g = 7: outside the geometric ratio range"):
-        trim(m, 7.0, 300.0, **OP)
+        trim(m, OperatingPoint(r_g=7.0, omega_p=300.0, **OP))
     with pytest.raises(ParameterError, match=r"omega_p = -3: allowed range is \(0, inf\)"):
-        trim(m, 1.0, -3.0, **OP)
+        trim(m, OperatingPoint(r_g=1.0, omega_p=-3.0, **OP))
 
 
 def test_steady_state_holds_in_simulation(params):
     m = nonlinear_model(params, drive="speed")
-    op = trim(m, 0.7, 250.0, F_s=12e3, T_l=40.0)
+    op = trim(m, OperatingPoint(r_g=0.7, omega_p=250.0, F_s=12e3, T_l=40.0))
     res = simulate(m, op.x, {}, 0.2, u0=op.u)
     assert res.complete, res.message
     # an equilibrium stays put: traction torque = load within 1e-6 relative after 0.2 s
@@ -74,7 +74,7 @@ def test_bad_model_options_and_inputs(params):
     with pytest.raises(ParameterError, match=r"coulomb_sp = -1: allowed range is \[0, inf\)"):
         ModelOptions(coulomb_sp=-1)
     m = nonlinear_model(params)
-    op = trim(m, 1.0, 300.0, **OP)
+    op = trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, **OP))
     x = op.x.copy()
     x[15] = 0.0
     with pytest.raises(ValueError, match="omega_p = 0: the slip nu"):
@@ -86,7 +86,7 @@ def test_bad_model_options_and_inputs(params):
 
 
 def test_traction_matches_traction_module(params):
-    from empact.traction import traction_from_params
+    from empact.variator.traction import traction_from_params
 
     m = nonlinear_model(params)
     nu = np.linspace(-0.05, 0.05, 41)
@@ -102,7 +102,7 @@ def test_iosystem(params):
     m = nonlinear_model(params)
     sys = m.iosystem()
     assert isinstance(sys, control.NonlinearIOSystem)
-    op = trim(m, 1.0, 300.0, **OP)
+    op = trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, **OP))
     np.testing.assert_allclose(sys._rhs(0.0, op.x, op.u), m.rhs(0.0, op.x, op.u))
     assert sys.input_labels == list(m.inputs) and "nu" in sys.output_labels
 
@@ -112,7 +112,7 @@ def test_energy_conserved_undamped_locked_belt(params):
     """No damping, no friction, belt locked (no slip), Shafai's law at zero (no creep
     resistance): the total energy is constant."""
     m = nonlinear_model(params, damping="none", belt="locked", shift_law="shafai")
-    op = trim(m, 0.8, 300.0, F_s=10e3, T_l=0.0)
+    op = trim(m, OperatingPoint(r_g=0.8, omega_p=300.0, F_s=10e3, T_l=0.0))
     x0 = op.x.copy()
     x0[6] += 2.0     # kick the primary servo [rad/s]
     x0[11] += 1e-3   # and the secondary sheave [m/s]
@@ -151,7 +151,7 @@ def test_energy_conserved_undamped_locked_belt(params):
 def test_power_balance_with_dissipation(params):
     """Moderate damping, Coulomb friction, slipping belt: E(t) - E(0) = int (P_in - P_diss)."""
     m = nonlinear_model(params, damping="moderate", coulomb_sp=0.05, coulomb_ss=0.05)
-    op = trim(m, 1.0, 300.0, **OP)
+    op = trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, **OP))
     x0 = op.x.copy()
     x0[6] += 5.0
     x0[16] -= 1.0
@@ -173,7 +173,7 @@ def test_power_balance_with_dissipation(params):
 # -- linearisation ---------------------------------------------------------------------------
 def test_jacobian_matches_central_differences(params):
     m = nonlinear_model(params, drive="speed", ratio_control=True, coulomb_sp=0.1)
-    op = trim(m, 0.6, 300.0, **OP)
+    op = trim(m, OperatingPoint(r_g=0.6, omega_p=300.0, **OP))
     A, B, C, D = m.jacobian(op.x, op.u)
     x, u = op.x, op.u
     for j in range(m.n):
@@ -203,7 +203,7 @@ def test_linearisation_matches_sec2_models(params, r_g):
     """Belt locked, no damping, no shift resistance (Shafai's law at zero): actuation and
     driveline eigenfrequencies of Sec. 2 within 2 %."""
     m = nonlinear_model(params, damping="none", belt="locked", shift_law="shafai")
-    op = trim(m, r_g, 300.0, F_s=10e3, T_l=0.0)
+    op = trim(m, OperatingPoint(r_g=r_g, omega_p=300.0, F_s=10e3, T_l=0.0))
     A = m.jacobian(op.x, op.u)[0]
     act = slice(0, 12)
     dl = [12, 13, 14, 15, 16, 17, 18]  # twists, shaft speeds, belt stretch
@@ -227,7 +227,7 @@ def test_linearisation_matches_linear_slip_model(params):
     Shafai's law (at zero): the creep law's static force makes the clamping force depend on
     the torque ratio, a coupling the paper's slip model does not have."""
     m = nonlinear_model(params, damping="none", shift_law="shafai")
-    op = trim(m, 1.0, 300.0, **OP)
+    op = trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, **OP))
     A = m.jacobian(op.x, op.u)[0]
     dl = list(range(12, 18))
     ev = np.linalg.eigvals(A[np.ix_(dl, dl)])
@@ -279,7 +279,7 @@ def test_nu_r_row_is_eq2_without_its_ratio_term(params):
     """linearize: nu_r = nu - (1 - nu0) r_g / r_g0 (exact row algebra), and it equals the
     model's own nu_r output when the reference ratio is the trimmed one (complex step)."""
     m = nonlinear_model(params, reference_ratio=0.7)
-    op = trim(m, 0.7, 300.0, **OP)
+    op = trim(m, OperatingPoint(r_g=0.7, omega_p=300.0, **OP))
     sys = linearize(op, ["T_mp"], ["r_g", "nu", "nu_r"])
     C = np.asarray(sys.C)
     np.testing.assert_allclose(C[2], C[1] - (1 - op.nu) / op.r_g * C[0], rtol=0, atol=1e-12)
@@ -305,7 +305,7 @@ def test_shift_and_load_step_example(params):
 
 def test_stop_marks_incomplete(params):
     m = nonlinear_model(params)  # torque-controlled drive: a big load brakes it to a stop
-    op = trim(m, 1.0, 50.0, F_s=20e3, T_l=10.0)
+    op = trim(m, OperatingPoint(r_g=1.0, omega_p=50.0, F_s=20e3, T_l=10.0))
     res = simulate(m, op.x, {"T_l": np.array([[0.0, 10.0], [0.0, 150.0]])}, 2.0, u0=op.u)
     assert not res.complete
     assert "stopped at t = " in res.message and "omega_p = " in res.message
@@ -322,9 +322,9 @@ def test_jacobian_columns_outside_varying_columns_are_constant(params, opts):
 
     m = nonlinear_model(params, **opts)
     if m.options.belt == "locked":
-        op = trim(m, 0.8, 300.0, F_s=12e3, T_l=20.0)
+        op = trim(m, OperatingPoint(r_g=0.8, omega_p=300.0, F_s=12e3, T_l=20.0))
     else:
-        op = trim(m, 0.8, 300.0, **OP)
+        op = trim(m, OperatingPoint(r_g=0.8, omega_p=300.0, **OP))
     A0 = m.jacobian(op.x, op.u)[0]
     rng = np.random.default_rng(4)
     fixed = np.setdiff1d(np.arange(m.n), K.varying_columns(m.ix))

@@ -9,7 +9,7 @@ import pytest
 import tomli_w
 
 from empact.errors import ParameterError
-from empact.geometry import ratio_range
+from empact.variator.geometry import ratio_range
 from empact.linear.actuation import actuation_model
 from empact.linear.driveline import driveline_model
 from empact.params import dumps_params, load_params

@@ -14,7 +14,7 @@ from empact.nonlinear.simulation import run_scenario
 from empact.params import OperatingPoint
 from empact.slip import belt_root_locus, pole_sweep, slip_frequency_responses, stability_map, \
     zero_locus
-from empact.traction import traction_curves, traction_from_params
+from empact.variator.traction import traction_curves, traction_from_params
 
 
 @pytest.fixture(scope="module")

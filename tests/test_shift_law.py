@@ -6,13 +6,14 @@ from scipy.integrate import solve_ivp, trapezoid
 from scipy.linalg import eigh, null_space
 
 from empact.errors import ParameterError
+from empact.params import OperatingPoint
 from empact.linear.actuation import actuation_model
 from empact.nonlinear import _kernel as K
 from empact.nonlinear.equilibrium import trim
 from empact.nonlinear.model import nonlinear_model
 from empact.nonlinear.simulation import simulate
-from empact.shift_law import creep_coefficient, creep_damping, shift_rate
-from empact.thrust_ratio import (AnalyticThrustRatio, TabulatedThrustRatio, kappa_geo,
+from empact.variator.shift_law import creep_coefficient, creep_damping, shift_rate
+from empact.variator.thrust_ratio import (AnalyticThrustRatio, TabulatedThrustRatio, kappa_geo,
                                  load_thrust_ratio, zero_torque_difference)
 
 
@@ -21,7 +22,7 @@ def creep_run(params, omega_p, dT, duration=0.5):
     measured ratio rate (linear fit over 0.2 s .. end) and the law's prediction from the
     thrust-bearing forces (what a rig measures), on a speed-held primary."""
     m = nonlinear_model(params, drive="speed", load="torque", damping="large")
-    op = trim(m, 1.0, omega_p, F_s=1e4, T_l=0.0)
+    op = trim(m, OperatingPoint(r_g=1.0, omega_p=omega_p, F_s=1e4, T_l=0.0))
     u = op.u.copy()
     u[0] += dT
     res = simulate(m, op.x, {}, duration, u0=u, sample_rate=1000.0, rtol=1e-8)
@@ -59,7 +60,7 @@ def test_infinite_resistance_gives_the_rigid_geometry_eigenvalues(params):
     rows leave out)."""
     m = nonlinear_model(params, damping="none", belt="locked")
     m.p[K.P_GAIN] = 1e-6  # beyond the parameter's allowed range on purpose: the limit
-    op = trim(m, 1.0, 300.0, F_s=10e3, T_l=0.0)
+    op = trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, F_s=10e3, T_l=0.0))
     A = m.jacobian(op.x, op.u)[0][:12, :12]
     ev = np.linalg.eigvals(A)
     f_nl = np.sort(np.abs(ev[(ev.imag > 0) & (np.abs(ev) < 2 * np.pi * 1e4)]) / (2 * np.pi))
@@ -80,7 +81,7 @@ def test_load_step_with_held_servos_moves_ratio_as_kappa_predicts(params):
     the trim at the new load and the final ratio needs the held servo torques (1e-4
     relative; measured 2e-5: the remaining creep)."""
     m = nonlinear_model(params, drive="speed", load="torque")
-    op = trim(m, 1.0, 300.0, F_s=1e4, T_l=30.0)
+    op = trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, F_s=1e4, T_l=30.0))
     res = simulate(m, op.x, {"T_l": np.array([[0.1, 30.0], [0.1, 45.0]])}, 400.0, u0=op.u,
                    sample_rate=1.0)
     assert res.complete, res.message
@@ -88,11 +89,11 @@ def test_load_step_with_held_servos_moves_ratio_as_kappa_predicts(params):
     assert r[-1] < 0.95 and np.all(np.diff(r[1:]) <= 1e-12)  # monotone downshift
     assert abs(r[-1] - r[-11]) / 10 < 1e-6
     y = m.output_dict(res.x[-1], res.u[-1])
-    new = trim(m, y["r_g"], 300.0, F_s=y["F_s"], T_l=45.0)
+    new = trim(m, OperatingPoint(r_g=y["r_g"], omega_p=300.0, F_s=y["F_s"], T_l=45.0))
     np.testing.assert_allclose(new.u[:2], op.u[:2], rtol=1e-4)
     # the direction is kappa*'s: at the new load and the old ratio kappa* is above the held
     # thrust ratio (the primary would need more force to hold the ratio)
-    held = trim(m, 1.0, 300.0, F_s=1e4, T_l=45.0)
+    held = trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, F_s=1e4, T_l=45.0))
     assert held.T_mp < op.T_mp  # more primary force (T_mp < 0 closes the primary)
 
 
@@ -104,7 +105,7 @@ def test_creep_power_closes_the_balance(params, T_l):
     sample (to 1e-9 of its peak) and more than 1 % of the total; loaded, its static part
     (the torque's push on the ratio) also does work, of either sign."""
     m = nonlinear_model(params, drive="speed")
-    op = trim(m, 1.0, 300.0, F_s=1e4, T_l=T_l)
+    op = trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, F_s=1e4, T_l=T_l))
     x0 = op.x.copy()
     x0[6] += 50.0
     u = op.u.copy()
@@ -129,7 +130,7 @@ def test_linear_creep_damping_is_the_models_jacobian(params):
     d F_creep / d(v_p, v_s) at an unloaded trim (tau = 0), to 0.5 % (the radii of the
     stretched belt against the unstretched ones)."""
     m = nonlinear_model(params)
-    op = trim(m, 0.7, 300.0, F_s=1.2e4, T_l=0.0)
+    op = trim(m, OperatingPoint(r_g=0.7, omega_p=300.0, F_s=1.2e4, T_l=0.0))
     C = m.jacobian(op.x, op.u)[2][m.outputs.index("F_creep")]
     cd = creep_damping(params, op.r_g, 300.0, op.F_s)
     # the trim's radii carry the belt stretch; creep_damping takes the unstretched ones
@@ -184,7 +185,7 @@ def test_tabulated_thrust_ratio_kernel_equals_python(params, tmp_path):
     d = zero_torque_difference(kmap, params.variator, [0.5, 2.0])
     assert abs(d[0]) > 0.01
     # the model trims and runs with it (the static creep force carries the difference)
-    op = trim(m, 0.5, 300.0, F_s=1e4, T_l=0.0)
+    op = trim(m, OperatingPoint(r_g=0.5, omega_p=300.0, F_s=1e4, T_l=0.0))
     assert op.residual < 1e-8
     y = m.output_dict(op.x, op.u)
     assert y["kappa_eq"] == pytest.approx(0.75, rel=1e-12)
@@ -193,8 +194,7 @@ def test_tabulated_thrust_ratio_kernel_equals_python(params, tmp_path):
 
 def test_scenario_thrust_ratio_path_is_relative_to_the_scenario(tmp_path, monkeypatch):
     """A ``[model] thrust_ratio`` file named relative to an open-loop or a closed-loop scenario
-    is read from the scenario's folder, whatever the working directory (both loaders)."""
-    from empact.control.closed_loop import load_control_scenario
+    is read from the scenario's folder, whatever the working directory (one loader)."""
     from empact.nonlinear.scenario import load_scenario
     folder = tmp_path / "study"
     folder.mkdir()
@@ -203,11 +203,11 @@ def test_scenario_thrust_ratio_path_is_relative_to_the_scenario(tmp_path, monkey
         '[scenario]\nduration = 0.1\n[model]\nthrust_ratio = "kappa.csv"\n'
         "[initial]\nr_g = 1\nomega_p = 300.0\nF_s = 10000.0\nT_l = 50.0\n")
     (folder / "closed.toml").write_text(
-        '[scenario]\nduration = 0.1\ncontroller = "shipped:pi"\n[model]\n'
+        '[scenario]\nduration = 0.1\n[controller]\nfile = "shipped:pi"\n[model]\n'
         'thrust_ratio = "kappa.csv"\n[initial]\nr_g = 1\nomega_p = 300.0\nnu = 0.01\n'
         "T_l = 50.0\n")
     monkeypatch.chdir(tmp_path)  # not the scenario's folder
-    for sc in (load_scenario(folder / "open.toml"), load_control_scenario(folder / "closed.toml")):
+    for sc in (load_scenario(folder / "open.toml"), load_scenario(folder / "closed.toml")):
         kmap = sc.options.thrust_ratio
         # the table's own value at (tau = 0, r_g = 0.5), exact
         assert float(kmap.kappa(0.0, 0.5)) == pytest.approx(0.75, rel=1e-12)

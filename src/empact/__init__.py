@@ -65,7 +65,7 @@ Control and sweeps (beyond the paper)
    design_pi, design_hinf
                       -- robust decentralised PI; mixed-sensitivity H-infinity (slycot)
    robustness_map     -- disk margins of a controller over a family
-   run_closed_loop, load_control_scenario
+   run_closed_loop    -- a scenario with a [controller] on the nonlinear machine
                       -- a controller on the nonlinear machine
    monte_carlo, load_spread
                       -- an analysis over a parameter spread (failures kept with reasons)
@@ -92,12 +92,12 @@ __version__ = "0.1.0"
 _CATALOGUE = {
     "load_params": "params", "default_params": "params", "save_params": "params",
     "Params": "params", "OperatingPoint": "params", "ParameterError": "errors",
-    "variator_state": "geometry", "belt_length": "geometry", "ratio_range": "geometry",
-    "traction_from_params": "traction", "load_traction": "traction",
-    "traction_curves": "traction",
-    "creep_damping": "shift_law", "shift_rate": "shift_law",
-    "thrust_ratio_from_params": "thrust_ratio", "load_thrust_ratio": "thrust_ratio",
-    "kappa_geo": "thrust_ratio",
+    "variator_state": "variator.geometry", "belt_length": "variator.geometry", "ratio_range": "variator.geometry",
+    "traction_from_params": "variator.traction", "load_traction": "variator.traction",
+    "traction_curves": "variator.traction",
+    "creep_damping": "variator.shift_law", "shift_rate": "variator.shift_law",
+    "thrust_ratio_from_params": "variator.thrust_ratio", "load_thrust_ratio": "variator.thrust_ratio",
+    "kappa_geo": "variator.thrust_ratio",
     "actuation_model": "linear.actuation", "driveline_model": "linear.driveline",
     "LumpedModel": "linear.lumped", "calibrate": "linear.calibration",
     "slip_model": "slip.model", "belt_root_locus": "slip.loci", "pole_sweep": "slip.loci",
@@ -113,12 +113,19 @@ _CATALOGUE = {
     "plant_family": "control.family", "design_pi": "control.pi",
     "design_hinf": "control.hinf", "robustness_map": "control.robustness",
     "run_closed_loop": "control.closed_loop", "load_control_scenario": "control.closed_loop",
+    "Plant": "nonlinear.linearization",
     "monte_carlo": "montecarlo.study", "load_spread": "montecarlo.spread",
     "SweepOptions": "sweep",
     "frequency_response": "lti", "transmission_zeros": "lti", "root_locus": "lti",
 }
 
 __all__ = sorted(_CATALOGUE)
+
+#: module paths of empact 0.1 kept for one release (importing one warns, naming the new one)
+DEPRECATED_MODULES = {"empact.geometry": "empact.variator.geometry",
+                      "empact.traction": "empact.variator.traction",
+                      "empact.shift_law": "empact.variator.shift_law",
+                      "empact.thrust_ratio": "empact.variator.thrust_ratio"}
 
 
 def __getattr__(name: str) -> Any:

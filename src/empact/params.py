@@ -27,16 +27,22 @@ from __future__ import annotations
 import math
 import os
 import tomllib
-from dataclasses import asdict, dataclass, field, fields, replace
+import warnings
+from dataclasses import asdict, dataclass, fields, replace
 from importlib import resources
 from typing import Any, Mapping
 
+import numpy as np
 import tomli_w
 
 from ._io import atomic_write_text
-from ._validate import check_choice, check_number, interval
+from ._section import Section, param
+from ._validate import check_choice, check_number
 from .errors import ParameterError
-from .geometry import ratio_range
+from .variator.geometry import VariatorParams, ratio_range, variator_state
+from .variator.shift_law import ShiftParams
+from .variator.thrust_ratio import ThrustRatioParams
+from .variator.traction import TractionParams, traction_from_params
 
 __all__ = [
     "ParameterError", "VariatorParams", "ActuationParams", "DampingLevel", "DampingParams",
@@ -48,106 +54,46 @@ __all__ = [
 
 DAMPING_LEVELS = ("none", "moderate", "large")
 
-
-def _p(unit: str, doc: str, lo: float = 0.0, hi: float = math.inf, *, lo_open: bool = True,
-       hi_open: bool = False, note: str = "") -> Any:
-    """Field spec: a float with unit, description and an allowed interval."""
-    return field(metadata=dict(unit=unit, doc=doc, lo=lo, hi=hi, lo_open=lo_open,
-                               hi_open=hi_open, note=note))
-
-
-def _interval(meta: Mapping[str, Any]) -> str:
-    return interval(meta["lo"], meta["hi"], lo_open=meta["lo_open"], hi_open=meta["hi_open"])
-
-
-class _Section:
-    """Mixin: range-checks every float field after construction (`empact._validate`)."""
-
-    _name = "section"
-
-    def __post_init__(self) -> None:
-        for f in fields(self):  # type: ignore[arg-type]
-            meta = f.metadata
-            if "unit" not in meta:
-                continue
-            value = check_number(f"{self._name}.{f.name}", getattr(self, f.name), meta["lo"],
-                                 meta["hi"], lo_open=meta["lo_open"], hi_open=meta["hi_open"],
-                                 unit=meta["unit"], note=meta["note"])
-            object.__setattr__(self, f.name, value)
-
-    @classmethod
-    def describe(cls) -> list[tuple[str, str, str, str]]:
-        """(name, unit, allowed interval, description) for every field."""
-        return [(f.name, f.metadata["unit"], _interval(f.metadata), f.metadata["doc"])
-                for f in fields(cls) if "unit" in f.metadata]  # type: ignore[arg-type]
-
-
 @dataclass(frozen=True)
-class VariatorParams(_Section):
-    """Pushbelt variator geometry (paper eqs. 4-6)."""
-
-    _name = "variator"
-    a: float = _p("m", "centre distance between the pulley shafts", 0.02, 1.0)
-    beta: float = _p("rad", "pulley wedge angle (half the V angle; pushbelts: about 11 deg)",
-                     math.radians(1), math.radians(30), lo_open=False)
-    L_belt: float = _p("m", "belt length (running circumference)", 0.1, 5.0)
-    R_min: float = _p("m", "smallest running radius; also R0, the radius at zero sheave "
-                           "translation", 0.002, 0.5)
-    R_max: float = _p("m", "largest running radius", 0.002, 0.5)
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.R_max <= self.R_min:
-            raise ParameterError(
-                f"variator.R_max = {self.R_max!r}: must exceed variator.R_min = {self.R_min!r} [m]")
-        # The belt must fit: at r_g = 1 both radii are (L - 2a) / (2 pi).
-        R_med = (self.L_belt - 2 * self.a) / (2 * math.pi)
-        if not self.R_min < R_med < self.R_max:
-            raise ParameterError(
-                f"variator.L_belt = {self.L_belt!r}: gives the medium-ratio radius {R_med:.4g} m, "
-                f"which must lie in (R_min, R_max) = ({self.R_min:g}, {self.R_max:g}) m")
-
-
-@dataclass(frozen=True)
-class ActuationParams(_Section):
+class ActuationParams(Section):
     """Linear actuation model (paper Sec. 2.1, Fig. 3)."""
 
     _name = "actuation"
-    J_mp: float = _p("kg m^2", "primary servo inertia (rotor and worm), coordinate q1", 1e-8, 1.0)
-    J_ms: float = _p("kg m^2", "secondary servo inertia (rotor and chain sprocket), "
+    J_mp: float = param("kg m^2", "primary servo inertia (rotor and worm), coordinate q1", 1e-8, 1.0)
+    J_ms: float = param("kg m^2", "secondary servo inertia (rotor and chain sprocket), "
                      "coordinate q2", 1e-8, 1.0)
-    J_sp: float = _p("kg m^2", "primary sun gear with screw, ring/carrier/planets lumped, q3",
+    J_sp: float = param("kg m^2", "primary sun gear with screw, ring/carrier/planets lumped, q3",
                      1e-7, 10.0)
-    J_ss: float = _p("kg m^2", "secondary sun gear with screw input, q4", 1e-7, 10.0)
-    m_p: float = _p("kg", "primary moving sheave with screw output, q5", 0.01, 100.0)
-    m_s: float = _p("kg", "secondary moving sheave with screw output, q6", 0.01, 100.0)
-    i_w: float = _p("-", "worm ratio (servo turns per ring turn)", 0.1, 1000.0)
-    i_c: float = _p("-", "chain ratio (servo turns per ring turn)", 0.01, 100.0)
-    i_e: float = _p("-", "ring to sun ratio of the epicyclic sets (the paper: 2)", 1.0, 10.0)
-    s: float = _p("m/rad", "screw pitch (translation per radian)", 1e-7, 1e-2)
-    k_w: float = _p("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
-    k_c: float = _p("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
-    k_belt: float = _p("N/m", "longitudinal pushbelt stiffness (spring 3)", 1e2, 1e11)
-    k_tp: float = _p("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
-    k_ts: float = _p("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
+    J_ss: float = param("kg m^2", "secondary sun gear with screw input, q4", 1e-7, 10.0)
+    m_p: float = param("kg", "primary moving sheave with screw output, q5", 0.01, 100.0)
+    m_s: float = param("kg", "secondary moving sheave with screw output, q6", 0.01, 100.0)
+    i_w: float = param("-", "worm ratio (servo turns per ring turn)", 0.1, 1000.0)
+    i_c: float = param("-", "chain ratio (servo turns per ring turn)", 0.01, 100.0)
+    i_e: float = param("-", "ring to sun ratio of the epicyclic sets (the paper: 2)", 1.0, 10.0)
+    s: float = param("m/rad", "screw pitch (translation per radian)", 1e-7, 1e-2)
+    k_w: float = param("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
+    k_c: float = param("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
+    k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3)", 1e2, 1e11)
+    k_tp: float = param("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
+    k_ts: float = param("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
 
 
 @dataclass(frozen=True)
-class DampingLevel(_Section):
+class DampingLevel(Section):
     """One damping level of the actuation model (Fig. 6)."""
 
     _name = "damping"
-    alpha: float = _p("s", "proportional spring damping, C_spring = alpha K", 0.0, 0.1,
+    alpha: float = param("s", "proportional spring damping, C_spring = alpha K", 0.0, 0.1,
                       lo_open=False)
-    c_mp: float = _p("N m s/rad", "viscous friction of the primary servo", 0.0, 100.0,
+    c_mp: float = param("N m s/rad", "viscous friction of the primary servo", 0.0, 100.0,
                      lo_open=False)
-    c_ms: float = _p("N m s/rad", "viscous friction of the secondary servo", 0.0, 100.0,
+    c_ms: float = param("N m s/rad", "viscous friction of the secondary servo", 0.0, 100.0,
                      lo_open=False)
-    c_sp: float = _p("N m s/rad", "viscous friction of the primary screw", 0.0, 1e4,
+    c_sp: float = param("N m s/rad", "viscous friction of the primary screw", 0.0, 1e4,
                      lo_open=False)
-    c_ss: float = _p("N m s/rad", "viscous friction of the secondary screw", 0.0, 1e4,
+    c_ss: float = param("N m s/rad", "viscous friction of the secondary screw", 0.0, 1e4,
                      lo_open=False)
-    c_shafai: float = _p("N/m", "Shafai pulley damping: c_pulley = c_shafai / |omega| [N s/m]",
+    c_shafai: float = param("N/m", "Shafai pulley damping: c_pulley = c_shafai / |omega| [N s/m]",
                          0.0, 1e10, lo_open=False)
 
 
@@ -171,179 +117,210 @@ class DampingParams:
 
 
 @dataclass(frozen=True)
-class DrivelineParams(_Section):
+class DrivelineParams(Section):
     """Test-bench driveline (paper Sec. 2.2, Fig. 7)."""
 
     _name = "driveline"
-    J_d: float = _p("kg m^2", "drive motor inertia, q1", 1e-6, 1e3)
-    J_p: float = _p("kg m^2", "primary pulley with torque converter, q2", 1e-6, 1e2)
-    J_s: float = _p("kg m^2", "secondary pulley, q3", 1e-6, 1e2)
-    J_l: float = _p("kg m^2", "load motor inertia, q4", 1e-6, 1e3)
-    k_tc: float = _p("N m/rad", "torque converter lock-up clutch stiffness", 1e-2, 1e8)
-    k_belt: float = _p("N/m", "pushbelt stiffness as a chain element (elongation R_p q2 - R_s "
+    J_d: float = param("kg m^2", "drive motor inertia, q1", 1e-6, 1e3)
+    J_p: float = param("kg m^2", "primary pulley with torque converter, q2", 1e-6, 1e2)
+    J_s: float = param("kg m^2", "secondary pulley, q3", 1e-6, 1e2)
+    J_l: float = param("kg m^2", "load motor inertia, q4", 1e-6, 1e3)
+    k_tc: float = param("N m/rad", "torque converter lock-up clutch stiffness", 1e-2, 1e8)
+    k_belt: float = param("N/m", "pushbelt stiffness as a chain element (elongation R_p q2 - R_s "
                               "q3)", 1e2, 1e11)
-    k_ds: float = _p("N m/rad", "driveshaft stiffness", 1e-2, 1e8)
+    k_ds: float = param("N m/rad", "driveshaft stiffness", 1e-2, 1e8)
 
 
 @dataclass(frozen=True)
-class TractionParams(_Section):
-    """Analytic traction curve mu(nu, r_g) (Fig. 10), a Pacejka-type magic formula.
-
-    ``mu = D sin(C arctan(B nu - E (B nu - arctan(B nu))))``; B, C, D, E are given at the
-    LOW, MED and OD ratios and interpolated linearly in log(r_g) in between (held
-    constant outside).
-    """
-
-    _name = "traction"
-    r_low: float = _p("-", "LOW ratio where the *_low coefficients hold", 0.05, 20.0)
-    r_med: float = _p("-", "MED ratio where the *_med coefficients hold", 0.05, 20.0)
-    r_od: float = _p("-", "OD ratio where the *_od coefficients hold", 0.05, 20.0)
-    B_low: float = _p("-", "stiffness factor at LOW", 1.0, 1e6)
-    B_med: float = _p("-", "stiffness factor at MED", 1.0, 1e6)
-    B_od: float = _p("-", "stiffness factor at OD", 1.0, 1e6)
-    C_low: float = _p("-", "shape factor at LOW", 1.0, 2.0, lo_open=False)
-    C_med: float = _p("-", "shape factor at MED", 1.0, 2.0, lo_open=False)
-    C_od: float = _p("-", "shape factor at OD", 1.0, 2.0, lo_open=False)
-    D_low: float = _p("-", "peak traction coefficient at LOW", 0.0, 1.0)
-    D_med: float = _p("-", "peak traction coefficient at MED", 0.0, 1.0)
-    D_od: float = _p("-", "peak traction coefficient at OD", 0.0, 1.0)
-    E_low: float = _p("-", "curvature factor at LOW", -10.0, 1.0, lo_open=False)
-    E_med: float = _p("-", "curvature factor at MED", -10.0, 1.0, lo_open=False)
-    E_od: float = _p("-", "curvature factor at OD", -10.0, 1.0, lo_open=False)
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if not self.r_low < self.r_med < self.r_od:
-            raise ParameterError(
-                f"traction.r_med = {self.r_med!r}: must lie strictly between r_low = "
-                f"{self.r_low!r} and r_od = {self.r_od!r}")
-
-
-@dataclass(frozen=True)
-class ShiftParams(_Section):
-    """Creep-mode shifting of the pushbelt: the belt's resistance to a ratio change.
-
-    Carbone, Mangialardi, Bonsen, Tursi, Veenhuizen, "CVT dynamics: theory and experiments",
-    Mechanism and Machine Theory 42 (2007) 409-428: in creep mode the ratio rate is
-    proportional to the primary speed and linear in the log of the ratio of the actual to the
-    equilibrium thrust ratio::
-
-        dr_g/dt = |omega_p| K_c [ln(F_p / F_s) - ln kappa*(tau, r_g)]
-        K_c = gain D(F_s) (1 + cos^2 beta) / sin(2 beta) r_g (R_p / a) (a1 + a2 ln^2 r_g)
-        D(F_s) = D_ref (1 + k_D (F_s - F_ref))
-
-    D is the amplitude of the pulley deformation that lets the belt creep radially (rigid
-    pulleys: no creep).  The coefficients are a third party's reconstruction of the paper's
-    fits (eng-tools.dev, "How does a CVT actually change ratio?", its Eqs. 23 and 49 and the
-    calculator's a1, a2 fitted to the paper's Fig. 13); the paper's own tables could not be
-    read, so the magnitude is uncertain by about a factor 10 (hence `gain`).  The test rig of
-    the paper covered r_g = 0.6-1.8, F_s = 20-30 kN, 1000-2000 rpm.
-    """
-
-    _name = "shift"
-    D_ref: float = _p("rad", "pulley deformation amplitude at F_ref (Carbone 2007, "
-                             "reconstructed: 1e-3)", 0.0, 5e-3)
-    F_ref: float = _p("N", "clamping force of D_ref (Carbone 2007: 20 kN)", 1e3, 1e6)
-    k_D: float = _p("1/N", "growth of D with the clamping force (Carbone 2007, "
-                           "reconstructed: 2e-5, i.e. 2 % per kN)", 0.0, 1e-4, lo_open=False)
-    a1: float = _p("-", "ratio dependence g(r) = r q (a1 + a2 ln^2 r), constant term "
-                        "(reconstructed fit: 0.21)", 0.0, 5.0)
-    a2: float = _p("-", "ratio dependence, quadratic term (reconstructed fit: 0.08)", 0.0, 5.0,
-                   lo_open=False)
-    gain: float = _p("-", "overall factor on the creep rate: 1 is the published magnitude; "
-                          "the reconstruction is uncertain by about 10x", 0.1, 50.0,
-                     lo_open=False)
-    omega_0: float = _p("rad/s", "speed below which creep fades (regularisation at "
-                                 "standstill: no shifting without rotation)", 0.01, 10.0)
-    xi_sat: float = _p("-", "saturation of the log thrust-ratio error (slip mode beyond "
-                            "it; no published threshold)", 0.3, 3.0, lo_open=False)
-
-
-@dataclass(frozen=True)
-class ThrustRatioParams(_Section):
-    """Torque-dependent equilibrium thrust ratio ``kappa* = F_p* / F_s`` (analytic default).
-
-    ``ln kappa*(tau, r_g) = p0 ln kappa_geo(r_g) + (b0 - b1 ln r_g) tau`` with the torque ratio
-    ``tau = T_b cos(beta) / (2 mu_max F_s R_s)`` (1 at the traction limit) and the geometric
-    thrust ratio of the elastic belt ``kappa_geo = (pi + 2 phi) / (pi - 2 phi)`` (virtual
-    work; Carbone's frictionless limit): with ``p0 = 1`` it agrees exactly at zero torque.
-    Shaped like published pushbelt curves (rising with torque, faster at LOW, flat or falling
-    at OD); the values are estimates, no measured map could be read: a tabulated map (CSV or
-    TOML, `empact.thrust_ratio.load_thrust_ratio`) replaces it.
-    """
-
-    _name = "thrust_ratio"
-    p0: float = _p("-", "steepness of the zero-torque curve relative to kappa_geo", 0.5, 2.0,
-                   lo_open=False)
-    b0: float = _p("-", "d ln kappa* / d tau at r_g = 1", 0.0, 1.5, lo_open=False)
-    b1: float = _p("-", "how much faster ln kappa* rises with tau at LOW than at OD", -1.0, 2.0)
-
-
-@dataclass(frozen=True)
-class Sec21Stiffness(_Section):
+class Sec21Stiffness(Section):
     """Stiffnesses of the actuation model with the paper's Sec. 2.1 kinematics as published
     (kinematics ``"paper-sec2.1"``), calibrated to Table 1 on its own: the overlay that
     `empact.linear.actuation.actuation_model` and the nonlinear model use for that variant."""
 
     _name = "paper_sec21"
-    k_w: float = _p("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
-    k_c: float = _p("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
-    k_belt: float = _p("N/m", "longitudinal pushbelt stiffness (spring 3)", 1e2, 1e11)
-    k_tp: float = _p("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
-    k_ts: float = _p("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
+    k_w: float = param("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
+    k_c: float = param("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
+    k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3)", 1e2, 1e11)
+    k_tp: float = param("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
+    k_ts: float = param("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
 
 
-#: Operating-point variables: unit and description (names as in the paper).
+#: Operating-point variables: unit and description (names as in the paper).  An operating
+#: point gives the ratio, the primary speed and exactly two of: the slip (as ``nu`` or as the
+#: torque ratio ``tau``), the clamping force ``F_s`` and the load torque ``T_l``.
 OPERATING_VARIABLES = {"r_g": ("-", "geometric ratio R_p / R_s"),
                        "nu": ("-", "slip (fraction, 0.01 is 1 %)"),
                        "F_s": ("N", "secondary clamping force"),
-                       "omega_p": ("rad/s", "primary pulley speed")}
+                       "omega_p": ("rad/s", "primary pulley speed"),
+                       "T_l": ("N m", "load torque (the belt torque on the secondary at steady "
+                                      "state)"),
+                       "tau": ("-", "torque ratio mu(nu) / mu_max: the share of the traction "
+                                    "capacity in use (the torque reserve is 1 - tau)")}
+
+#: the variables that fix a point besides r_g and omega_p (two of them; nu or tau, not both)
+_SLIP = ("nu", "tau")
 
 
 @dataclass(frozen=True)
-class OperatingPoint(_Section):
+class OperatingPoint(Section):
     """An operating point of the variator (names as in the paper), validated on construction.
 
     The one operating-point type of empact: the ``[operating]`` table of a parameter file, the
-    point of the slip model and the trim request of the nonlinear model.
+    point of the slip model, a scenario's ``[initial]`` table and the trim request of the
+    nonlinear model.  It gives the ratio ``r_g``, the primary speed ``omega_p`` and exactly
+    two of: the slip (``nu``, or the torque ratio ``tau``, which is how a clamping strategy
+    states it), the clamping force ``F_s`` and the load torque ``T_l``; the trim
+    (`empact.nonlinear.equilibrium.trim`) solves the third.  `resolve` completes a point on the
+    variator's unstretched geometry (what the linear slip model uses).
 
     Attributes
     ----------
     r_g : geometric ratio ``R_p / R_s`` [-], > 0 (checked against the variator where used)
-    nu : slip [-] (a fraction: 0.01 is 1 %), in (-1, 1)
-    F_s : secondary clamping force [N], >= 0
+    nu : slip [-] (a fraction: 0.01 is 1 %), in (-1, 1), or None
+    F_s : secondary clamping force [N], >= 0, or None
     omega_p : primary pulley speed [rad/s], > 0 (eq. 2 is undefined at standstill)
+    T_l : load torque [N m], or None
+    tau : torque ratio ``mu(nu) / mu_max`` [-] in [-1, 1] (1: the traction limit), or None
+
+    Examples
+    --------
+    >>> OperatingPoint(r_g=1.0, nu=0.01, F_s=10e3, omega_p=300.0).given
+    ('nu', 'F_s')
+    >>> OperatingPoint(r_g=1.0, omega_p=300.0, tau=0.9, T_l=80.0).given
+    ('T_l', 'tau')
     """
 
     _name = "operating"
-    r_g: float = _p("-", OPERATING_VARIABLES["r_g"][1])
-    nu: float = _p("-", OPERATING_VARIABLES["nu"][1], -1.0, 1.0, hi_open=True)
-    F_s: float = _p("N", OPERATING_VARIABLES["F_s"][1], lo_open=False)
-    omega_p: float = _p("rad/s", OPERATING_VARIABLES["omega_p"][1],
-                        note="the slip nu = 1 - omega_s / (r_g omega_p) of eq. 2 is undefined "
-                             "at standstill")
+    r_g: float = param("-", OPERATING_VARIABLES["r_g"][1])
+    nu: float | None = param("-", OPERATING_VARIABLES["nu"][1], -1.0, 1.0, hi_open=True,
+                             default=None)
+    F_s: float | None = param("N", OPERATING_VARIABLES["F_s"][1], lo_open=False, default=None)
+    omega_p: float = param("rad/s", OPERATING_VARIABLES["omega_p"][1],
+                           note="the slip nu = 1 - omega_s / (r_g omega_p) of eq. 2 is "
+                                "undefined at standstill", default=None)
+    T_l: float | None = param("N m", OPERATING_VARIABLES["T_l"][1], -math.inf,
+                              default=None)
+    tau: float | None = param("-", OPERATING_VARIABLES["tau"][1], -1.0, 1.0, lo_open=False,
+                              default=None)
+
+    def __post_init__(self) -> None:
+        if self.omega_p is None:
+            raise ParameterError("operating point: omega_p (primary speed [rad/s]) is missing")
+        super().__post_init__()
+        if self.nu is not None and self.tau is not None:
+            raise ParameterError(f"operating point: give the slip as nu or as tau, not both "
+                                 f"(nu = {self.nu:g}, tau = {self.tau:g})")
+        given = self.given
+        if len(given) != 2:
+            shown = ", ".join(f"{k} = {getattr(self, k):g}" for k in given) or "none"
+            raise ParameterError(f"operating point: give exactly two of nu (or tau), F_s, T_l "
+                                 f"besides r_g and omega_p; given: {shown}")
+
+    @property
+    def given(self) -> tuple[str, ...]:
+        """The two variables that fix the point besides r_g and omega_p, in the order
+        ``nu, F_s, T_l, tau``."""
+        return tuple(k for k in ("nu", "F_s", "T_l", "tau") if getattr(self, k) is not None)
 
     @property
     def omega_s(self) -> float:
         """Secondary speed ``r_g (1 - nu) omega_p`` [rad/s] (eq. 2 solved for omega_s)."""
+        if self.nu is None:
+            raise ParameterError("operating point: omega_s needs the slip nu (resolve the "
+                                 "point first)")
         return self.r_g * (1 - self.nu) * self.omega_p
 
     @classmethod
-    def from_params(cls, params: "Params", **changes: float) -> "OperatingPoint":
+    def from_params(cls, params: "Params", **changes: float | None) -> "OperatingPoint":
         """The ``[operating]`` point of a parameter set, with keyword `changes`."""
         return params.operating.replace(**changes)
 
-    def replace(self, **changes: float) -> "OperatingPoint":
-        """A copy with some variables changed (validated)."""
+    def replace(self, **changes: float | None) -> "OperatingPoint":
+        """A copy with some variables changed (validated).  Setting the slip as ``nu`` drops
+        a ``tau`` and the other way round; a value of None drops a variable."""
         unknown = set(changes) - set(OPERATING_VARIABLES)
         if unknown:
             raise ParameterError(f"unknown operating-point variable {sorted(unknown)[0]!r}: "
                                  f"choose from {', '.join(OPERATING_VARIABLES)}")
+        for a, b in (("nu", "tau"), ("tau", "nu")):
+            if changes.get(a) is not None and b not in changes:
+                changes[b] = None
         return replace(self, **changes)
 
+    def to_dict(self) -> dict[str, float]:
+        """The given variables by name (SI): ``r_g``, two of ``nu, F_s, T_l, tau``, then
+        ``omega_p``."""
+        out = {"r_g": self.r_g}
+        for k in ("nu", "F_s", "T_l", "tau"):
+            if getattr(self, k) is not None:
+                out[k] = getattr(self, k)
+        out["omega_p"] = self.omega_p
+        return out
+
     def as_dict(self) -> dict[str, float]:
-        """``{"r_g": ..., "nu": ..., "F_s": ..., "omega_p": ...}`` (SI)."""
-        return dict(r_g=self.r_g, nu=self.nu, F_s=self.F_s, omega_p=self.omega_p)
+        """Deprecated: `to_dict`."""
+        warnings.warn("OperatingPoint.as_dict is deprecated; use to_dict", DeprecationWarning,
+                      stacklevel=2)
+        return self.to_dict()
+
+    def resolve(self, params: "Params", traction: Any = None) -> "OperatingPoint":
+        """The point with ``nu`` and ``F_s`` given (the slip model's variables), solved on the
+        variator's unstretched radii with the traction curve of `params` (or `traction`):
+        ``T_l = 2 mu(nu) F_s R_s / cos(beta)`` (eq. 1), the slip on the rising branch of the
+        curve where a torque ratio or a load fixes it.  A point given by ``nu`` and ``F_s``
+        is returned as it is."""
+        if self.nu is not None and self.F_s is not None:
+            return self
+        tr = traction_from_params(params) if traction is None else traction
+        R_s = float(variator_state(self.r_g, params.variator).R_s)
+        cosb = math.cos(params.variator.beta)
+        nu = self.nu
+        if nu is None and self.tau is not None:
+            nu = _slip_at(tr, self.r_g, self.tau * _mu_max(tr, self.r_g), "tau", self.tau)
+        if nu is not None:
+            mu = float(tr.mu(nu, self.r_g))
+            if self.F_s is not None:
+                return OperatingPoint(r_g=self.r_g, nu=nu, F_s=self.F_s, omega_p=self.omega_p)
+            if mu * self.T_l <= 0:
+                raise ParameterError(f"operating point: mu(nu) = {mu:.4g} cannot carry T_l = "
+                                     f"{self.T_l:g} N m with a positive clamping force")
+            return OperatingPoint(r_g=self.r_g, nu=nu, F_s=self.T_l * cosb / (2 * mu * R_s),
+                                  omega_p=self.omega_p)
+        need = self.T_l * cosb / (2 * self.F_s * R_s) if self.F_s > 0 else math.inf
+        return OperatingPoint(r_g=self.r_g, nu=_slip_at(tr, self.r_g, need, "T_l", self.T_l),
+                              F_s=self.F_s, omega_p=self.omega_p)
+
+
+def _mu_max(traction: Any, r_g: float) -> float:
+    """Peak traction coefficient of a curve at `r_g` (its ``mu_max`` where it has one)."""
+    if hasattr(traction, "mu_max"):
+        return float(traction.mu_max(r_g))
+    return _peak(traction, r_g)[1]
+
+
+def _peak(traction: Any, r_g: float) -> tuple[float, float]:
+    lo, hi = max(traction.nu_range[0], 0.0), traction.nu_range[1]
+    nu = np.linspace(lo, hi, 4001)
+    mu = traction.mu(nu, r_g)
+    k = int(np.argmax(mu))
+    return float(nu[k]), float(mu[k])
+
+
+def _slip_at(traction: Any, r_g: float, mu: float, name: str, value: float) -> float:
+    """The slip on the rising branch of the traction curve where it reaches `mu` (bisection
+    to 1e-15), or a one-line error naming the variable that asked for it."""
+    nu_pk, mu_pk = _peak(traction, r_g)
+    if abs(mu) > mu_pk:
+        raise ParameterError(f"operating point: {name} = {value:g} needs mu = {abs(mu):.4g}, "
+                             f"above the traction peak {mu_pk:.4g} at r_g = {r_g:g}")
+    a, b = 0.0, nu_pk
+    for _ in range(80):
+        mid = 0.5 * (a + b)
+        if float(traction.mu(mid, r_g)) < abs(mu):
+            a = mid
+        else:
+            b = mid
+    return math.copysign(0.5 * (a + b), mu) if mu else 0.0
 
 
 _SECTIONS = {
@@ -380,8 +357,11 @@ class Params:
 
     # -- conversion -----------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """Nested plain dictionary, as written to TOML."""
-        return asdict(self)
+        """Nested plain dictionary, as written to TOML (variables of the operating point that
+        are not given are left out)."""
+        d = asdict(self)
+        d["operating"] = self.operating.to_dict()
+        return d
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], base: "Params | None" = None,
@@ -394,7 +374,9 @@ class Params:
             For an unknown section or key, a wrong type or a value out of range.
         """
         merged = base.to_dict() if base is not None else {}
+        op_base = dict(merged.get("operating", {}))
         _merge(merged, data, source, _schema())
+        _merge_operating(merged, op_base, data.get("operating", {}))
         try:
             damping = merged["damping"]
             levels = {name: DampingLevel(**damping[name]) for name in DAMPING_LEVELS}
@@ -426,6 +408,8 @@ class Params:
             if not hasattr(node, part) or part.startswith("_"):
                 raise ParameterError(f"unknown parameter {dotted!r}")
             node = getattr(node, part)
+        if node is None:
+            raise ParameterError(f"parameter {dotted!r} is not set in this parameter set")
         if not isinstance(node, float):
             raise ParameterError(f"parameter {dotted!r} is a section, not a value")
         return node
@@ -439,6 +423,27 @@ class Params:
             node = getattr(node, part)
         meta = {f.name: f.metadata for f in fields(node)}[last]
         return str(meta.get("unit", ""))
+
+
+def _merge_operating(merged: dict[str, Any], base: Mapping[str, Any],
+                     given: Mapping[str, Any]) -> None:
+    """The ``[operating]`` table of a file over the base set's: a file that names two of the
+    variables ``nu`` (or ``tau``), ``F_s``, ``T_l`` states its own point; one that names one
+    of them changes that one (``nu`` and ``tau`` replace each other), as
+    `OperatingPoint.replace` does."""
+    if not isinstance(given, Mapping):
+        return
+    pair = [k for k in ("nu", "F_s", "T_l", "tau") if k in given]
+    if not pair:
+        return
+    table = {k: v for k, v in merged["operating"].items()
+             if k not in ("nu", "F_s", "T_l", "tau")}
+    if len(pair) == 1:
+        table.update({k: v for k, v in base.items() if k in ("nu", "F_s", "T_l", "tau")})
+        if pair[0] in ("nu", "tau"):
+            table.pop("tau" if pair[0] == "nu" else "nu", None)
+    table.update({k: given[k] for k in pair})
+    merged["operating"] = table
 
 
 def _schema() -> dict[str, Any]:

@@ -22,22 +22,24 @@ from .._io import atomic_write_text
 from .._validate import check_int, check_number, check_values
 from ..errors import ParameterError
 from ..export import jsonable as to_jsonable
-from ..geometry import check_ratio
+from ..variator.geometry import check_ratio
 from ..params import OperatingPoint, Params, load_params
-from ..traction import traction_from_params
+from ..variator.traction import traction_from_params
 
 __all__ = ["sweep_options", "sweep_from_options",
            "InputError", "Failed", "ErrorGroup", "LazyGroup", "to_jsonable", "emit_json",
            "params_option", "json_options", "force_option", "get_params", "operating_point",
-           "operating_values", "PLOT_SUFFIXES",
+           "operating_values", "PLOT_SUFFIXES", "LINEAR_OPTIONS",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION"]
 
 #: suffixes of ``--plot`` files (the figure's format)
 PLOT_SUFFIXES = ("png", "svg", "pdf")
 
-#: operating-point option -> variable (the same four options on every command)
-OPTION_VARIABLE = {"ratio": "r_g", "slip": "nu", "clamp": "F_s", "speed": "omega_p"}
-
+#: operating-point option -> variable (the same options on every command)
+OPTION_VARIABLE = {"ratio": "r_g", "slip": "nu", "clamp": "F_s", "speed": "omega_p",
+                   "tau": "tau", "load-torque": "T_l"}
+#: the options of the linear slip model's commands (a point given by slip and clamping force)
+LINEAR_OPTIONS = ("ratio", "slip", "clamp", "speed")
 
 def _one_line(text: str) -> str:
     return " ".join(str(text).split())
@@ -144,7 +146,8 @@ UNITS = {
     "A": "SI (states, inputs and outputs in their units)", "B": "SI", "C": "SI", "D": "SI",
     "values": "unit of the swept variable", "mu_peak": "-", "nu_peak": "-", "nu_range": "-",
     "residual": "-", "coulomb_sp": "N m", "coulomb_ss": "N m", "coulomb_omega": "rad/s",
-    "drive_bandwidth": "Hz", "load_bandwidth": "Hz", "ratio_bandwidth": "Hz", "step": "N m",
+    "drive_bandwidth_hz": "Hz", "load_bandwidth_hz": "Hz", "ratio_bandwidth_hz": "Hz",
+    "step": "N m", "tau": "-",
     "omega_p_fixed": "rad/s", "wall_time_s": "s", "max_real_pole": "1/s", "disk_margin": "-",
     "gain_margin_db": "dB", "phase_margin_deg": "deg", "kp": "N m per unit error",
     "ki": "N m/s per unit error", "wi_rad_s": "rad/s", "crossover_hz": "Hz", "roll_off_hz": "Hz",
@@ -291,8 +294,8 @@ def output_folder(path: str, option: str = "--out", *, force: bool = False) -> P
 
 def operating_values(params: Params, option: str, values: Any, *, trim: bool = False,
                      traction: Any = None) -> np.ndarray:
-    """Values of one operating-point option (``ratio``, ``slip``, ``clamp``, ``speed``),
-    checked under the option's name (``--slip = 0.5: ...``).
+    """Values of one operating-point option (``ratio``, ``slip``, ``clamp``, ``speed``,
+    ``tau``, ``load-torque``), checked under the option's name (``--slip = 0.5: ...``).
 
     The slip must lie in the traction curve's valid range (`traction`, default the analytic
     curve of `params`); with `trim` (a point the nonlinear model is trimmed at) the clamping
@@ -311,13 +314,49 @@ def operating_values(params: Params, option: str, values: Any, *, trim: bool = F
     if option == "speed":
         return check_values(name, values, 0.0, lo_open=True, unit="rad/s",
                             note="the slip of eq. 2 is undefined at standstill")
+    if option == "tau":
+        return check_values(name, values, -1.0, 1.0, note="the torque ratio mu / mu_max; 1 "
+                            "is the traction limit, 0.9 an 11 % torque reserve")
+    if option == "load-torque":
+        return check_values(name, values, -1e4, 1e4, unit="N m")
     raise KeyError(option)
+
+
+#: the variables besides r_g and omega_p that fix an operating point (two of them)
+_PAIR = ("nu", "tau", "F_s", "T_l")
 
 
 def operating_point(params: Params, *, trim: bool = False, **options: float | None) \
         -> OperatingPoint:
     """The ``[operating]`` point of `params` with the given options (``ratio``, ``slip``,
-    ``clamp``, ``speed``; None keeps the file's value), each checked by `operating_values`."""
-    values = {OPTION_VARIABLE[opt]: float(operating_values(params, opt, v, trim=trim))
-              for opt, v in options.items() if v is not None}
-    return params.operating.replace(**values)
+    ``clamp``, ``speed``, ``tau``, ``load_torque``; None keeps the file's value), each
+    checked by `operating_values`.
+
+    Two of ``--slip`` (or ``--tau``), ``--clamp``, ``--load-torque`` state the point; one of
+    them changes that variable of the file's point (``--slip`` and ``--tau`` replace each
+    other); one that the file's point does not give is an error naming the choice."""
+    values = {OPTION_VARIABLE[opt.replace("_", "-")]: float(operating_values(
+        params, opt.replace("_", "-"), v, trim=trim))
+        for opt, v in options.items() if v is not None}
+    given = [k for k in _PAIR if k in values]
+    if "nu" in given and "tau" in given:
+        raise InputError("give --slip or --tau, not both")
+    base = params.operating
+    if len(given) >= 3:
+        raise InputError("give at most two of --slip (or --tau), --clamp, --load-torque")
+    if len(given) == 2:
+        values.update({k: None for k in _PAIR if k not in given})
+    elif len(given) == 1:
+        k = given[0]
+        slip_like = k in ("nu", "tau")
+        if not slip_like and getattr(base, k) is None:
+            has = " and ".join(f"--{_OPTION[v]}" for v in base.given)
+            raise InputError(f"--{_OPTION[k]} with the parameter file's point given by {has}: "
+                             f"also give one of them, to say which --{_OPTION[k]} replaces")
+    try:
+        return base.replace(**values)
+    except ParameterError as exc:
+        raise InputError(str(exc)) from None
+
+
+_OPTION = {v: k for k, v in OPTION_VARIABLE.items()}

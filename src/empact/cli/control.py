@@ -15,15 +15,21 @@ from .slip import parse_values
 
 #: the grid options of `plants` and `control design`: option -> (variable, unit, help)
 GRID = {"ratio": ("r_g", "-", "geometric ratio r_g"), "slip": ("nu", "-", "slip nu (0.01 is "
-        "1 %)"), "clamp": ("F_s", "N", "clamping force F_s"), "speed": ("omega_p", "rad/s",
-        "primary speed omega_p"), "load": ("T_l", "N m", "load torque T_l")}
+        "1 %)"), "tau": ("tau", "-", "torque ratio mu / mu_max in place of --slip (0.9: an "
+        "11 % torque reserve)"), "clamp": ("F_s", "N", "clamping force F_s"),
+        "speed": ("omega_p", "rad/s", "primary speed omega_p"),
+        "load-torque": ("T_l", "N m", "load torque T_l")}
 #: most grid points of one family from the command line
 MAX_FAMILY = 200_000
+#: allowed ranges of the grid options
+_RANGE = {"r_g": (0.0, 10.0), "nu": (-0.5, 0.5), "tau": (-1.0, 1.0), "F_s": (0.0, 1e6),
+          "omega_p": (0.0, 2000.0), "T_l": (-1e4, 1e4)}
 
 
 def grid_options(fn):
     for opt, (var, unit, doc) in reversed(list(GRID.items())):
-        fn = click.option(f"--{opt}", opt, default=None, metavar="VALUE|LIST|RANGE",
+        fn = click.option(f"--{opt}", opt.replace("-", "_"), default=None,
+                          metavar="VALUE|LIST|RANGE",
                           help=f"{doc} [{unit}]; a list or start:stop:count makes it an axis "
                                "(default: the parameter file's [operating]).")(fn)
     fn = click.option("--damping", type=click.Choice(["none", "moderate", "large"]),
@@ -35,14 +41,35 @@ def grid_options(fn):
                                                                      "shafai"]),
                       default="carbone", show_default=True, help="The belt's shift "
                       "resistance.")(fn)
+    fn = click.option("--drive", type=click.Choice(["torque", "speed"]), default="speed",
+                      show_default=True, help="Drive motor torque- or speed-controlled (the "
+                      "test bench: speed, as `empact linearize`).")(fn)
+    fn = click.option("--load", "load_mode", type=LoadMode(), default="torque",
+                      show_default=True, help="Load motor torque- or speed-controlled (the "
+                      "load torque is --load-torque).")(fn)
     return fn
 
 
+class LoadMode(click.Choice):
+    """``--load torque|speed``; a number names the option that took it over."""
+
+    def __init__(self) -> None:
+        super().__init__(["torque", "speed"])
+
+    def convert(self, value, param, ctx):
+        try:
+            float(value)
+        except (TypeError, ValueError):
+            return super().convert(value, param, ctx)
+        self.fail(f"{value!r} is a number: the load torque is --load-torque now; --load is the "
+                  "load motor's mode (torque or speed)", param, ctx)
+
+
 def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_law: str,
-                        sweep=None):
+                        drive: str = "speed", load: str = "torque", sweep=None):
     """Parse the grid options (each checked under its name) and build the family."""
     from ..control.family import plant_family
-    from ..geometry import check_ratio
+    from ..variator.geometry import check_ratio
 
     values = {}
     for opt, text in raw.items():
@@ -50,8 +77,7 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
         if v is None:
             continue
         var, unit, _ = GRID[opt]
-        lo = {"r_g": 0.0, "nu": -0.5, "F_s": 0.0, "omega_p": 0.0, "T_l": -1e4}[var]
-        hi = {"r_g": 10.0, "nu": 0.5, "F_s": 1e6, "omega_p": 2000.0, "T_l": 1e4}[var]
+        lo, hi = _RANGE[var]
         for x in v:
             check_number(f"--{opt}", x, lo, hi, lo_open=var in ("r_g", "F_s", "omega_p"),
                          unit=unit)
@@ -61,11 +87,13 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
     n = int(np.prod([np.size(v) for v in values.values()] or [1]))
     if n > MAX_FAMILY:
         raise InputError(f"{n} grid points; at most {MAX_FAMILY}")
-    if all(k in values for k in ("nu", "F_s", "T_l")):
-        raise InputError("give at most two of --slip, --clamp, --load (the trim solves the "
-                         "third)")
+    if "nu" in values and "tau" in values:
+        raise InputError("give --slip or --tau, not both")
+    if sum(k in values for k in ("nu", "tau", "F_s", "T_l")) > 2:
+        raise InputError("give at most two of --slip (or --tau), --clamp, --load-torque (the "
+                         "trim solves the third)")
     return plant_family(params, damping=damping, kinematics=kinematics, shift_law=shift_law,
-                        sweep=sweep, **values)
+                        drive=drive, load=load, sweep=sweep, **values)
 
 
 def _summary(fam) -> dict:
@@ -83,8 +111,9 @@ def _summary(fam) -> dict:
 @params_option
 @json_options
 @force_option
-def plants_cmd(ratio, slip, clamp, speed, load, damping, kinematics, shift_law, out, scheduler,
-               workers, scheduler_timeout, params_file, as_json, json_out, force) -> None:
+def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics, shift_law,
+               drive, load_mode, out, scheduler, workers, scheduler_timeout, params_file,
+               as_json, json_out, force) -> None:
     """Trim and exactly linearise the machine over a grid of operating points (a plant
     family: T_mp, T_ms and the load -> r_g, nu, nu_r), for control design and LPV models."""
     from ..control.family import save_family
@@ -94,9 +123,10 @@ def plants_cmd(ratio, slip, clamp, speed, load, damping, kinematics, shift_law, 
     sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
     params = get_params(params_file)
     t0 = time.perf_counter()
-    fam = family_from_options(params, {"ratio": ratio, "slip": slip, "clamp": clamp,
-                                       "speed": speed, "load": load}, damping, kinematics,
-                              shift_law, sweep)
+    fam = family_from_options(params, {"ratio": ratio, "slip": slip, "tau": tau,
+                                       "clamp": clamp, "speed": speed,
+                                       "load-torque": load_torque}, damping, kinematics,
+                              shift_law, drive, load_mode, sweep)
     wall = time.perf_counter() - t0
     if out:
         save_family(fam, out)
@@ -133,9 +163,9 @@ def control_group() -> None:
 @params_option
 @json_options
 @force_option
-def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, clamp, speed,
-               load, damping, kinematics, shift_law, out, params_file, as_json, json_out,
-               force) -> None:
+def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, tau, clamp,
+               speed, load_torque, damping, kinematics, shift_law, drive, load_mode, out,
+               params_file, as_json, json_out, force) -> None:
     """Design a controller (T_mp, T_ms) from the errors of (r_g, slip) on a plant family
     (default family: r_g 0.5..2 (7, geometric), slip 0.6..1.2 % (4) at [operating])."""
     from ..control.hinf import design_hinf
@@ -153,11 +183,12 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
     for b in bw:
         check_number("--bandwidth", b, 0.0, 50.0, lo_open=True, unit="Hz")
     params = get_params(params_file)
-    raw = {"ratio": ratio or "0.5:2:7", "slip": slip or "0.006,0.008,0.01,0.012",
-           "clamp": clamp, "speed": speed, "load": load}
+    raw = {"ratio": ratio or "0.5:2:7",
+           "slip": slip or (None if tau else "0.006,0.008,0.01,0.012"), "tau": tau,
+           "clamp": clamp, "speed": speed, "load-torque": load_torque}
     if raw["ratio"] == "0.5:2:7":
         raw["ratio"] = ",".join(f"{x:.6g}" for x in np.geomspace(0.5, 2, 7))
-    fam = family_from_options(params, raw, damping, kinematics, shift_law)
+    fam = family_from_options(params, raw, damping, kinematics, shift_law, drive, load_mode)
     if not fam.ok.all():
         raise InputError(f"{int((~fam.ok).sum())} grid points do not trim ("
                          f"{sorted({str(r) for r in fam.reason.ravel() if r})[0]}); narrow "
@@ -240,10 +271,8 @@ def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_js
                  force) -> None:
     """Closed loop on the nonlinear machine: print the scenario's metrics against its
     targets (exit 1 when the run stops early)."""
-    from dataclasses import replace
-
-    from ..control.closed_loop import (control_example_path, control_examples,
-                                       load_control_scenario, run_closed_loop)
+    from ..control.closed_loop import control_example_path, control_examples, run_closed_loop
+    from ..nonlinear.scenario import load_scenario
     from ..nonlinear.simulation import write_csv
 
     if list_ex:
@@ -254,9 +283,12 @@ def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_js
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
     output_file(out, "--out", force=force, suffixes=("csv",))
     output_file(json_out, "--json-out", force=True)
-    sc = load_control_scenario(control_example_path(example) if example else scenario)
+    sc = load_scenario(control_example_path(example) if example else scenario)
+    if not sc.closed_loop:
+        raise InputError(f"{scenario}: no [controller] table (an open-loop scenario: run it "
+                         "with 'empact simulate')")
     if controller:
-        sc = replace(sc, controller=controller)
+        sc = sc.with_controller(controller)
     params = get_params(params_file)
     run = run_closed_loop(sc, params)
     if out:

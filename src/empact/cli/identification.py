@@ -7,7 +7,7 @@ import numpy as np
 
 from .._validate import check_int, check_number
 from ..experiments.rig import EXCITATIONS
-from ..geometry import check_ratio
+from ..variator.geometry import check_ratio
 from ..identification import METHODS, estimate_frf
 from ..identification.records import load_records, sample_rate
 from ._common import (PLOT_SUFFIXES, InputError, emit_json, force_option, get_params, json_options,
@@ -124,13 +124,13 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
     check_ratio(r_list, params.variator, "--ratios")
     results = [identify_plant(params, base.replace(r_g=r), order=order, amplitudes=(step, step))
                for r in r_list]
-    models = [{"r_g": res.r_g, "operating_point": res.experiment.op.as_dict(),
+    models = [{"r_g": res.r_g, "operating_point": res.experiment.op.to_dict(),
                "order": res.realization.order, "fit_percent": res.realization.fit,
                "singular_values": res.realization.singular_values[:40],
                "A": res.realization.A, "B": res.realization.B,
                "C": res.realization.C, "D": res.realization.D,
                "inputs": ["T_mp", "T_ms"], "outputs": ["r_g", "nu"]} for res in results]
-    data = {"operating_point": base.as_dict(), "step": step, "models": models}
+    data = {"operating_point": base.to_dict(), "step": step, "models": models}
     if dest is not None:
         import json
 

@@ -6,7 +6,7 @@ import click
 import numpy as np
 
 from .._validate import check_int, check_number
-from ..geometry import check_ratio
+from ..variator.geometry import check_ratio
 from ..linear.actuation import actuation_model
 from ..linear.calibration import calibrate, load_targets
 from ..linear.driveline import driveline_model, uncoupled_frequencies

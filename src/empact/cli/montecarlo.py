@@ -67,11 +67,14 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
     spread = load_spread(spread_file, params)
     sc = ctrl = None
     if closed:
-        from ..control.closed_loop import (control_example_path, load_control_scenario,
-                                           resolve_controller)
+        from ..control.closed_loop import control_example_path, resolve_controller
+        from ..nonlinear.scenario import load_scenario
 
-        sc = load_control_scenario(control_example_path(example) if example else scenario)
-        ctrl = resolve_controller(controller or sc.controller)
+        sc = load_scenario(control_example_path(example) if example else scenario)
+        if not sc.closed_loop:
+            raise InputError(f"--scenario {scenario}: no [controller] table (the closed-loop "
+                             "analysis needs a closed-loop scenario)")
+        ctrl = resolve_controller(controller or sc.controller.file)
     result = monte_carlo(params, spread, runs, analysis, seed=seed, scenario=sc,
                          controller=ctrl, sweep=sweep)
     if out:

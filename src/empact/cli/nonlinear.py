@@ -5,7 +5,7 @@ import click
 import numpy as np
 
 from .._validate import check_number
-from ..geometry import check_ratio
+from ..variator.geometry import check_ratio
 from ._common import (PLOT_SUFFIXES, Failed, InputError, emit_json, force_option, get_params,
                       json_options, operating_point, output_file, output_folder, params_option)
 from .linear import plot_option
@@ -38,6 +38,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     the partial result, marked INCOMPLETE); 2 bad input.
     """
     from .._io import atomic_folder
+    from ..control.closed_loop import run_closed_loop
     from ..nonlinear.scenario import example_path, list_examples, load_scenario
     from ..nonlinear.simulation import csv_text, run_scenario
     from ..plotting import plot_simulation, save_figure
@@ -58,7 +59,10 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
                          f"= {n_samples:.3g} output samples; at most {MAX_SAMPLES}")
     dest = output_folder(out or f"sim-{sc.name}", "--out", force=force)
     params = get_params(params_file)
-    res = run_scenario(sc, params, progress=not quiet)
+    if sc.closed_loop:
+        res = run_closed_loop(sc, params, progress=not quiet).result
+    else:
+        res = run_scenario(sc, params, progress=not quiet)
     if not res.complete and not keep_partial:
         raise Failed(f"simulation stopped early, nothing written (--keep-partial keeps it): "
                      f"{res.message}")
@@ -75,7 +79,7 @@ def _options(drive: str, load: str, damping: str, kinematics: str, shift_law: st
     opts = {"drive": drive, "load": load, "damping": damping, "kinematics": kinematics,
             "shift_law": shift_law}
     if thrust_ratio:
-        from ..thrust_ratio import load_thrust_ratio
+        from ..variator.thrust_ratio import load_thrust_ratio
 
         opts["thrust_ratio"] = load_thrust_ratio(thrust_ratio)
     return opts
@@ -88,24 +92,29 @@ def _described(opts: dict) -> dict:
             if not (k in ("thrust_ratio", "reference_ratio") and v is None)}
 
 
-model_options = [
-    click.option("--damping", type=click.Choice(["none", "moderate", "large"]),
-                 default="moderate", show_default=True, help="Actuation damping level."),
-    click.option("--drive", type=click.Choice(["torque", "speed"]), default="torque",
-                 show_default=True, help="Drive motor torque- or speed-controlled."),
-    click.option("--load", type=click.Choice(["torque", "speed"]), default="torque",
-                 show_default=True, help="Load motor torque- or speed-controlled."),
-    click.option("--kinematics", type=click.Choice(["equal-translation", "paper-sec2.1"]),
-                 default="equal-translation", show_default=True,
-                 help="The machine's sheave kinematics, or the paper's Sec. 2.1 rows (a "
-                      "named variant)."),
-    click.option("--shift-law", "shift_law", type=click.Choice(["carbone", "ide", "shafai"]),
-                 default="carbone", show_default=True,
-                 help="The belt's shift resistance (empact.shift_law)."),
-    click.option("--thrust-ratio", "thrust_ratio", type=click.Path(dir_okay=False),
-                 default=None, help="Measured thrust-ratio map kappa*(tau, r_g), .csv "
-                 "(r_g,tau,kappa) or .toml (default: the analytic [thrust_ratio])."),
-]
+def model_options_for(drive: str = "torque") -> list:
+    """The model-option flags (`ModelOptions`), with the drive motor's default: ``"speed"``
+    for the plant commands (the test bench, as `empact plants`), ``"torque"`` for the
+    analyses of the bare machine (`empact nmp`, as `empact.nmp_analysis`)."""
+    return [
+        click.option("--damping", type=click.Choice(["none", "moderate", "large"]),
+                     default="moderate", show_default=True, help="Actuation damping level."),
+        click.option("--drive", type=click.Choice(["torque", "speed"]), default=drive,
+                     show_default=True, help="Drive motor torque- or speed-controlled."),
+        click.option("--load", type=click.Choice(["torque", "speed"]), default="torque",
+                     show_default=True, help="Load motor torque- or speed-controlled."),
+        click.option("--kinematics", type=click.Choice(["equal-translation", "paper-sec2.1"]),
+                     default="equal-translation", show_default=True,
+                     help="The machine's sheave kinematics, or the paper's Sec. 2.1 rows (a "
+                          "named variant)."),
+        click.option("--shift-law", "shift_law",
+                     type=click.Choice(["carbone", "ide", "shafai"]), default="carbone",
+                     show_default=True, help="The belt's shift resistance "
+                     "(empact.variator.shift_law)."),
+        click.option("--thrust-ratio", "thrust_ratio", type=click.Path(dir_okay=False),
+                     default=None, help="Measured thrust-ratio map kappa*(tau, r_g), .csv "
+                     "(r_g,tau,kappa) or .toml (default: the analytic [thrust_ratio])."),
+    ]
 
 
 def _add(options):
@@ -120,7 +129,11 @@ def _add(options):
 @click.option("--ratio", "r_g", type=float, default=None,
               help="Geometric ratio r_g [-] (default: the parameter file's [operating]).")
 @click.option("--slip", "nu", type=float, default=None, help="Slip nu [-] (0.004 is 0.4 %).")
+@click.option("--tau", "tau", type=float, default=None,
+              help="Torque ratio mu / mu_max [-] in place of --slip (0.9: an 11 % torque "
+                   "reserve).")
 @click.option("--clamp", "F_s", type=float, default=None, help="Clamping force F_s [N].")
+@click.option("--load-torque", "T_l", type=float, default=None, help="Load torque T_l [N m].")
 @click.option("--speed", "omega_p", type=float, default=None,
               help="Primary speed omega_p [rad/s].")
 @click.option("--format", "fmt", type=click.Choice(["json", "mat", "npz"]), default=None,
@@ -128,36 +141,40 @@ def _add(options):
 @click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
               help="Output file (.json, .mat or .npz).")
 @click.option("--all-io", is_flag=True, help="All inputs and outputs, not only the plant's.")
-@_add(model_options)
+@_add(model_options_for("speed"))
 @params_option
 @force_option
-def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load, kinematics,
-                  shift_law, thrust_ratio, params_file, force) -> None:
+def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, drive, load,
+                  kinematics, shift_law, thrust_ratio, params_file, force) -> None:
     """Exact linear plant at an operating point: A, B, C, D.
 
     Inputs T_mp, T_ms (control) and the load T_l (or omega_l_ref with --load speed) as the
-    disturbance; outputs r_g, nu (eq. 2) and nu_r (slip at the operating ratio).
+    disturbance; outputs r_g, nu (eq. 2) and nu_r (slip at the operating ratio).  By default
+    the test bench (drive motor speed-controlled, load motor torque-controlled), as
+    `empact plants`: a family's point equals this plant.
     """
     from ..export import format_of, save_system, system_dict
+    from ..nonlinear.equilibrium import trim
     from ..nonlinear.linearization import (PLANT_INPUTS, PLANT_OUTPUTS, disturbance_input,
-                                           linearize, trim_point)
+                                           linearize)
     from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, nonlinear_model
 
     if out is None and fmt not in (None, "json"):
         raise InputError(f"--format {fmt} needs --out FILE")
     output_file(out, "--out", force=force, suffixes=("json", "mat", "npz"))
     params = get_params(params_file)
-    point = operating_point(params, trim=True, ratio=r_g, slip=nu, clamp=F_s, speed=omega_p)
+    point = operating_point(params, trim=True, ratio=r_g, slip=nu, tau=tau, clamp=F_s,
+                            load_torque=T_l, speed=omega_p)
     opts = _options(drive, load, damping, kinematics, shift_law, thrust_ratio)
     model = nonlinear_model(params, **opts)
-    op = trim_point(model, point)
+    op = trim(model, point)
     dist = disturbance_input(model)
     sys_ = linearize(op, None if all_io else PLANT_INPUTS + (dist,),
                      None if all_io else PLANT_OUTPUTS)
     units = {"inputs": [INPUT_UNITS[n] for n in sys_.input_labels],
              "outputs": [OUTPUT_UNITS[n] for n in sys_.output_labels],
              "states": [STATE_UNITS[n] for n in sys_.state_labels]}
-    meta = {"operating_point": op.as_dict(), "model_options": _described(opts),
+    meta = {"operating_point": op.to_dict(), "model_options": _described(opts),
             "control_inputs": list(PLANT_INPUTS), "disturbance_inputs": [dist]}
     if out is None:
         emit_json(system_dict(sys_, units, meta), "linearize")
@@ -172,7 +189,10 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
               help="Comma-separated ratios r_g.")
 @click.option("--slip", "nu", type=float, default=None,
               help="Slip [-] (default: the parameter file's [operating]).")
+@click.option("--tau", "tau", type=float, default=None,
+              help="Torque ratio mu / mu_max [-] in place of --slip.")
 @click.option("--clamp", "F_s", type=float, default=None, help="Clamping force [N].")
+@click.option("--load-torque", "T_l", type=float, default=None, help="Load torque T_l [N m].")
 @click.option("--speed", "omega_p", type=float, default=None, help="Primary speed [rad/s].")
 @click.option("--fmax", "f_max", type=float, default=200.0, show_default=True,
               help="Largest zero frequency reported [Hz].")
@@ -180,11 +200,11 @@ def linearize_cmd(r_g, nu, F_s, omega_p, fmt, out, all_io, damping, drive, load,
               show_default=True, help="Slip nu of eq. 2 on the current radii, or nu_r at the "
               "operating ratio (see empact.nonlinear.nmp).")
 @plot_option
-@_add(model_options)
+@_add(model_options_for("torque"))
 @params_option
 @json_options
 @force_option
-def nmp_cmd(ratios, nu, F_s, omega_p, f_max, slip_signal, plot, damping, drive, load,
+def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, damping, drive, load,
             kinematics, shift_law, thrust_ratio, params_file, as_json, json_out, force) -> None:
     """Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio (Sec 2.3)."""
     from ..nonlinear.nmp import nmp_analysis
@@ -199,7 +219,8 @@ def nmp_cmd(ratios, nu, F_s, omega_p, f_max, slip_signal, plot, damping, drive, 
     output_file(plot, "--plot", force=force, suffixes=PLOT_SUFFIXES)
     output_file(json_out, "--json-out", force=True)
     params = get_params(params_file)
-    base = operating_point(params, trim=True, slip=nu, clamp=F_s, speed=omega_p)
+    base = operating_point(params, trim=True, slip=nu, tau=tau, clamp=F_s, load_torque=T_l,
+                           speed=omega_p)
     check_ratio(r, params.variator, "--ratios")
     res = nmp_analysis(params, r, base=base, f_max=f_max, slip=slip_signal,
                        **_options(drive, load, damping, kinematics, shift_law, thrust_ratio))
@@ -213,7 +234,7 @@ def nmp_cmd(ratios, nu, F_s, omega_p, f_max, slip_signal, plot, damping, drive, 
                    "dL_exact": g.dL_exact, "dL_first_order": g.dL_first_order,
                    "zeros": list(res.zeros), "rhp_zeros": list(res.rhp_zeros),
                    "n_rhp": res.n_rhp, "n_rhp_real": res.n_rhp_real,
-                   "slip_signal": res.slip, "operating_point": base.as_dict(),
+                   "slip_signal": res.slip, "operating_point": base.to_dict(),
                    "model_options": _described(res.operating["options"])}, "nmp", json_out)
         return
     click.echo(f"{'r_g':>6s} {'Delta_x [mm]':>13s} {'dL/delta exact':>15s} {'4 phi/tan(b)':>13s}"

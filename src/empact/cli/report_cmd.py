@@ -5,7 +5,7 @@ import click
 
 from .. import paper
 from .._validate import check_choice
-from ..geometry import ratio_range
+from ..variator.geometry import ratio_range
 from ..report import SECTIONS, build_report
 from ._common import InputError, force_option, get_params, output_folder, params_option
 

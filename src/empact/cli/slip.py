@@ -19,13 +19,13 @@ from .._validate import check_int, check_number
 from ..params import OperatingPoint, Params
 from ..slip import (INPUTS, OUTPUTS, VARIABLES, belt_root_locus, pole_sweep,
                     slip_frequency_responses, slip_model, stability_map, zero_locus)
-from ..traction import TractionModel, load_traction, traction_curves, traction_from_params
-from ._common import (OPTION_VARIABLE, PLOT_SUFFIXES, ErrorGroup, InputError, emit_json,
+from ..variator.traction import TractionModel, load_traction, traction_curves, traction_from_params
+from ._common import (LINEAR_OPTIONS, OPTION_VARIABLE, PLOT_SUFFIXES, ErrorGroup, InputError, emit_json,
                       force_option, get_params, json_options, operating_values, output_file,
                       params_option, sweep_from_options, sweep_options)
 from .linear import frequency_grid, plot_option
 
-VARIABLE_OPTION = {v: k for k, v in OPTION_VARIABLE.items()}
+VARIABLE_OPTION = {OPTION_VARIABLE[k]: k for k in LINEAR_OPTIONS}
 #: Most values one option may sweep (poles, responses, zeros are computed per value).
 MAX_SWEEP = 10_000
 #: Most points of a stability map (about 0.1 s per 40 000 points on two cores).
@@ -72,7 +72,7 @@ def parse_values(text: str | None, option: str, limit: int = MAX_SWEEP) -> np.nd
 
 def op_options(fn: Callable) -> Callable:
     """The four operating-point options, ``--traction`` and ``--params``."""
-    for name, var in reversed(list(OPTION_VARIABLE.items())):
+    for name, var in reversed([(k, OPTION_VARIABLE[k]) for k in LINEAR_OPTIONS]):
         unit, doc = VARIABLES[var]
         fn = click.option(f"--{name}", name, default=None, metavar="VALUE|LIST|RANGE",
                           help=f"{doc} [{unit}] ({var}); default from the parameter file.")(fn)
@@ -108,7 +108,7 @@ def _grid(params: Params, tr: TractionModel, raw: dict[str, str | None], *, max_
         raise InputError(f"give at most {max_sweeps} of --ratio/--slip/--clamp/--speed as a list "
                          f"or range (got {names})")
     fixed = {v: float(a[0]) for v, a in values.items() if a.size == 1}
-    return OperatingPoint.from_params(params, **fixed), sweeps
+    return params.operating.resolve(params, tr).replace(**fixed), sweeps
 
 
 def _pairs(z: np.ndarray) -> list[list[float]]:
@@ -138,7 +138,7 @@ def statespace(ratio, slip, clamp, speed, traction_file, params_file, as_json,
                     max_sweeps=0)
     m = slip_model(params, base, tr)
     if as_json or json_out:
-        emit_json({"operating_point": base.as_dict(), "c_b": m.belt.c_b, "c_s": m.belt.c_s,
+        emit_json({"operating_point": base.to_dict(), "c_b": m.belt.c_b, "c_s": m.belt.c_s,
                    "g_F": m.belt.g_F, "mu": m.belt.mu, "dmu": m.belt.dmu, "A": m.A, "B": m.B,
                    "C": m.C, "D": m.D, "inputs": m.inputs, "outputs": m.outputs,
                    "states": m.states}, "slip.statespace", json_out)
@@ -176,7 +176,7 @@ def poles(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_o
         op = base.replace(**{name: float(v)})
         m = slip_model(params, op, tr)
         max_re = float(sw.max_real[k])
-        points.append({"operating_point": op.as_dict(), "mu": m.belt.mu, "dmu": m.belt.dmu,
+        points.append({"operating_point": op.to_dict(), "mu": m.belt.mu, "dmu": m.belt.dmu,
                        "c_b": m.belt.c_b, "poles": _pairs(m.poles()),
                        "max_real": max_re, "min_damping": float(sw.min_damping[k]),
                        "stable": bool(max_re <= 1e-6)})
@@ -185,7 +185,7 @@ def poles(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_o
 
         plot_pole_sweep(sw).save(plot)
     if as_json or json_out:
-        emit_json({"operating_point": base.as_dict(), "variable": name if sweeps else None,
+        emit_json({"operating_point": base.to_dict(), "variable": name if sweeps else None,
                    "values": values, "points": points,
                    "note": "poles: all 8 eigenvalues, including the three structural zeros; "
                            "max_real and min_damping leave those out"}, "slip.poles", json_out)
@@ -279,9 +279,9 @@ def frf(ratio, slip, clamp, speed, traction_file, params_file, inp, out, fmin, f
 
         plot_slip_bode(resp, title=f"{inp} -> {out}").save(plot)
     if as_json or json_out:
-        emit_json({"operating_point": base.as_dict(), "input": inp, "output": out,
+        emit_json({"operating_point": base.to_dict(), "input": inp, "output": out,
                    "frequencies_hz": f,
-                   "responses": [{"operating_point": op.as_dict(),
+                   "responses": [{"operating_point": op.to_dict(),
                                   "magnitude_db": r.magnitude_db()[0, 0],
                                   "phase_deg": r.phase_deg()[0, 0]}
                                  for op, r in zip(ops, resp)]}, "slip.frf", json_out)
@@ -320,7 +320,7 @@ def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_o
         plot_zero_locus(zl).save(plot)
     coupled_hz = np.sort(np.abs(zl.coupled), axis=1)[:, ::2] / (2 * np.pi)
     if as_json or json_out:
-        emit_json({"operating_point": base.as_dict(), "r_g": ratios,
+        emit_json({"operating_point": base.to_dict(), "r_g": ratios,
                    "zeros": [_pairs(z[np.isfinite(z)]) for z in zl.zeros],
                    "zeros_at_origin": zl.n_origin, "zeros_hz": zl.zero_hz,
                    "coupled_hz": coupled_hz,
@@ -368,7 +368,7 @@ def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk
 
         plot_stability_map(sm).save(plot)
     if as_json or json_out:
-        emit_json({"operating_point": base.as_dict(), "x": {"name": x_name, "values": x},
+        emit_json({"operating_point": base.to_dict(), "x": {"name": x_name, "values": x},
                    "y": {"name": y_name, "values": y}, "max_real": sm.max_real,
                    "min_damping": sm.min_damping, "unstable": sm.unstable,
                    "unstable_fraction": sm.unstable_fraction,

@@ -8,10 +8,12 @@ coordinates at every point (deviations from each point's trim).  It is built in 
 `empact.nonlinear.equilibrium.trim_grid` trims all points at once and one compiled loop
 (`empact.nonlinear._kernel.linearize_batch`) linearises them by the complex step.
 
-Operating variables (axes, any subset, in this order): ``r_g`` [-], ``nu`` [-], ``F_s`` [N],
-``omega_p`` [rad/s], ``T_l`` [N m].  The trim needs two of ``nu``, ``F_s``, ``T_l``: with a
-load given it uses ``(F_s, T_l)``, or ``(nu, T_l)`` when the slip is given and the clamping
-force is not; otherwise ``(nu, F_s)``; what is not given comes from ``params.operating``.
+Operating variables (axes, any subset, in this order): ``r_g`` [-], ``nu`` [-] or ``tau``
+[-] (the slip, or the torque ratio ``mu / mu_max``), ``F_s`` [N], ``omega_p`` [rad/s], ``T_l``
+[N m].  The trim needs two of the slip, ``F_s``, ``T_l`` (an `~empact.params.OperatingPoint`):
+two given state the pair; one given changes that variable of the base point (default
+``params.operating``; ``nu`` and ``tau`` replace each other); what is not given comes from the
+base point.
 
 `PlantFamily.at` interpolates A, B, C, D multilinearly between the grid points, in ``ln r_g``,
 ``ln nu`` (``nu`` when the slip axis reaches zero or below), ``ln F_s``, ``ln omega_p`` and
@@ -33,8 +35,8 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from dataclasses import dataclass, field
-from types import SimpleNamespace
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -47,12 +49,12 @@ from .._validate import check_choice, check_values
 from ..errors import ParameterError
 from ..export import jsonable, write_arrays
 from ..lti import statespace
-from ..nonlinear import _kernel as K
 from ..nonlinear.equilibrium import trim_grid
-from ..nonlinear.linearization import PLANT_INPUTS, PLANT_OUTPUTS, disturbance_input
+from ..nonlinear.linearization import (BENCH_OPTIONS, PLANT_INPUTS, PLANT_OUTPUTS, Plant,
+                                       disturbance_input, linearize_many)
 from ..nonlinear.model import (INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel,
                                nonlinear_model)
-from ..params import Params
+from ..params import OperatingPoint, Params
 from ..sweep import SweepOptions, plan_chunks, run_chunks
 
 interpolate = lazy_module("scipy.interpolate")
@@ -63,12 +65,8 @@ __all__ = ["VARIABLES", "PlantFamily", "plant_family", "save_family", "load_fami
 #: operating variables of a family: unit, and whether it is interpolated in its logarithm
 #: (when all its grid values are positive: the plant depends on the slip through the slope of
 #: the traction curve, which varies roughly with ln nu)
-VARIABLES = {"r_g": ("-", True), "nu": ("-", True), "F_s": ("N", True),
+VARIABLES = {"r_g": ("-", True), "nu": ("-", True), "tau": ("-", True), "F_s": ("N", True),
              "omega_p": ("rad/s", True), "T_l": ("N m", False)}
-
-#: model options of a plant family by default: the test bench of the paper's Sec. 3 and 4
-#: (speed-controlled drive motor, torque-controlled load motor)
-BENCH_OPTIONS = {"drive": "speed", "load": "torque"}
 
 #: most points of one family
 MAX_POINTS = 1_000_000
@@ -127,20 +125,25 @@ class PlantFamily:
         """Number of grid points."""
         return int(self.ok.size)
 
-    def plant(self, index: tuple[int, ...] | int):
-        """The plant at one grid point as a named `control.StateSpace`."""
+    def _index(self, index: tuple[int, ...] | int) -> tuple[int, ...]:
         idx = np.unravel_index(index, self.shape) if isinstance(index, (int, np.integer)) \
             else tuple(index)
         if not self.ok[idx]:
             raise ParameterError(f"grid point {idx}: not trimmed ({self.reason[idx]})")
-        return statespace(self.A[idx], self.B[idx], self.C[idx], self.D[idx],
-                          states=self.states, inputs=self.inputs, outputs=self.outputs,
-                          name="plant_" + "_".join(f"{k}_{self.operating[k][idx]:.4g}"
-                                                   for k in self.axes))
+        return idx
 
-    def at(self, **point: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
-        """``(A, B, C, D)`` interpolated multilinearly at an off-grid point, given by the
-        family's axis variables (``r_g=...``, ...), each inside its axis' range."""
+    def plant(self, index: tuple[int, ...] | int) -> Plant:
+        """The plant at one grid point (a `Plant`, as `empact.nonlinear.linearization.plant`
+        returns; its ``state_space()`` is the named `control.StateSpace`)."""
+        idx = self._index(index)
+        system = statespace(self.A[idx], self.B[idx], self.C[idx], self.D[idx],
+                            states=self.states, inputs=self.inputs, outputs=self.outputs,
+                            name="plant_" + "_".join(f"{k}_{self.operating[k][idx]:.4g}"
+                                                     for k in self.axes))
+        return Plant(system=system,
+                     operating={k: float(v[idx]) for k, v in self.operating.items()})
+
+    def _matrices(self, point: dict[str, float]) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         if set(point) != set(self.axes):
             raise ParameterError(f"give the family's axes {', '.join(self.axes)}; got "
                                  f"{', '.join(point) or 'none'}")
@@ -163,11 +166,26 @@ class PlantFamily:
             out.append(f(np.array(q)[None])[0].reshape(M.shape[len(self.shape):]))
         return tuple(out)
 
+    def interpolate(self, **point: float) -> Plant:
+        """The plant interpolated multilinearly at an off-grid point, given by the family's
+        axis variables (``r_g=...``, ...), each inside its axis' range (a `Plant`)."""
+        A, B, C, D = self._matrices(point)
+        system = statespace(A, B, C, D, states=self.states, inputs=self.inputs,
+                            outputs=self.outputs, name="plant_interpolated")
+        return Plant(system=system, operating={k: float(v) for k, v in point.items()})
+
+    def at(self, **point: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """Deprecated: `interpolate` (returns a `Plant`); this gives its (A, B, C, D)."""
+        warnings.warn("PlantFamily.at is deprecated; use PlantFamily.interpolate (a Plant)",
+                      DeprecationWarning, stacklevel=2)
+        return self._matrices(point)
+
     def interpolated_plant(self, **point: float):
-        """`at` as a named `control.StateSpace`."""
-        A, B, C, D = self.at(**point)
-        return statespace(A, B, C, D, states=self.states, inputs=self.inputs,
-                          outputs=self.outputs, name="plant_interpolated")
+        """Deprecated: ``interpolate(...).state_space()``."""
+        warnings.warn("PlantFamily.interpolated_plant is deprecated; use "
+                      "PlantFamily.interpolate(...).state_space()", DeprecationWarning,
+                      stacklevel=2)
+        return self.interpolate(**point).system
 
     def to_dict(self) -> dict[str, Any]:
         """Plain arrays and names (the export layout)."""
@@ -198,7 +216,8 @@ def _axis(name: str, value) -> NDArray[np.float64]:
     return np.atleast_1d(np.asarray(arr, float)).ravel()
 
 
-def plant_family(params: Params, *, r_g=None, nu=None, F_s=None, omega_p=None, T_l=None,
+def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega_p=None,
+                 T_l=None, base: OperatingPoint | None = None,
                  model: EmpactModel | None = None, sweep: SweepOptions | None = None,
                  **options) -> PlantFamily:
     """Trim and exactly linearise the machine on a grid of operating points.
@@ -206,16 +225,19 @@ def plant_family(params: Params, *, r_g=None, nu=None, F_s=None, omega_p=None, T
     Parameters
     ----------
     params : Params
-    r_g, nu, F_s, omega_p, T_l : float or 1-D array, optional
+    r_g, nu, tau, F_s, omega_p, T_l : float or 1-D array, optional
         Operating variables (SI); arrays become the grid's axes.  See the module notes for
-        which two of nu, F_s, T_l the trim uses; the rest come from ``params.operating``.
+        which two of the slip (nu or tau), F_s, T_l the trim uses.
+    base : OperatingPoint, optional
+        The point whose variables fill in what is not given (default ``params.operating``).
     model : EmpactModel, optional
         A built model with torque servo inputs (then `options` must be empty).
     sweep : SweepOptions, optional
         Where the points are computed (`empact.sweep`: in process by default, or on Dask);
         the result is bitwise the same.
     **options
-        `empact.nonlinear.model.ModelOptions` fields (default `BENCH_OPTIONS`).
+        `empact.nonlinear.model.ModelOptions` fields (default `BENCH_OPTIONS`, the test bench:
+        the same defaults as `empact.nonlinear.linearization.plant`).
 
     Returns
     -------
@@ -228,18 +250,24 @@ def plant_family(params: Params, *, r_g=None, nu=None, F_s=None, omega_p=None, T
     if "T_mp" not in model.inputs:
         raise ParameterError("a plant family needs the servo torques as inputs "
                              "(ratio_control = false)")
-    given = {"r_g": r_g, "nu": nu, "F_s": F_s, "omega_p": omega_p, "T_l": T_l}
-    if all(given[k] is not None for k in ("nu", "F_s", "T_l")):
-        raise ParameterError("give at most two of nu, F_s, T_l (the trim solves the third)")
-    if given["T_l"] is not None:
-        pair = ("nu", "T_l") if given["nu"] is not None and given["F_s"] is None \
-            else ("F_s", "T_l")
-    else:
-        pair = ("nu", "F_s")
-    op = params.operating
+    given = {"r_g": r_g, "nu": nu, "tau": tau, "F_s": F_s, "omega_p": omega_p, "T_l": T_l}
+    base = params.operating if base is None else base
+    pair = [k for k in ("nu", "tau", "F_s", "T_l") if given[k] is not None]
+    if "nu" in pair and "tau" in pair:
+        raise ParameterError("give the slip as nu or as tau, not both")
+    if len(pair) > 2:
+        raise ParameterError("give at most two of nu (or tau), F_s, T_l (the trim solves the "
+                             "third)")
+    first = {k: float(np.ravel(np.asarray(given[k], float))[0]) for k in pair}
+    if len(pair) == 2:
+        first.update({k: None for k in ("nu", "tau", "F_s", "T_l") if k not in pair})
+    elif len(pair) == 1 and pair[0] in ("F_s", "T_l") and getattr(base, pair[0]) is None:
+        raise ParameterError(f"{pair[0]} given with a base point given by "
+                             f"{' and '.join(base.given)}: give the second variable too")
+    point = base.replace(**first)
     values = {}
-    for name in ("r_g", "omega_p") + pair:
-        v = given[name] if given[name] is not None else getattr(op, name)
+    for name in ("r_g", "omega_p") + point.given:
+        v = given[name] if given[name] is not None else getattr(point, name)
         values[name] = _axis(name, v)
     axes = {n: values[n] for n in VARIABLES if n in values and values[n].size > 1}
     fixed = {n: float(values[n][0]) for n in values if values[n].size == 1}
@@ -249,23 +277,17 @@ def plant_family(params: Params, *, r_g=None, nu=None, F_s=None, omega_p=None, T
         raise ParameterError(f"{n_pts} grid points; at most {MAX_POINTS}")
     mesh = dict(zip(axes, np.meshgrid(*axes.values(), indexing="ij"))) if axes else {}
     flat = {n: (mesh[n].ravel() if n in mesh else np.full(n_pts, fixed[n])) for n in values}
-    tasks = [(model, pair, {k: v[s] for k, v in flat.items()})
+    tasks = [(model, point.given, {k: v[s] for k, v in flat.items()})
              for s in plan_chunks(n_pts, SECONDS_PER_POINT, sweep)]
     parts = run_chunks(_linearise_points, tasks, sweep, desc="plant family")
     res = {k: np.concatenate([part[k] for part in parts]) for k in parts[0]}
     A, B, C, D = res["A"], res["B"], res["C"], res["D"]
-    tg = SimpleNamespace(**{k: res[k] for k in ("r_g", "omega_p", "nu", "F_s", "T_l", "ok")},
-                         reason=tuple(res["reason"].tolist()))
-    n = model.n
-    # nu_r at each point's own ratio: d nu_r = d nu - (1 - nu0) d r_g / r_g0
-    w = ((1 - tg.nu) / tg.r_g)[:, None]
-    C[:, K.Y_NUR] = C[:, K.Y_NU] - w * C[:, K.Y_RG]
-    D[:, K.Y_NUR] = D[:, K.Y_NU] - w * D[:, K.Y_RG]
     inputs = PLANT_INPUTS + (disturbance_input(model),)
-    ii = [model.inputs.index(k) for k in inputs]
-    oo = [model.outputs.index(k) for k in PLANT_OUTPUTS]
+    ii = [model.input_index(k) for k in inputs]
+    oo = [model.output_index(k) for k in PLANT_OUTPUTS]
     grid = shape if shape else ()
-    op_all = {"r_g": tg.r_g, "nu": tg.nu, "F_s": tg.F_s, "omega_p": tg.omega_p, "T_l": tg.T_l}
+    n = model.n
+    op_all = {k: res[k] for k in ("r_g", "nu", "F_s", "omega_p", "T_l", "tau")}
     return PlantFamily(
         axes=axes, fixed=fixed,
         A=A.reshape(grid + (n, n)), B=B[:, :, ii].reshape(grid + (n, len(ii))),
@@ -273,7 +295,7 @@ def plant_family(params: Params, *, r_g=None, nu=None, F_s=None, omega_p=None, T
         D=D[:, oo][:, :, ii].reshape(grid + (len(oo), len(ii))),
         states=model.states, inputs=inputs, outputs=PLANT_OUTPUTS,
         operating={k: v.reshape(grid) for k, v in op_all.items()},
-        ok=tg.ok.reshape(grid), reason=np.array(tg.reason, dtype=object).reshape(grid),
+        ok=res["ok"].reshape(grid), reason=res["reason"].reshape(grid),
         options={k: getattr(model.options, k) for k in ("drive", "load", "damping",
                                                         "kinematics", "shift_law")})
 
@@ -289,20 +311,16 @@ def _linearise_points(task) -> dict[str, NDArray]:
     change a bit."""
     model, pair, flat = task
     tg = trim_grid(model, flat["r_g"], flat["omega_p"], **{k: flat[k] for k in pair})
-    N, n, m_all = tg.r_g.size, model.n, 4
+    N, n, ny = tg.r_g.size, model.n, len(model.outputs)
     A = np.full((N, n, n), np.nan)
-    B = np.full((N, n, m_all), np.nan)
-    C = np.full((N, K.NY, n), np.nan)
-    D = np.full((N, K.NY, m_all), np.nan)
+    B = np.full((N, n, 4), np.nan)
+    C = np.full((N, ny, n), np.nan)
+    D = np.full((N, ny, 4), np.nan)
     g = np.flatnonzero(tg.ok)
     if g.size:  # linearise the points that trimmed, in one compiled loop
-        Ag, Bg = np.empty((g.size, n, n)), np.empty((g.size, n, m_all))
-        Cg, Dg = np.empty((g.size, K.NY, n)), np.empty((g.size, K.NY, m_all))
-        K.linearize_batch(np.ascontiguousarray(tg.x[g]), np.ascontiguousarray(tg.u[g]),
-                          model.p, model.ix, np.empty((g.size, n)), Ag, Bg, Cg, Dg)
-        A[g], B[g], C[g], D[g] = Ag, Bg, Cg, Dg
+        A[g], B[g], C[g], D[g] = linearize_many(model, tg.x[g], tg.u[g], tg.r_g[g], tg.nu[g])
     return {"A": A, "B": B, "C": C, "D": D, "r_g": tg.r_g, "omega_p": tg.omega_p,
-            "nu": tg.nu, "F_s": tg.F_s, "T_l": tg.T_l, "ok": tg.ok,
+            "nu": tg.nu, "F_s": tg.F_s, "T_l": tg.T_l, "tau": tg.tau, "ok": tg.ok,
             "reason": np.array(tg.reason, dtype=object)}
 
 
@@ -347,7 +365,8 @@ def load_family(path: str | os.PathLike[str]) -> PlantFamily:
     return PlantFamily(axes=axes, fixed=fixed, A=z["A"], B=z["B"], C=z["C"], D=z["D"],
                        states=tuple(map(str, z["states"])), inputs=tuple(map(str, z["inputs"])),
                        outputs=tuple(map(str, z["outputs"])),
-                       operating={n: z[f"operating_{n}"] for n in VARIABLES},
+                       operating={n: z[f"operating_{n}"] for n in VARIABLES
+                                  if f"operating_{n}" in z.files},
                        ok=z["ok"], reason=np.array(z["reason"], dtype=object),
                        options={k[len("options_"):]: str(z[k]) for k in z.files
                                 if k.startswith("options_")})

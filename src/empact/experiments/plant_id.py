@@ -24,7 +24,8 @@ import numpy as np
 from .._validate import check_number
 from ..errors import ParameterError
 from ..identification.realization import RealizationResult, realize_steps
-from ..nonlinear.linearization import plant, trim_point
+from ..nonlinear.equilibrium import trim
+from ..nonlinear.linearization import plant
 from ..nonlinear.model import nonlinear_model
 from ..nonlinear.simulation import simulate
 from ..params import OperatingPoint
@@ -78,7 +79,7 @@ class PlantIdentification:
     def exact(self):
         """The exact (T_mp, T_ms) -> (r_g, nu, nu_r) linearisation at the same point."""
         return plant(self.params, self.point, model=self.experiment.op.model,
-                     disturbance=False)[0]
+                     disturbance=False).system
 
     @property
     def r_g(self) -> float:
@@ -111,7 +112,7 @@ def step_experiment(params, op: OperatingPoint | None = None, *,
     sample_rate = check_number("sample_rate", sample_rate, 0.0, lo_open=True, unit="Hz")
     op = params.operating if op is None else op
     model = nonlinear_model(params) if model is None else model
-    trimmed = trim_point(model, op)
+    trimmed = trim(model, op)
     cols = []
     for j, name in enumerate(INPUTS):
         u = trimmed.u.copy()

@@ -28,6 +28,7 @@ from ..identification.frf_estimation import FRFEstimate, estimate_frf
 from ..nonlinear.model import nonlinear_model
 from ..nonlinear.simulation import simulate
 from ..nonlinear.equilibrium import trim
+from ..params import OperatingPoint
 
 sig = lazy_module("scipy.signal")
 
@@ -170,7 +171,7 @@ def run_rig(params, settings: RigSettings | None = None, *, progress: bool = Fal
     s = settings or RigSettings()
     model = nonlinear_model(params, coulomb_sp=float(s.coulomb[0]),
                             coulomb_ss=float(s.coulomb[1]))
-    op = trim(model, s.r_g, s.omega_p, nu=s.nu, F_s=s.F_s)
+    op = trim(model, OperatingPoint(r_g=s.r_g, nu=s.nu, F_s=s.F_s, omega_p=s.omega_p))
     n = int(round(s.duration * s.sample_rate))
     t = np.arange(n) / s.sample_rate
     x = excitation_signal(s.excitation, n, s.sample_rate, s.band, s.rms, seed=s.seed,

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry import variator_state
+from ..variator.geometry import variator_state
 from .lumped import LumpedModel
 from ..params import Params
 

@@ -50,7 +50,7 @@ OUTPUTS: dict[str, dict[str, str]] = {
 }
 
 #: measured wall time of one run [s] (sizes the sweep's chunks)
-SECONDS_PER_RUN = {"plant": 0.03, "slip": 2e-3, "closed-loop": 0.5}
+SECONDS_PER_RUN = {"plant": 0.03, "slip": 2e-3, "closed-loop": 0.08}
 
 #: a pole pair resonates (its frequency response peaks) below this damping ratio
 ZETA_RESONANT = 1.0 / np.sqrt(2.0)
@@ -70,7 +70,7 @@ class AnalysisContext:
     Attributes
     ----------
     kind : one of `ANALYSES`
-    scenario : `empact.control.closed_loop.ControlScenario` (closed loop only)
+    scenario : a closed-loop `empact.nonlinear.scenario.Scenario` (closed loop only)
     controller : `empact.control.controller.Controller` (closed loop only)
     """
 
@@ -91,7 +91,8 @@ def evaluate(params: Params, context: AnalysisContext) -> dict[str, float]:
 
 
 def _plant(params: Params, context: AnalysisContext) -> dict[str, float]:
-    sys, op = plant(params, params.operating, disturbance=False)
+    pl = plant(params, params.operating, disturbance=False)
+    sys, op = pl.system, pl.trim
     poles = np.linalg.eigvals(sys.A)
     f, zeta = oscillatory(poles)
     resonant = zeta < ZETA_RESONANT

@@ -169,7 +169,8 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
     runs : number of runs (1 ... `MAX_RUNS`)
     analysis : "plant", "slip" or "closed-loop" (`empact.montecarlo.analyses`)
     seed : the study's seed (>= 0); run ``i`` draws from ``SeedSequence(seed, spawn_key=(i,))``
-    scenario, controller : the closed-loop scenario (`ControlScenario`) and controller
+    scenario, controller : the closed-loop scenario (a `Scenario` with a [controller] table)
+        and controller
         (`Controller`, default the scenario's own)
     sweep : where the runs are computed (`empact.sweep.SweepOptions`; default in process)
 
@@ -180,7 +181,7 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
     runs = check_int("runs", runs, 1, MAX_RUNS)
     seed = check_int("seed", seed, 0, 2**63 - 1)
     if analysis == "closed-loop" and controller is None and scenario is not None:
-        controller = resolve_controller(scenario.controller)
+        controller = resolve_controller(scenario.controller.file)
     context = AnalysisContext(analysis, scenario, controller)
     tasks = [(params, spread, context, seed, s.start, s.stop)
              for s in plan_chunks(runs, SECONDS_PER_RUN[analysis], sweep)]

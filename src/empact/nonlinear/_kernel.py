@@ -13,8 +13,16 @@ Private: the public interface, the state ordering and the sign conventions are d
 `_eval` is written once for real and complex arguments, so that `_jacobian` can differentiate
 it by the complex step (exact to rounding: no subtraction, step 1e-30).  Comparisons use the
 real part; ``abs`` is written as a sign flip so that it stays analytic.
+
+This module owns the layout of ``p``, ``x`` and ``y``: every index has a name here
+(`PARAMETER_NAMES`, `BASE_STATES` and `OPTIONAL_STATES`, `OUTPUTS`), the model packs its
+parameters by name (`pack_parameters`) and reads them back by name (`KernelConstants`), and
+no other module spells an index.
 """
 from __future__ import annotations
+
+from collections import namedtuple
+from typing import Mapping
 
 import numpy as np
 from numba import njit
@@ -33,22 +41,79 @@ from numba import njit
  P_KP0, P_KB0, P_KB1, P_RREF, P_TAB) = range(76)
 NP = 76
 
+#: names of the parameter vector's entries, in the order of the ``P_*`` indices
+PARAMETER_NAMES = (
+    "a", "tan_beta", "cos_beta", "R_min", "R_max", "L_belt",
+    "J_mp", "J_ms", "J_sp", "J_ss", "m_p", "m_s", "i_w", "i_c", "i_e", "s",
+    "k_w", "k_c", "k_belt", "k_tp", "k_ts",
+    "alpha", "c_mp", "c_ms", "c_sp", "c_ss", "c_shafai",
+    "coulomb_sp", "coulomb_ss", "coulomb_omega",
+    "J_d", "J_p", "J_s", "J_l", "k_tc", "k_ds", "k_belt_driveline",
+    "ln_r_low", "ln_r_med", "ln_r_od",
+    "B_low", "B_med", "B_od", "C_low", "C_med", "C_od", "D_low", "D_med", "D_od",
+    "E_low", "E_med", "E_od",
+    "drive_kp", "drive_ki", "load_kp", "load_ki", "ratio_kp", "ratio_kd", "ratio_ki",
+    "sheave_sense", "R_s0",
+    "shift_law", "D_ref", "F_ref", "k_D", "a1", "a2", "gain", "omega_0", "xi_sat", "g_beta",
+    "kappa_p0", "kappa_b0", "kappa_b1", "r_ref", "tabulated")
+assert len(PARAMETER_NAMES) == NP
+
+#: the kernel's parameters read back by name (`constants`)
+KernelConstants = namedtuple("KernelConstants", PARAMETER_NAMES)
+
+#: the base states (actuation 12, driveline 6; see `empact.nonlinear.model`) and the optional
+#: ones, each appended when its option is on (``ix`` holds their positions)
+BASE_STATES = ("theta_mp", "theta_ms", "theta_sp", "theta_ss", "x_p", "x_s",
+               "omega_mp", "omega_ms", "omega_sp", "omega_ss", "v_p", "v_s",
+               "twist_tc", "twist_ds", "omega_d", "omega_p", "omega_s", "omega_l")
+OPTIONAL_STATES = ("s_b", "z_d", "z_l", "z_r")
+
 #: shift laws (``p[P_LAW]``): Shafai's c / |omega| on each sheave, or the belt's creep
 #: resistance after Carbone et al. (log of the thrust ratio) or Ide et al. (thrust difference)
 LAW_SHAFAI, LAW_CARBONE, LAW_IDE = 0.0, 1.0, 2.0
 
 #: number of base states (actuation 12, driveline 6)
-NX_BASE = 18
+NX_BASE = len(BASE_STATES)
 
 OUTPUTS = ("r_g", "nu", "nu_r", "theta_mp", "theta_ms", "F_p", "F_s", "F_p_act", "F_s_act",
            "omega_p", "omega_s", "omega_d", "omega_l", "omega_mp", "omega_ms", "T_b", "mu",
            "tau", "kappa", "kappa_eq", "r_g_dot", "F_creep", "R_p", "R_s", "phi", "x_p", "x_s",
            "belt_elongation", "T_mp_act", "T_d_act", "T_l_act", "E", "P_in", "P_diss",
-           "P_creep")
+           "P_creep", "T_ms_act", "T_ds", "mu_max")
 NY = len(OUTPUTS)
 (Y_RG, Y_NU, Y_NUR, Y_THMP, Y_THMS, Y_FP, Y_FS, Y_FPA, Y_FSA, Y_WP, Y_WS, Y_WD, Y_WL, Y_WMP,
  Y_WMS, Y_TB, Y_MU, Y_TAU, Y_KAP, Y_KEQ, Y_RDOT, Y_FCR, Y_RP, Y_RS, Y_PHI, Y_XP, Y_XS, Y_E,
- Y_TMP, Y_TD, Y_TL, Y_EN, Y_PIN, Y_PDISS, Y_PCREEP) = range(NY)
+ Y_TMP, Y_TD, Y_TL, Y_EN, Y_PIN, Y_PDISS, Y_PCREEP, Y_TMS, Y_TDS, Y_MUMAX) = range(NY)
+
+
+def pack_parameters(values: Mapping[str, float], table: np.ndarray) -> np.ndarray:
+    """The parameter vector ``p`` from values by name (every name of `PARAMETER_NAMES`),
+    followed by the encoded thrust-ratio `table` (empty for the analytic map)."""
+    missing = set(PARAMETER_NAMES) - set(values)
+    if missing:
+        raise KeyError(f"kernel parameters missing: {', '.join(sorted(missing))}")
+    p = np.zeros(NP + len(table))
+    p[:NP] = [float(values[k]) for k in PARAMETER_NAMES]
+    p[NP:] = table
+    return p
+
+
+def constants(p: np.ndarray) -> KernelConstants:
+    """The kernel parameters of ``p`` by name."""
+    return KernelConstants(*map(float, p[:NP]))
+
+
+def state_layout(locked_belt: bool, drive_speed: bool, load_speed: bool,
+                 ratio_control: bool) -> tuple[tuple[str, ...], np.ndarray]:
+    """State names and the positions ``ix`` (int64, shape (4,), -1 when absent) of the
+    optional states for the model's options."""
+    states = list(BASE_STATES)
+    ix = np.full(4, -1, dtype=np.int64)
+    for k, on in enumerate((locked_belt, drive_speed, load_speed, ratio_control)):
+        if on:
+            ix[k] = len(states)
+            states.append(OPTIONAL_STATES[k])
+    return tuple(states), ix
 
 
 @njit(cache=True)
@@ -384,6 +449,9 @@ def _eval(x, u, p, ix, dx, y):
     y[Y_EN] = E
     y[Y_PIN] = P_in
     y[Y_PDISS] = P_diss
+    y[Y_TMS] = T_ms
+    y[Y_TDS] = T_ds
+    y[Y_MUMAX] = mu_max
 
 
 @njit(cache=True)
@@ -412,6 +480,25 @@ def _jacobian(x, u, p, ix, A, B, C, D):
             B[i, j] = dx[i].imag / h
         for i in range(C.shape[0]):
             D[i, j] = y[i].imag / h
+
+
+@njit(cache=True)
+def stop_status(y, p, omega_min):
+    """Why a simulation must stop at outputs `y` (0: it need not): 4 non-finite output,
+    1 omega_p at or below `omega_min` (slip undefined), 2 clamping force at or below zero
+    (slack belt), 3 a running radius outside [R_min, R_max]."""
+    for i in range(y.shape[0]):
+        if not np.isfinite(y[i]):
+            return 4
+    if y[Y_WP] <= omega_min:
+        return 1
+    if y[Y_FS] <= 0.0:
+        return 2
+    tol = 1e-9
+    if y[Y_RP] < p[P_RMIN] - tol or y[Y_RP] > p[P_RMAX] + tol or y[Y_RS] < p[P_RMIN] - tol \
+            or y[Y_RS] > p[P_RMAX] + tol:
+        return 3
+    return 0
 
 
 #: Base-state columns of df/dx that depend on the state or the inputs (the rest are constant

@@ -10,8 +10,9 @@ explicit time dependence through the inputs is included (``df/dt = B du/dt``).
 Inputs are piecewise linear in time (a repeated time is a step); the integrator never steps
 across a breakpoint, so every step sees smooth inputs.  Breakpoints and input pieces are found
 by running indices (O(1) per step, whatever the number of breakpoints behind), and the
-Jacobian is evaluated in full once per call and afterwards only in its state-dependent
-columns (`_kernel.varying_columns`, 8 or 9 of 18-22).
+Jacobian is evaluated in full once per run and afterwards only in its state-dependent
+columns (`_kernel.varying_columns`, 8 or 9 of 18-22); it is kept between calls (a sampled
+controller's run calls `integrate` once per sample period).
 
 Numba caches this module's compiled code with `_kernel._eval` inlined and re-checks only this
 file's time stamp: after editing `_kernel.py` in a source checkout delete the ``*.nbi`` /
@@ -27,8 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._kernel import NY, P_RMAX, P_RMIN, Y_FS, Y_RP, Y_RS, Y_WP, _eval, _input_direction, \
-    _state_jacobian
+from ._kernel import NY, _eval, _input_direction, _state_jacobian, stop_status
 
 D_GAMMA = 1.0 / (2.0 + np.sqrt(2.0))
 E32 = 6.0 + np.sqrt(2.0)
@@ -127,34 +127,19 @@ def _u_at(t, u0, slope, tref, u):
 
 
 @njit(cache=True)
-def _check(y, p, omega_min):
-    for i in range(y.shape[0]):
-        if not np.isfinite(y[i]):
-            return 4
-    if y[Y_WP] <= omega_min:
-        return 1
-    if y[Y_FS] <= 0.0:
-        return 2
-    tol = 1e-9
-    if y[Y_RP] < p[P_RMIN] - tol or y[Y_RP] > p[P_RMAX] + tol or y[Y_RS] < p[P_RMIN] - tol \
-            or y[Y_RS] > p[P_RMAX] + tol:
-        return 3
-    return 0
-
-
-@njit(cache=True)
 def integrate(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, atol,
-              hmin, hmax, omega_min, max_steps, X, Y, cols):
+              hmin, hmax, omega_min, max_steps, X, Y, cols, J, full):
     """Integrate from `t` to `t_end` in place on `x`; fill `X`, `Y` at `samples` in (t, t_end].
 
-    `cols` are the Jacobian columns that change (`_kernel.varying_columns`).
+    `cols` are the Jacobian columns that change (`_kernel.varying_columns`); `J` (n, n) holds
+    the Jacobian between calls: with `full` every column is evaluated at the first step (the
+    first call of a run), otherwise only `cols` (the others are constant over a run).
 
     Returns ``(status, t, h, n_filled, n_steps, n_rejected)``; on a stop, `x` holds the last
     accepted state at time `t`.
     """
     n = x.shape[0]
     m = sig_n.shape[0]
-    J = np.empty((n, n))
     W = np.empty((n, n))
     piv = np.empty(n, dtype=np.int64)
     F0 = np.empty(n)
@@ -173,7 +158,6 @@ def integrate(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, at
     tref = np.empty(m)
     hint = np.zeros(m, dtype=np.int64)
     all_cols = np.arange(n)
-    full = True  # the constant columns are filled by the first evaluation
     ib = 0
     n_samp = samples.shape[0]
     js = 0
@@ -266,7 +250,7 @@ def integrate(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, at
         for i in range(n):
             x[i] = xn[i]
         t = t_new
-        status = _check(y, p, omega_min)
+        status = stop_status(y, p, omega_min)
         if status != 0:
             return status, t, h, n_filled, n_steps, n_rej
         fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * err ** (-1.0 / 3.0)))

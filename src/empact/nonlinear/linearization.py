@@ -8,25 +8,37 @@ The linear model's states are deviations from the trimmed state.  The driveline 
 rotating frame (twists and speeds), so the shaft angles, which grow without bound at speed,
 never appear; with torque-controlled drive and load motors the common speed of the shafts is a
 pole at the origin (the driveline's rigid-body mode).
+
+The plant of Fig. 2 (`plant`) is taken on the test bench by default (`BENCH_OPTIONS`: the
+drive motor speed-controlled, the load motor torque-controlled, as in the paper's Secs. 3-4):
+the same bench as a plant family (`empact.control.family.plant_family`), so that a family's
+point and the single-point plant are the same system.
 """
 from __future__ import annotations
 
-from typing import Sequence
+import warnings
+from dataclasses import dataclass, field
+from typing import Any, Iterator, Sequence
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..lti import index, statespace
 from ..params import OperatingPoint, Params
-from .model import EmpactModel, nonlinear_model
 from .equilibrium import TrimResult, trim
+from .model import EmpactModel, nonlinear_model
 
-__all__ = ["linearize", "plant", "trim_point", "PLANT_INPUTS", "PLANT_OUTPUTS",
-           "disturbance_input"]
+__all__ = ["linearize", "linearize_many", "plant", "Plant", "trim_point", "PLANT_INPUTS",
+           "PLANT_OUTPUTS", "BENCH_OPTIONS", "disturbance_input"]
 
 #: the plant's control inputs (servo torques) and outputs (ratio and the two slip signals:
 #: eq. 2 on the current radii, and at the operating ratio)
 PLANT_INPUTS = ("T_mp", "T_ms")
 PLANT_OUTPUTS = ("r_g", "nu", "nu_r")
+
+#: model options of a plant by default: the test bench of the paper's Secs. 3 and 4
+#: (speed-controlled drive motor, torque-controlled load motor)
+BENCH_OPTIONS = {"drive": "speed", "load": "torque"}
 
 
 def disturbance_input(model: EmpactModel) -> str:
@@ -39,6 +51,16 @@ def _select(names: Sequence[str], wanted: Sequence[str] | None, what: str) -> li
     if wanted is None:
         return list(range(len(names)))
     return [index(names, w, what) for w in wanted]
+
+
+def _refer_nu_r(model: EmpactModel, C: NDArray, D: NDArray, r_g0, nu0) -> None:
+    """``nu_r = 1 - omega_s / (r_g0 omega_p)`` at the trimmed ratio ``r_g0``, whatever the
+    model's reference: ``d nu_r = d nu - (1 - nu0) d r_g / r_g0`` (eq. 2 without its ratio
+    term); in place on the rows of `C`, `D` (stacked over the last two axes)."""
+    i_nu, i_r, i_nur = (model.output_index(k) for k in ("nu", "r_g", "nu_r"))
+    w = np.asarray((1 - np.asarray(nu0)) / np.asarray(r_g0))[..., None]
+    C[..., i_nur, :] = C[..., i_nu, :] - w * C[..., i_r, :]
+    D[..., i_nur, :] = D[..., i_nu, :] - w * D[..., i_r, :]
 
 
 def linearize(op: TrimResult, inputs: Sequence[str] | None = None,
@@ -63,11 +85,7 @@ def linearize(op: TrimResult, inputs: Sequence[str] | None = None,
     """
     m = op.model
     A, B, C, D = m.jacobian(op.x, op.u)
-    # nu_r = 1 - omega_s / (r_g0 omega_p) at the trimmed ratio r_g0, whatever the model's
-    # reference: d nu_r = d nu - (1 - nu0) d r_g / r_g0 (eq. 2 without its ratio term)
-    i_nu, i_r, i_nur = (m.outputs.index(k) for k in ("nu", "r_g", "nu_r"))
-    w = (1 - op.nu) / op.r_g
-    C[i_nur], D[i_nur] = C[i_nu] - w * C[i_r], D[i_nu] - w * D[i_r]
+    _refer_nu_r(m, C, D, op.r_g, op.nu)
     ii = _select(m.inputs, inputs, "input")
     oo = _select(m.outputs, outputs, "output")
     return statespace(A, B[:, ii], C[oo], D[np.ix_(oo, ii)], states=m.states,
@@ -75,13 +93,85 @@ def linearize(op: TrimResult, inputs: Sequence[str] | None = None,
                       name=name)
 
 
+def linearize_many(model: EmpactModel, X: NDArray, U: NDArray, r_g0: NDArray,
+                   nu0: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """`linearize` at many trimmed points in one compiled loop: states `X` (N, n), inputs
+    `U` (N, 4), their ratios and slips (N,) -> ``A`` (N, n, n), ``B`` (N, n, 4), ``C`` (N, ny,
+    n), ``D`` (N, ny, 4) over all inputs and outputs, ``nu_r`` at each point's ratio."""
+    A, B, C, D = model.jacobian_many(X, U)
+    _refer_nu_r(model, C, D, r_g0, nu0)
+    return A, B, C, D
+
+
+@dataclass(frozen=True, eq=False)
+class Plant:
+    """An exact linear plant at one operating point: what `plant` and
+    `empact.control.family.PlantFamily.plant` return.
+
+    Attributes
+    ----------
+    system : control.StateSpace
+        Named inputs (``T_mp, T_ms`` [N m] and the disturbance), outputs (``r_g, nu, nu_r``
+        [-]) and states (SI).
+    operating : dict
+        The operating variables of the point (``r_g, nu, F_s, omega_p, T_l``, SI).
+    trim : TrimResult or None
+        The trimmed point (None for a point of a stored family).
+    """
+
+    system: Any
+    operating: dict[str, float] = field(default_factory=dict)
+    trim: TrimResult | None = None
+
+    def state_space(self):
+        """The plant as a named `control.StateSpace`."""
+        return self.system
+
+    @property
+    def A(self) -> NDArray[np.float64]:
+        return np.asarray(self.system.A)
+
+    @property
+    def B(self) -> NDArray[np.float64]:
+        return np.asarray(self.system.B)
+
+    @property
+    def C(self) -> NDArray[np.float64]:
+        return np.asarray(self.system.C)
+
+    @property
+    def D(self) -> NDArray[np.float64]:
+        return np.asarray(self.system.D)
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        return tuple(self.system.input_labels)
+
+    @property
+    def outputs(self) -> tuple[str, ...]:
+        return tuple(self.system.output_labels)
+
+    @property
+    def states(self) -> tuple[str, ...]:
+        return tuple(self.system.state_labels)
+
+    def __iter__(self) -> Iterator[Any]:
+        """Deprecated: ``sys, trimmed = plant(...)`` (empact 0.1); use ``.state_space()``
+        and ``.trim``."""
+        warnings.warn("unpacking plant() as (system, trim) is deprecated: plant() returns a "
+                      "Plant; use .state_space() and .trim", DeprecationWarning, stacklevel=2)
+        return iter((self.system, self.trim))
+
+
 def trim_point(model: EmpactModel, op: OperatingPoint) -> TrimResult:
-    """`trim` at an operating point given by ratio, speed, slip and clamping force."""
-    return trim(model, op.r_g, op.omega_p, nu=op.nu, F_s=op.F_s)
+    """Deprecated: `empact.nonlinear.equilibrium.trim` takes the `OperatingPoint` itself."""
+    warnings.warn("trim_point(model, op) is deprecated; use trim(model, op)",
+                  DeprecationWarning, stacklevel=2)
+    return trim(model, op)
 
 
 def plant(params: Params, op: OperatingPoint | None = None, *,
-          model: EmpactModel | None = None, disturbance: bool = True, **options):
+          model: EmpactModel | None = None, disturbance: bool = True, **options) -> Plant:
     """The exact plant of Fig. 2 at one operating point: servo torques (and the load as a
     disturbance) to ratio and slip.
 
@@ -89,10 +179,11 @@ def plant(params: Params, op: OperatingPoint | None = None, *,
     ----------
     params : Params
     op : OperatingPoint, optional
-        Ratio, slip, clamping force and primary speed (default: ``params.operating``).
+        The operating point: ratio, speed and two of slip (or torque ratio), clamping force,
+        load (default: ``params.operating``).
     model : EmpactModel, optional
         A built model (then `options` must be empty); default ``nonlinear_model(params,
-        **options)``.
+        **BENCH_OPTIONS, **options)``: the test bench.
     disturbance : bool
         Include the load input (``T_l``, or ``omega_l_ref`` with a speed-controlled load) as
         a third input, the plant's disturbance.
@@ -101,17 +192,26 @@ def plant(params: Params, op: OperatingPoint | None = None, *,
 
     Returns
     -------
-    (control.StateSpace, TrimResult)
+    Plant
         Inputs ``T_mp, T_ms`` [N m] (+ the disturbance), outputs ``r_g, nu, nu_r`` [-].
+
+    Examples
+    --------
+    >>> from empact import default_params
+    >>> p = plant(default_params())
+    >>> p.inputs, p.outputs
+    (('T_mp', 'T_ms', 'T_l'), ('r_g', 'nu', 'nu_r'))
     """
     if model is None:
-        model = nonlinear_model(params, **options)
+        model = nonlinear_model(params, **{**BENCH_OPTIONS, **options})
     elif options:
         raise ValueError("give either model or options, not both")
     if "T_mp" not in model.inputs:
         raise ValueError("the (T_mp, T_ms) plant needs ratio_control = false")
     op = params.operating if op is None else op
-    trimmed = trim_point(model, op)
+    trimmed = trim(model, op)
     name = f"plant_rg_{op.r_g:g}".replace(".", "p")
     inputs = PLANT_INPUTS + ((disturbance_input(model),) if disturbance else ())
-    return linearize(trimmed, inputs, PLANT_OUTPUTS, name=name), trimmed
+    system = linearize(trimmed, inputs, PLANT_OUTPUTS, name=name)
+    operating = {k: getattr(trimmed, k) for k in ("r_g", "nu", "F_s", "omega_p", "T_l")}
+    return Plant(system=system, operating=operating, trim=trimmed)

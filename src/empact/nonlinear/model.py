@@ -97,8 +97,9 @@ within about 1 %.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field, fields
-from functools import lru_cache
+import warnings
+from dataclasses import InitVar, dataclass, field, fields
+from functools import cached_property, lru_cache
 from typing import Literal
 
 import numpy as np
@@ -109,8 +110,8 @@ from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
 from ..linear.actuation import actuation_model
 from ..params import DAMPING_LEVELS, Params
-from ..shift_law import SHIFT_LAWS, g_beta
-from ..thrust_ratio import TabulatedThrustRatio, load_thrust_ratio
+from ..variator.shift_law import SHIFT_LAWS, g_beta
+from ..variator.thrust_ratio import TabulatedThrustRatio, load_thrust_ratio
 from . import _kernel as K
 
 control = lazy_module("control")
@@ -122,9 +123,7 @@ __all__ = ["KINEMATICS", "ModelOptions", "EmpactModel", "nonlinear_model", "rhs"
            "OUTPUTS",
            "OUTPUT_UNITS", "STATE_UNITS"]
 
-BASE_STATES = ("theta_mp", "theta_ms", "theta_sp", "theta_ss", "x_p", "x_s",
-               "omega_mp", "omega_ms", "omega_sp", "omega_ss", "v_p", "v_s",
-               "twist_tc", "twist_ds", "omega_d", "omega_p", "omega_s", "omega_l")
+BASE_STATES = K.BASE_STATES
 OUTPUTS = K.OUTPUTS
 STATE_UNITS = {"theta_mp": "rad", "theta_ms": "rad", "theta_sp": "rad", "theta_ss": "rad",
                "x_p": "m", "x_s": "m", "omega_mp": "rad/s", "omega_ms": "rad/s",
@@ -139,7 +138,7 @@ OUTPUT_UNITS = {"r_g": "-", "nu": "-", "nu_r": "-", "theta_mp": "rad", "theta_ms
                 "kappa": "-", "kappa_eq": "-", "r_g_dot": "1/s", "F_creep": "N", "R_p": "m",
                 "R_s": "m", "phi": "rad", "x_p": "m", "x_s": "m", "belt_elongation": "m",
                 "T_mp_act": "N m", "T_d_act": "N m", "T_l_act": "N m", "E": "J", "P_in": "W",
-                "P_diss": "W", "P_creep": "W"}
+                "P_diss": "W", "P_creep": "W", "T_ms_act": "N m", "T_ds": "N m", "mu_max": "-"}
 #: what each output is (`empact.nonlinear.model` docs, JSON exports)
 OUTPUT_DESCRIPTIONS = {
     "nu": "slip of eq. 2 on the current radii, 1 - omega_s / (r_g omega_p)",
@@ -151,7 +150,9 @@ OUTPUT_DESCRIPTIONS = {
     "kappa": "thrust ratio the shift law implies for the current ratio rate",
     "kappa_eq": "equilibrium thrust ratio kappa*(tau, r_g)", "r_g_dot": "ratio rate",
     "F_creep": "creep force on the primary sheave (opening)",
-    "P_creep": "power absorbed by the creep resistance (part of P_diss)"}
+    "P_creep": "power absorbed by the creep resistance (part of P_diss)",
+    "T_ms_act": "secondary servo torque", "T_ds": "driveshaft torque k_ds twist_ds (what a "
+    "test bench measures)", "mu_max": "peak traction coefficient at the current ratio"}
 INPUT_UNITS = {"T_mp": "N m", "r_g_ref": "-", "T_ms": "N m", "T_d": "N m",
                "omega_d_ref": "rad/s", "T_l": "N m", "omega_l_ref": "rad/s"}
 
@@ -176,11 +177,13 @@ class ModelOptions:
         Coulomb friction torque of the primary (q3) and secondary (q4 - q3) spindle [N m], >= 0.
     coulomb_omega : float
         Velocity scale of the smooth Coulomb friction ``tanh(omega / coulomb_omega)`` [rad/s].
-    drive_bandwidth, load_bandwidth : float
+    drive_bandwidth_hz, load_bandwidth_hz : float
         Speed-loop bandwidths [Hz]: ``K_p = 2 pi f J``, ``K_i = K_p 2 pi f / 4``.
-    ratio_bandwidth : float
+        (``drive_bandwidth``, ``load_bandwidth``: deprecated names.)
+    ratio_bandwidth_hz : float
         Ratio-loop natural frequency [Hz] (damping ratio 0.7, integral at a quarter of it),
         gains from the shift-mode inertia at r_g = 1 referred to the primary servo.
+        (``ratio_bandwidth``: deprecated name.)
     kinematics : {"equal-translation", "paper-sec2.1"}
         Sheave kinematics.  ``"equal-translation"`` (default, the Empact as built, Secs. 1 and
         2.3): ``R_s = R_min + q6 / tan(beta)``; with the secondary servo held a primary-servo
@@ -215,15 +218,27 @@ class ModelOptions:
     coulomb_sp: float = 0.0
     coulomb_ss: float = 0.0
     coulomb_omega: float = 0.5
-    drive_bandwidth: float = 5.0
-    load_bandwidth: float = 5.0
-    ratio_bandwidth: float = 2.0
+    drive_bandwidth_hz: float = 5.0
+    load_bandwidth_hz: float = 5.0
+    ratio_bandwidth_hz: float = 2.0
     kinematics: Literal["equal-translation", "paper-sec2.1"] = "equal-translation"
     shift_law: Literal["carbone", "ide", "shafai"] = "carbone"
     thrust_ratio: TabulatedThrustRatio | None = None
     reference_ratio: float | None = None
+    drive_bandwidth: InitVar[float | None] = None
+    load_bandwidth: InitVar[float | None] = None
+    ratio_bandwidth: InitVar[float | None] = None
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, drive_bandwidth: float | None = None,
+                      load_bandwidth: float | None = None,
+                      ratio_bandwidth: float | None = None) -> None:
+        for old, value in (("drive_bandwidth", drive_bandwidth),
+                           ("load_bandwidth", load_bandwidth),
+                           ("ratio_bandwidth", ratio_bandwidth)):
+            if value is not None:
+                warnings.warn(f"ModelOptions.{old} is deprecated; use {old}_hz [Hz]",
+                              DeprecationWarning, stacklevel=3)
+                object.__setattr__(self, f"{old}_hz", value)
         check_choice("damping", self.damping, DAMPING_LEVELS)
         check_choice("kinematics", self.kinematics, KINEMATICS)
         check_choice("shift_law", self.shift_law, SHIFT_LAWS)
@@ -241,15 +256,15 @@ class ModelOptions:
         for name, unit in (("coulomb_sp", "N m"), ("coulomb_ss", "N m")):
             object.__setattr__(self, name, check_number(name, getattr(self, name), 0.0,
                                                         unit=unit))
-        for name, unit in (("coulomb_omega", "rad/s"), ("drive_bandwidth", "Hz"),
-                           ("load_bandwidth", "Hz"), ("ratio_bandwidth", "Hz")):
+        for name, unit in (("coulomb_omega", "rad/s"), ("drive_bandwidth_hz", "Hz"),
+                           ("load_bandwidth_hz", "Hz"), ("ratio_bandwidth_hz", "Hz")):
             object.__setattr__(self, name, check_number(name, getattr(self, name), 0.0,
                                                         lo_open=True, unit=unit))
 
     @classmethod
     def from_mapping(cls, values: dict) -> "ModelOptions":
         """Options from keyword values; an unknown key is an error naming the allowed ones."""
-        allowed = [f.name for f in fields(cls)]
+        allowed = [f.name for f in fields(cls)] + list(_DEPRECATED_OPTIONS)
         for key in values:
             if key not in allowed:
                 raise ParameterError(f"unknown model option {key!r} (allowed: "
@@ -258,6 +273,10 @@ class ModelOptions:
         if isinstance(values.get("thrust_ratio"), (str, os.PathLike)):
             values["thrust_ratio"] = load_thrust_ratio(values["thrust_ratio"])
         return cls(**values)
+
+
+#: option names kept for one release (a DeprecationWarning names the new one)
+_DEPRECATED_OPTIONS = ("drive_bandwidth", "load_bandwidth", "ratio_bandwidth")
 
 
 @dataclass(frozen=True, eq=False)
@@ -287,27 +306,45 @@ class EmpactModel:
 
     def __post_init__(self) -> None:
         o = self.options
-        states = list(BASE_STATES)
-        ix = np.full(4, -1, dtype=np.int64)
-        for k, (name, on) in enumerate((("s_b", o.belt == "locked"), ("z_d", o.drive == "speed"),
-                                        ("z_l", o.load == "speed"), ("z_r", o.ratio_control))):
-            if on:
-                ix[k] = len(states)
-                states.append(name)
+        states, ix = K.state_layout(o.belt == "locked", o.drive == "speed", o.load == "speed",
+                                    o.ratio_control)
         inputs = ("r_g_ref" if o.ratio_control else "T_mp", "T_ms",
                   "omega_d_ref" if o.drive == "speed" else "T_d",
                   "omega_l_ref" if o.load == "speed" else "T_l")
-        object.__setattr__(self, "states", tuple(states))
+        object.__setattr__(self, "states", states)
         object.__setattr__(self, "inputs", inputs)
         object.__setattr__(self, "outputs", tuple(OUTPUTS))
         object.__setattr__(self, "p", _parameter_vector(self.params, o))
         object.__setattr__(self, "ix", ix)
 
-    # -- evaluation ---------------------------------------------------------------------
+    # -- layout by name ---------------------------------------------------------------------
     @property
     def n(self) -> int:
         """Number of states."""
         return len(self.states)
+
+    def state_index(self, name: str) -> int:
+        """Position of the state `name` in ``x`` (e.g. ``"twist_ds"``)."""
+        return _index(self.states, name, "state")
+
+    def output_index(self, name: str) -> int:
+        """Position of the output `name` in ``y`` (e.g. ``"nu_r"``)."""
+        return _index(self.outputs, name, "output")
+
+    def input_index(self, name: str) -> int:
+        """Position of the input `name` in ``u`` (e.g. ``"T_l"``)."""
+        return _index(self.inputs, name, "input")
+
+    @cached_property
+    def constants(self) -> K.KernelConstants:
+        """The compiled kernel's parameters by name (a named tuple: ``k_belt``, ``tan_beta``,
+        ``sheave_sense``, ``R_s0``, ...; `empact.nonlinear._kernel.PARAMETER_NAMES`)."""
+        return K.constants(self.p)
+
+    @property
+    def creep(self) -> bool:
+        """True when a creep law (Carbone or Ide) resists the shift; False for Shafai."""
+        return self.options.shift_law != "shafai"
 
     def _check(self, x: ArrayLike, u: ArrayLike) -> tuple[NDArray, NDArray]:
         x = np.ascontiguousarray(x, dtype=float)
@@ -320,16 +357,18 @@ class EmpactModel:
                              f"{', '.join(self.inputs)}")
         if not np.all(np.isfinite(x)) or not np.all(np.isfinite(u)):
             raise ValueError("state or input is not finite")
-        if x[15] == 0.0:
+        c = self.constants
+        if x[self.state_index("omega_p")] == 0.0:
             raise ValueError("omega_p = 0: the slip nu (eq. 2) is undefined at a standing "
                              "primary pulley")
-        if x[16] == 0.0 and self.p[K.P_CSH] != 0.0 and self.p[K.P_LAW] == K.LAW_SHAFAI:
+        if x[self.state_index("omega_s")] == 0.0 and c.c_shafai != 0.0 and not self.creep:
             raise ValueError("omega_s = 0: Shafai damping c_shafai / |omega_s| is undefined")
         v = self.params.variator
-        R_p = v.R_min + x[4] / self.p[K.P_TB]
-        R_s = self.p[K.P_RS0] - self.p[K.P_SIG] * x[5] / self.p[K.P_TB]
+        x_p, x_s = x[self.state_index("x_p")], x[self.state_index("x_s")]
+        R_p = v.R_min + x_p / c.tan_beta
+        R_s = c.R_s0 - c.sheave_sense * x_s / c.tan_beta
         if not (abs(R_p - R_s) < v.a and R_p > 0 and R_s > 0):
-            raise ValueError(f"x_p = {x[4]:g} m, x_s = {x[5]:g} m: radii R_p = {R_p:g} m, "
+            raise ValueError(f"x_p = {x_p:g} m, x_s = {x_s:g} m: radii R_p = {R_p:g} m, "
                              f"R_s = {R_s:g} m have no belt geometry (need |R_p - R_s| < a = "
                              f"{v.a:g} m)")
         return x, u
@@ -338,7 +377,7 @@ class EmpactModel:
         """State derivative, shape (n,), and outputs, shape (len(OUTPUTS),), at (x, u)."""
         x, u = self._check(x, u)
         dx = np.empty(self.n)
-        y = np.empty(K.NY)
+        y = np.empty(len(self.outputs))
         K._eval(x, u, self.p, self.ix, dx, y)
         return dx, y
 
@@ -360,8 +399,8 @@ class EmpactModel:
         x, u = self._check(x, u)
         A = np.empty((self.n, self.n))
         B = np.empty((self.n, 4))
-        C = np.empty((K.NY, self.n))
-        D = np.empty((K.NY, 4))
+        C = np.empty((len(self.outputs), self.n))
+        D = np.empty((len(self.outputs), 4))
         K._jacobian(x, u, self.p, self.ix, A, B, C, D)
         return A, B, C, D
 
@@ -370,10 +409,57 @@ class EmpactModel:
         nu, r = np.broadcast_arrays(np.asarray(nu, float), np.asarray(r_g, float))
         if np.any(r <= 0):
             raise ValueError(f"r_g = {r[r <= 0].flat[0]:g}: must be positive")
-        out = np.empty(nu.shape)
-        for k in np.ndindex(nu.shape):
-            out[k] = K.traction_mu(float(nu[k]), float(r[k]), self.p)
-        return out
+        out = np.empty(nu.size)
+        K.traction_many(np.ascontiguousarray(nu.ravel()), np.ascontiguousarray(r.ravel()),
+                        self.p, out)
+        return out.reshape(nu.shape)
+
+    def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
+        """Peak traction coefficient ``mu_max(r_g)`` of the kernel's curve [-] (the torque
+        ratio is ``tau = mu / mu_max``)."""
+        r = np.asarray(r_g, float)
+        out = np.empty(r.size)
+        K.mu_max_many(np.ascontiguousarray(r.ravel()), self.p, out)
+        return out.reshape(r.shape)
+
+    def static_creep(self, r_g, R_p, R_s, phi, F_el, tau) -> tuple[NDArray, NDArray]:
+        """The shift law at rest for arrays (broadcast): the generalised force ``Lambda``
+        [N m] on the ratio and the equilibrium thrust ratio ``kappa*`` [-], at the belt
+        element's secondary force `F_el` [N] and the torque ratio `tau` (zero force and the
+        geometric thrust ratio for Shafai's law)."""
+        args = [np.ascontiguousarray(a, dtype=float).ravel()
+                for a in np.broadcast_arrays(r_g, R_p, R_s, phi, F_el, tau)]
+        shape = np.broadcast(r_g, R_p, R_s, phi, F_el, tau).shape
+        if not self.creep:
+            phi_ = args[3]
+            return (np.zeros(shape),
+                    ((np.pi + 2 * phi_) / (np.pi - 2 * phi_)).reshape(shape))
+        lam, keq = np.empty(args[0].size), np.empty(args[0].size)
+        K.creep_many(*args, self.p, lam, keq)
+        return lam.reshape(shape), keq.reshape(shape)
+
+    def evaluate_many(self, X: ArrayLike, U: ArrayLike) -> tuple[NDArray, NDArray]:
+        """`evaluate` at many points in one compiled loop: `X` (N, n), `U` (N, 4) ->
+        derivatives (N, n) and outputs (N, len(outputs))."""
+        X, U = np.ascontiguousarray(X, float), np.ascontiguousarray(U, float)
+        DX, Y = np.empty_like(X), np.empty((X.shape[0], len(self.outputs)))
+        K.eval_batch(X, U, self.p, self.ix, DX, Y)
+        return DX, Y
+
+    def jacobian_many(self, X: ArrayLike, U: ArrayLike) -> tuple[NDArray, ...]:
+        """`jacobian` at many points in one compiled loop: ``A`` (N, n, n), ``B`` (N, n, 4),
+        ``C`` (N, ny, n), ``D`` (N, ny, 4)."""
+        X, U = np.ascontiguousarray(X, float), np.ascontiguousarray(U, float)
+        N, n, ny = X.shape[0], self.n, len(self.outputs)
+        A, B = np.empty((N, n, n)), np.empty((N, n, 4))
+        C, D = np.empty((N, ny, n)), np.empty((N, ny, 4))
+        K.linearize_batch(X, U, self.p, self.ix, np.empty((N, n)), A, B, C, D)
+        return A, B, C, D
+
+    def stop_status(self, y: NDArray[np.float64], omega_min: float = 1.0) -> int:
+        """Why a simulation would stop at outputs `y` (0: it need not; codes of
+        `empact.nonlinear.simulation.STATUS`)."""
+        return int(K.stop_status(np.ascontiguousarray(y, float), self.p, omega_min))
 
     def iosystem(self, name: str = "empact"):
         """The model as a `control.NonlinearIOSystem` (updfcn signature ``(t, x, u, params)``)."""
@@ -391,47 +477,49 @@ def stiffnesses(params: Params, kinematics: str) -> tuple[float, float, float, f
 
 
 def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
+    """The kernel's parameter vector for `params` under the options `o`, packed by name."""
     v, a, d = params.variator, params.actuation, params.driveline
     lvl = params.damping.level(o.damping)
     t, sh, kr = params.traction, params.shift, params.thrust_ratio
     table = o.thrust_ratio.encode() if o.thrust_ratio is not None else np.zeros(0)
-    p = np.zeros(K.NP + len(table))
-    p[K.NP:] = table
-    p[K.P_A], p[K.P_TB], p[K.P_COSB] = v.a, np.tan(v.beta), np.cos(v.beta)
-    p[K.P_RMIN], p[K.P_RMAX], p[K.P_L0] = v.R_min, v.R_max, v.L_belt
     sig = sheave_sense(o.kinematics)
-    p[K.P_SIG], p[K.P_RS0] = sig, (v.R_max if sig > 0 else v.R_min)
-    p[K.P_JMP], p[K.P_JMS], p[K.P_JSP], p[K.P_JSS] = a.J_mp, a.J_ms, a.J_sp, a.J_ss
-    p[K.P_MP], p[K.P_MS] = a.m_p, a.m_s
-    p[K.P_IW], p[K.P_IC], p[K.P_IE], p[K.P_S] = a.i_w, a.i_c, a.i_e, a.s
-    p[K.P_KW], p[K.P_KC], p[K.P_KBELT], p[K.P_KTP], p[K.P_KTS] = stiffnesses(params,
-                                                                            o.kinematics)
-    p[K.P_ALPHA], p[K.P_CMP], p[K.P_CMS] = lvl.alpha, lvl.c_mp, lvl.c_ms
-    p[K.P_CSP], p[K.P_CSS], p[K.P_CSH] = lvl.c_sp, lvl.c_ss, lvl.c_shafai
-    p[K.P_TCSP], p[K.P_TCSS], p[K.P_WC] = o.coulomb_sp, o.coulomb_ss, o.coulomb_omega
-    p[K.P_JD], p[K.P_JP], p[K.P_JS], p[K.P_JL] = d.J_d, d.J_p, d.J_s, d.J_l
-    p[K.P_KTC], p[K.P_KDS], p[K.P_KBD] = d.k_tc, d.k_ds, d.k_belt
-    p[K.P_LLOW], p[K.P_LMED], p[K.P_LOD] = np.log([t.r_low, t.r_med, t.r_od])
-    p[K.P_B0:K.P_B2 + 1] = t.B_low, t.B_med, t.B_od
-    p[K.P_C0:K.P_C2 + 1] = t.C_low, t.C_med, t.C_od
-    p[K.P_D0:K.P_D2 + 1] = t.D_low, t.D_med, t.D_od
-    p[K.P_E0:K.P_E2 + 1] = t.E_low, t.E_med, t.E_od
-    for kp, ki, J, f in ((K.P_DKP, K.P_DKI, d.J_d, o.drive_bandwidth),
-                         (K.P_LKP, K.P_LKI, d.J_l, o.load_bandwidth)):
+    k_w, k_c, k_belt, k_tp, k_ts = stiffnesses(params, o.kinematics)
+    values = dict(
+        a=v.a, tan_beta=np.tan(v.beta), cos_beta=np.cos(v.beta), R_min=v.R_min, R_max=v.R_max,
+        L_belt=v.L_belt, J_mp=a.J_mp, J_ms=a.J_ms, J_sp=a.J_sp, J_ss=a.J_ss, m_p=a.m_p,
+        m_s=a.m_s, i_w=a.i_w, i_c=a.i_c, i_e=a.i_e, s=a.s, k_w=k_w, k_c=k_c, k_belt=k_belt,
+        k_tp=k_tp, k_ts=k_ts, alpha=lvl.alpha, c_mp=lvl.c_mp, c_ms=lvl.c_ms, c_sp=lvl.c_sp,
+        c_ss=lvl.c_ss, c_shafai=lvl.c_shafai, coulomb_sp=o.coulomb_sp,
+        coulomb_ss=o.coulomb_ss, coulomb_omega=o.coulomb_omega, J_d=d.J_d, J_p=d.J_p,
+        J_s=d.J_s, J_l=d.J_l, k_tc=d.k_tc, k_ds=d.k_ds, k_belt_driveline=d.k_belt,
+        ln_r_low=np.log(t.r_low), ln_r_med=np.log(t.r_med), ln_r_od=np.log(t.r_od),
+        B_low=t.B_low, B_med=t.B_med, B_od=t.B_od, C_low=t.C_low, C_med=t.C_med,
+        C_od=t.C_od, D_low=t.D_low, D_med=t.D_med, D_od=t.D_od, E_low=t.E_low,
+        E_med=t.E_med, E_od=t.E_od, sheave_sense=sig,
+        R_s0=(v.R_max if sig > 0 else v.R_min),
+        shift_law={"shafai": K.LAW_SHAFAI, "carbone": K.LAW_CARBONE,
+                   "ide": K.LAW_IDE}[o.shift_law],
+        D_ref=sh.D_ref, F_ref=sh.F_ref, k_D=sh.k_D, a1=sh.a1, a2=sh.a2, gain=sh.gain,
+        omega_0=sh.omega_0, xi_sat=sh.xi_sat, g_beta=g_beta(v.beta), kappa_p0=kr.p0,
+        kappa_b0=kr.b0, kappa_b1=kr.b1,
+        r_ref=params.operating.r_g if o.reference_ratio is None else o.reference_ratio,
+        tabulated=1.0 if len(table) else 0.0)
+    for loop, J, f in (("drive", d.J_d, o.drive_bandwidth_hz),
+                       ("load", d.J_l, o.load_bandwidth_hz)):
         w = 2 * np.pi * f
-        p[kp], p[ki] = J * w, J * w * w / 4
-    w = 2 * np.pi * o.ratio_bandwidth
+        values[f"{loop}_kp"], values[f"{loop}_ki"] = J * w, J * w * w / 4
+    w = 2 * np.pi * o.ratio_bandwidth_hz
     J = shift_inertia(params, o.kinematics)
-    p[K.P_RKP], p[K.P_RKD], p[K.P_RKI] = J * w * w, 2 * 0.7 * w * J, J * w**3 / 4
-    p[K.P_LAW] = {"shafai": K.LAW_SHAFAI, "carbone": K.LAW_CARBONE, "ide": K.LAW_IDE}[
-        o.shift_law]
-    p[K.P_DREF], p[K.P_FREF], p[K.P_KD] = sh.D_ref, sh.F_ref, sh.k_D
-    p[K.P_A1], p[K.P_A2], p[K.P_GAIN] = sh.a1, sh.a2, sh.gain
-    p[K.P_W0], p[K.P_XSAT], p[K.P_GBETA] = sh.omega_0, sh.xi_sat, g_beta(v.beta)
-    p[K.P_KP0], p[K.P_KB0], p[K.P_KB1] = kr.p0, kr.b0, kr.b1
-    p[K.P_RREF] = params.operating.r_g if o.reference_ratio is None else o.reference_ratio
-    p[K.P_TAB] = 1.0 if len(table) else 0.0
-    return p
+    values.update(ratio_kp=J * w * w, ratio_kd=2 * 0.7 * w * J, ratio_ki=J * w**3 / 4)
+    return K.pack_parameters(values, table)
+
+
+def _index(names: tuple[str, ...], name: str, what: str) -> int:
+    try:
+        return names.index(name)
+    except ValueError:
+        raise ParameterError(f"unknown {what} {name!r}: choose from "
+                             f"{', '.join(names)}") from None
 
 
 def sheave_sense(kinematics: str) -> float:

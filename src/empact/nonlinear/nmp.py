@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validate import check_choice, check_number
-from ..geometry import belt_length, check_ratio, radii, wrap_angle
+from ..variator.geometry import belt_length, check_ratio, radii, wrap_angle
 from ..lti import channel_zeros
 from ..params import OperatingPoint, Params
 from .linearization import plant
@@ -143,7 +143,8 @@ def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
     model = nonlinear_model(params, **options)
     zs, rhp = [], []
     for rg in r:
-        sys, op = plant(params, base.replace(r_g=float(rg)), model=model, disturbance=False)
+        sys = plant(params, base.replace(r_g=float(rg)), model=model,
+                    disturbance=False).system
         z = channel_zeros(sys, "T_mp", slip, max_abs=1e7)
         z = z[np.abs(z) < 2 * np.pi * f_max]
         zs.append(z)

@@ -1,19 +1,21 @@
-"""Simulation scenarios: TOML files naming the model options, the trimmed initial point and
-piecewise-linear input signals.
+"""Simulation scenarios: one TOML format for open-loop and closed-loop runs.
 
-::
+A scenario names the model options, the trimmed initial point, piecewise-linear input signals
+and, optionally, a controller and its references::
 
     [scenario]
     name = "shift-and-load-step"
     description = "LOW -> OD shift, then a load step"
     duration = 2.0            # [s]
     sample_rate = 1000.0      # output samples per second [Hz]
+    load_step_time = 0.5      # optional, [s]: the closed-loop metrics' window starts 0.3 s later
+    shift_window = [0.5, 2.0] # optional, [s]: the window of the shift metrics
 
     [model]                   # empact.nonlinear.model.ModelOptions
     drive = "speed"
     ratio_control = true
 
-    [initial]                 # empact.nonlinear.trim: r_g, omega_p and two of nu, F_s, T_l
+    [initial]                 # an OperatingPoint: r_g, omega_p and two of nu (or tau), F_s, T_l
     r_g = 0.43
     omega_p = 300.0
     F_s = 15000.0
@@ -26,10 +28,22 @@ piecewise-linear input signals.
     [offsets]                 # [[t, value], ...] added to the input's trimmed value
     T_ms = [[0.3, 0.0], [0.3, 0.5]]
 
+    [controller]              # optional: a sampled controller drives the servo torques
+    file = "shipped:pi"       # a controller file (relative to this file) or a shipped one
+    rate = 1000.0             # sample rate [Hz]; zero-order hold between samples
+    feedforward = true        # clamping feedforward of the measured driveshaft torque
+    clamping = "feedback"     # or "safety-factor" (open-loop clamping, the slip loop off)
+    safety_factor = 1.3
+
+    [references]              # [[t, value], ...]: set-points of the controller's signals
+    r_g = [[0.0, 1.0]]
+    nu = [[0.0, 0.01]]
+
     [solver]                  # optional
     rtol = 1e-4
     max_step = 0.01           # [s]
     omega_min = 1.0           # stop when omega_p falls to this [rad/s]
+    max_steps = 2000000
 
 Input names are the model's (``T_mp`` or ``r_g_ref``, ``T_ms``, ``T_d`` or ``omega_d_ref``,
 ``T_l`` or ``omega_l_ref``); ``F_s_ref`` [N] may replace ``T_ms`` and is mapped to the static
@@ -37,8 +51,15 @@ servo torque ``T_ms = i_e s F_s_ref / i_c``.  An ``[offsets]`` signal is added t
 trimmed value (steps of a servo torque around its holding torque, which depends on the
 parameters); an input is given absolutely or as an offset, not both.  A signal holds its first
 value before its first point and its last value after its last point; inputs not given hold
-their trimmed values.
-The shipped examples are in ``empact/data/scenarios``.
+their trimmed values.  With a ``[controller]`` the servo torques are the controller's
+(``ratio_control`` false, no ``T_mp``/``T_ms``/``F_s_ref`` signal); it runs with
+`empact.control.closed_loop.run_closed_loop`.  The shipped examples are in
+``empact/data/scenarios`` (open loop) and ``empact/data/control`` (closed loop).
+
+One loader (`load_scenario`), one validator (`scenario_from_dict`); every problem is one
+``ParameterError`` line naming the file, the key, the value and what is allowed.  A file in
+the layout of empact 0.1's closed-loop scenarios (controller keys in ``[scenario]``) is
+refused with the key to use instead.
 """
 from __future__ import annotations
 
@@ -52,18 +73,63 @@ from typing import Any, Mapping
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validate import check_number
+from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
-from ..params import read_toml
+from ..params import OPERATING_VARIABLES, OperatingPoint, read_toml
 from .model import ModelOptions
 
-__all__ = ["Scenario", "load_scenario", "scenario_from_dict", "list_examples", "example_path",
-           "input_names"]
+__all__ = ["Scenario", "ControllerSpec", "load_scenario", "scenario_from_dict", "list_examples",
+           "example_path", "input_names", "signal", "check_tables", "model_options",
+           "CLAMPING"]
 
-_SCENARIO_KEYS = {"scenario": {"name", "description", "duration", "sample_rate"},
-                  "model": None, "initial": {"r_g", "omega_p", "nu", "F_s", "T_l"},
+#: clamping strategies of a closed-loop scenario: the slip loop, or a production CVT's
+#: open-loop safety factor
+CLAMPING = ("feedback", "safety-factor")
+
+#: the signals a controller's references may name
+REFERENCES = ("r_g", "nu", "nu_r")
+
+_SCENARIO_KEYS = {"scenario": {"name", "description", "duration", "sample_rate",
+                               "load_step_time", "shift_window"},
+                  "model": None, "initial": set(OPERATING_VARIABLES),
                   "inputs": None, "offsets": None,
+                  "controller": {"file", "rate", "feedforward", "clamping", "safety_factor"},
+                  "references": set(REFERENCES),
                   "solver": {"rtol", "max_step", "omega_min", "max_steps"}}
+
+#: keys of the 0.1 closed-loop layout -> where they live now
+_MOVED = {"controller": "[controller] file", "controller_rate": "[controller] rate",
+          "feedforward": "[controller] feedforward", "clamping": "[controller] clamping",
+          "safety_factor": "[controller] safety_factor", "rtol": "[solver] rtol",
+          "max_step": "[solver] max_step"}
+
+#: places of the shipped scenarios: open loop, closed loop
+_EXAMPLE_FOLDERS = ("scenarios", "control")
+
+
+@dataclass(frozen=True)
+class ControllerSpec:
+    """The ``[controller]`` table of a scenario (data only: `empact.control.closed_loop`
+    loads the file and builds the loop).
+
+    Attributes
+    ----------
+    file : str
+        Controller file (absolute, or relative to the scenario's folder once loaded) or
+        ``"shipped:NAME"``.
+    rate : float
+        Sample rate [Hz]; the commands are held between samples.
+    feedforward : bool
+        Clamping feedforward of the measured driveshaft torque.
+    clamping : {"feedback", "safety-factor"}
+    safety_factor : float
+    """
+
+    file: str
+    rate: float = 1000.0
+    feedforward: bool = False
+    clamping: str = "feedback"
+    safety_factor: float = 1.3
 
 
 @dataclass(frozen=True)
@@ -78,12 +144,20 @@ class Scenario:
     sample_rate : float
         Output samples per second [Hz].
     options : ModelOptions
-    initial : dict
-        The trim request (keys r_g, omega_p and two of nu, F_s, T_l; SI).
+    initial : OperatingPoint
+        The trim request of the initial point.
     inputs : dict name -> array, shape (k, 2)
         Piecewise-linear signals ``[[t, value], ...]``.
     offsets : dict name -> array, shape (k, 2)
         Piecewise-linear signals added to the input's trimmed value.
+    controller : ControllerSpec or None
+        The sampled controller of a closed-loop scenario.
+    references : dict name -> array, shape (k, 2)
+        Set-points of the controller's signals (``r_g``, ``nu``, ``nu_r``).
+    load_step_time : float or None
+        [s]; the closed-loop metrics' window starts 0.3 s after it.
+    shift_window : (float, float) or None
+        [s]; the window of the shift metrics.
     rtol : float
         Relative tolerance of the integrator.
     max_step : float
@@ -92,6 +166,8 @@ class Scenario:
         Stop when omega_p falls to this [rad/s].
     max_steps : int
         Give up (incomplete result) after this many integration steps.
+    source : str
+        The file it was read from ('' when built from a mapping).
     """
 
     name: str
@@ -99,18 +175,34 @@ class Scenario:
     duration: float
     sample_rate: float
     options: ModelOptions
-    initial: Mapping[str, float]
+    initial: OperatingPoint
     inputs: Mapping[str, NDArray[np.float64]]
     offsets: Mapping[str, NDArray[np.float64]] = field(default_factory=dict)
+    controller: ControllerSpec | None = None
+    references: Mapping[str, NDArray[np.float64]] = field(default_factory=dict)
+    load_step_time: float | None = None
+    shift_window: tuple[float, float] | None = None
     rtol: float = 1e-4
     max_step: float = 0.01
     omega_min: float = 1.0
     max_steps: int = 2_000_000
+    source: str = ""
+
+    @property
+    def closed_loop(self) -> bool:
+        """True when a controller drives the servo torques."""
+        return self.controller is not None
 
     def with_duration(self, duration: float) -> "Scenario":
         """A copy with another end time [s]."""
         return replace(self, duration=check_number("duration", duration, 0.0, 3600.0,
                                                    lo_open=True, unit="s"))
+
+    def with_controller(self, file: str) -> "Scenario":
+        """A copy whose controller is read from `file` (a path or ``"shipped:NAME"``)."""
+        if self.controller is None:
+            raise ParameterError(f"scenario {self.name!r} has no [controller] table")
+        return replace(self, controller=replace(self.controller, file=str(file)))
 
 
 def load_scenario(path: str | os.PathLike[str]) -> Scenario:
@@ -137,6 +229,9 @@ def check_tables(data: Mapping[str, Any], schema: Mapping[str, Any], src: str) -
         allowed = schema[key]
         for sub in value:
             if allowed is not None and sub not in allowed:
+                if key == "scenario" and sub in _MOVED:
+                    raise ParameterError(f"{src}: scenario.{sub} belongs in {_MOVED[sub]} "
+                                         "now (one scenario format for open and closed loop)")
                 raise ParameterError(f"{src}: unknown key {key}.{sub} (allowed: "
                                      f"{', '.join(sorted(allowed))})")
 
@@ -155,6 +250,39 @@ def model_options(table: Mapping[str, Any], src: str,
         raise ParameterError(f"{src}: [model] {exc}") from None
 
 
+def _initial(table: Mapping[str, Any], src: str) -> OperatingPoint:
+    for key in ("r_g", "omega_p"):
+        if key not in table:
+            raise ParameterError(f"{src}: missing initial.{key}")
+    values = {k: check_number(f"initial.{k}", v, where=src) for k, v in table.items()}
+    try:
+        return OperatingPoint(**values)
+    except ParameterError as exc:
+        raise ParameterError(f"{src}: [initial] {exc}") from None
+
+
+def _controller(table: Mapping[str, Any], src: str) -> ControllerSpec:
+    if "file" not in table:
+        raise ParameterError(f"{src}: missing controller.file (a controller file or "
+                             "'shipped:NAME')")
+    file = table["file"]
+    if not isinstance(file, str) or not file:
+        raise ParameterError(f"{src}: controller.file = {file!r}: must be a file name or "
+                             "'shipped:NAME'")
+    if not file.startswith("shipped:") and not Path(file).is_absolute() and Path(src).is_file():
+        file = str(Path(src).parent / file)
+    return ControllerSpec(
+        file=file,
+        rate=check_number("controller.rate", table.get("rate", 1000.0), 1.0, 1e5, unit="Hz",
+                          where=src),
+        feedforward=check_bool("controller.feedforward",
+                               table.get("feedforward", False), where=src),
+        clamping=check_choice("controller.clamping", table.get("clamping", "feedback"),
+                              CLAMPING, where=src),
+        safety_factor=check_number("controller.safety_factor",
+                                   table.get("safety_factor", 1.3), 1.0, 3.0, where=src))
+
+
 def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenario:
     """Validate a scenario given as a nested mapping (the parsed TOML)."""
     check_tables(data, _SCENARIO_KEYS, src)
@@ -166,32 +294,50 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
     rate = check_number("scenario.sample_rate", head.get("sample_rate", 1000.0), 0.0, 1e6,
                         lo_open=True, unit="Hz", where=src)
     options = model_options(data.get("model", {}), src)
-    initial = dict(data.get("initial", {}))
-    for key in ("r_g", "omega_p"):
-        if key not in initial:
-            raise ParameterError(f"{src}: missing initial.{key}")
-    for key, value in initial.items():
-        check_number(f"initial.{key}", value, where=src)
+    initial = _initial(data.get("initial", {}), src)
     model_inputs = input_names(options)
+    controller = _controller(data["controller"], src) if "controller" in data else None
+    driven = ("T_mp", "T_ms", "F_s_ref") if controller else ()
+    if controller and options.ratio_control:
+        raise ParameterError(f"{src}: [model] ratio_control must be false with a "
+                             "[controller]: the controller drives the servo torques")
     inputs: dict[str, NDArray[np.float64]] = {}
     for name, pts in data.get("inputs", {}).items():
-        allowed = model_inputs + ("F_s_ref",)
+        allowed = [k for k in model_inputs + ("F_s_ref",) if k not in driven]
         if name not in allowed:
-            raise ParameterError(f"{src}: unknown input {name!r} for this model (allowed: "
-                                 f"{', '.join(allowed)})")
-        arr = _signal(f"{src}: inputs.{name}", pts, duration)
-        inputs[name] = arr
+            why = " (the [controller] drives the servos)" if name in driven else ""
+            raise ParameterError(f"{src}: unknown input {name!r} for this model{why} "
+                                 f"(allowed: {', '.join(allowed)})")
+        inputs[name] = signal(f"{src}: inputs.{name}", pts)
     if "F_s_ref" in inputs and "T_ms" in inputs:
         raise ParameterError(f"{src}: give inputs.T_ms or inputs.F_s_ref, not both")
     offsets: dict[str, NDArray[np.float64]] = {}
     for name, pts in data.get("offsets", {}).items():
-        if name not in model_inputs:
+        allowed = [k for k in model_inputs if k not in driven]
+        if name not in allowed:
             raise ParameterError(f"{src}: unknown offset input {name!r} for this model "
-                                 f"(allowed: {', '.join(model_inputs)})")
+                                 f"(allowed: {', '.join(allowed)})")
         if name in inputs or (name == "T_ms" and "F_s_ref" in inputs):
             raise ParameterError(f"{src}: input {name!r} given in [inputs] and [offsets]; "
                                  "give one")
-        offsets[name] = _signal(f"{src}: offsets.{name}", pts, duration)
+        offsets[name] = signal(f"{src}: offsets.{name}", pts)
+    references = {k: signal(f"{src}: references.{k}", v)
+                  for k, v in data.get("references", {}).items()}
+    if references and controller is None:
+        raise ParameterError(f"{src}: [references] needs a [controller] table")
+    if "nu" in references and "nu_r" in references:
+        raise ParameterError(f"{src}: give references.nu or references.nu_r, not both")
+    t_step = head.get("load_step_time")
+    window = head.get("shift_window")
+    if window is not None:
+        if not (isinstance(window, list) and len(window) == 2):
+            raise ParameterError(f"{src}: scenario.shift_window = {window!r}: must be [start, "
+                                 "end] [s]")
+        w0 = check_number("scenario.shift_window[0]", window[0], 0.0, duration, unit="s",
+                          where=src)
+        w1 = check_number("scenario.shift_window[1]", window[1], w0, duration, lo_open=True,
+                          unit="s", where=src)
+        window = (w0, w1)
     solver = data.get("solver", {})
     rtol = check_number("solver.rtol", solver.get("rtol", 1e-4), 1e-12, 0.1, lo_open=True,
                         where=src)
@@ -204,8 +350,11 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
     return Scenario(name=str(head.get("name", Path(src).stem)),
                     description=str(head.get("description", "")), duration=duration,
                     sample_rate=rate, options=options, initial=initial, inputs=inputs,
-                    offsets=offsets, rtol=rtol, max_step=max_step, omega_min=omega_min,
-                    max_steps=max_steps)
+                    offsets=offsets, controller=controller, references=references,
+                    load_step_time=None if t_step is None else check_number(
+                        "scenario.load_step_time", t_step, 0.0, duration, unit="s", where=src),
+                    shift_window=window, rtol=rtol, max_step=max_step, omega_min=omega_min,
+                    max_steps=max_steps, source=src)
 
 
 def input_names(options: ModelOptions) -> tuple[str, ...]:
@@ -216,7 +365,9 @@ def input_names(options: ModelOptions) -> tuple[str, ...]:
             "omega_l_ref" if options.load == "speed" else "T_l")
 
 
-def _signal(where: str, pts: Any, duration: float) -> NDArray[np.float64]:
+def signal(where: str, pts: Any) -> NDArray[np.float64]:
+    """A piecewise-linear signal ``[[t, value], ...]`` as an array of shape (k, 2): times
+    non-decreasing from 0, each repeated at most once (a step), values finite."""
     try:
         arr = np.array(pts, dtype=float)
     except (TypeError, ValueError):
@@ -234,22 +385,30 @@ def _signal(where: str, pts: Any, duration: float) -> NDArray[np.float64]:
     return arr
 
 
-def list_examples() -> dict[str, str]:
-    """Shipped example scenarios: name -> description."""
+def _example_files() -> dict[str, Path]:
+    out: dict[str, Path] = {}
+    for folder in _EXAMPLE_FOLDERS:
+        for res in sorted(resources.files("empact.data").joinpath(folder).iterdir(),
+                          key=lambda r: r.name):
+            if res.name.endswith(".toml"):
+                out[res.name[:-5]] = Path(str(res))
+    return out
+
+
+def list_examples(closed_loop: bool | None = None) -> dict[str, str]:
+    """Shipped example scenarios: name -> description (all, or only the open-loop or the
+    closed-loop ones)."""
     out = {}
-    for res in sorted(resources.files("empact.data").joinpath("scenarios").iterdir(),
-                      key=lambda r: r.name):
-        if res.name.endswith(".toml"):
-            data = tomllib.loads(res.read_text())
-            out[res.name[:-5]] = data.get("scenario", {}).get("description", "")
+    for name, path in _example_files().items():
+        data = tomllib.loads(path.read_text())
+        if closed_loop is None or ("controller" in data) == closed_loop:
+            out[name] = data.get("scenario", {}).get("description", "")
     return out
 
 
 def example_path(name: str) -> Path:
     """Path of a shipped example scenario (`list_examples` names)."""
-    names = list_examples()
-    if name not in names:
-        raise ParameterError(f"example {name!r}: choose from {', '.join(names)}")
-    return Path(str(resources.files("empact.data").joinpath("scenarios", f"{name}.toml")))
-
-
+    files = _example_files()
+    if name not in files:
+        raise ParameterError(f"example {name!r}: choose from {', '.join(files)}")
+    return files[name]

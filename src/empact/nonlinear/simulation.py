@@ -15,15 +15,17 @@ import csv
 import io
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Mapping
+from typing import Mapping, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._io import atomic_write_text
 from .._progress import progress as progress_bar
+from .._validate import check_number
+from ..errors import ParameterError
 from ..params import Params
 from . import _kernel as K
 from ._rosenbrock import STATUS, integrate
@@ -31,9 +33,9 @@ from .model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinea
 from .scenario import Scenario
 from .equilibrium import TrimResult, trim
 
-__all__ = ["SimulationResult", "simulate", "run_scenario", "scenario_model", "scenario_signals",
-           "csv_text",
-           "write_csv", "state_tolerances"]
+__all__ = ["SimulationResult", "SampledController", "simulate", "run_scenario",
+           "scenario_model", "scenario_signals", "csv_text", "write_csv", "state_tolerances",
+           "STATUS"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,45 +101,40 @@ def state_tolerances(model: EmpactModel, rtol: float) -> tuple[NDArray, NDArray]
     return rel, atol
 
 
-def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
-             duration: float, *, u0: NDArray | None = None, sample_rate: float = 1000.0,
-             rtol: float = 1e-4, max_step: float = 0.01, omega_min: float = 1.0,
-             max_steps: int = 2_000_000, progress: bool = False,
-             name: str = "") -> SimulationResult:
-    """Integrate `model` from `x0` over ``[0, duration]``.
+@runtime_checkable
+class SampledController(Protocol):
+    """What `simulate` needs of a controller in the loop (the step interface).
 
-    Parameters
+    Attributes
     ----------
-    model : EmpactModel
-    x0 : array, shape (n,)
-        Initial state (e.g. ``trim(...).x``).
-    signals : dict name -> array, shape (k, 2)
-        Piecewise-linear input signals ``[[t, value], ...]`` by model input name.
-    duration : float
-        End time [s].
-    u0 : array, shape (4,), optional
-        Values of the inputs without a signal (default zero).
-    sample_rate : float
-        Output samples per second [Hz].
-    rtol : float
-        Relative tolerance (see `state_tolerances`).
-    max_step : float
-        Largest step [s].
-    omega_min : float
-        Stop when omega_p falls to this [rad/s].
-    max_steps : int
-        Give up (incomplete result) after this many integration steps.
-    progress : bool
-        A progress bar on stderr (`empact._progress`).
+    dt : float
+        Sample period [s]; the commands are held over each period (zero-order hold).
+    measured : tuple of str
+        The signals it reads at each sample, by name: the model's outputs, states or inputs
+        (an input's value at the sample time).
+    commands : tuple of str
+        The model inputs it drives, by name (the others follow their signals).
 
-    Returns
+    Methods
     -------
-    SimulationResult
+    step(t, measured) -> commands
+        At sample time `t` [s] with the measured values (array in the order of `measured`),
+        the command values (array in the order of `commands`) held over ``[t, t + dt)``.
     """
-    x = np.array(x0, dtype=float)
-    if x.shape != (model.n,):
-        raise ValueError(f"x0 has shape {x.shape}: expected ({model.n},)")
-    u0 = np.zeros(4) if u0 is None else np.asarray(u0, float)
+
+    dt: float
+    measured: tuple[str, ...]
+    commands: tuple[str, ...]
+
+    def step(self, t: float, measured: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Commands over ``[t, t + dt)`` from the measurements at `t`."""
+
+
+def _signal_table(model: EmpactModel, signals: Mapping[str, NDArray], u0: NDArray,
+                  duration: float):
+    """The piecewise-linear inputs as the compiled integrator takes them: per input the times,
+    the values and the number of points (``sig_t``, ``sig_v``, ``sig_n``), and the sorted
+    breakpoints in (0, duration]."""
     for k in signals:
         if k not in model.inputs:
             raise ValueError(f"unknown input {k!r}: choose from {', '.join(model.inputs)}")
@@ -156,33 +153,90 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
         else:
             sig_v[j, 0] = u0[j]
     brk_arr = np.unique(np.array([b for b in brk if 0 < b <= duration]))
+    return sig_t, sig_v, sig_n, brk_arr
+
+
+def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
+             duration: float, *, u0: NDArray | None = None,
+             controller: SampledController | None = None, sample_rate: float = 1000.0,
+             rtol: float = 1e-4, max_step: float = 0.01, omega_min: float = 1.0,
+             max_steps: int = 2_000_000, progress: bool = False,
+             name: str = "") -> SimulationResult:
+    """Integrate `model` from `x0` over ``[0, duration]``, open loop or with a sampled
+    controller in the loop.
+
+    Parameters
+    ----------
+    model : EmpactModel
+    x0 : array, shape (n,)
+        Initial state (e.g. ``trim(...).x``).
+    signals : dict name -> array, shape (k, 2)
+        Piecewise-linear input signals ``[[t, value], ...]`` by model input name.
+    duration : float
+        End time [s].
+    u0 : array, shape (4,), optional
+        Values of the inputs without a signal (default zero); the controller's commands
+        start from them.
+    controller : SampledController, optional
+        Runs at its own sample period inside the integration: at each sample time it reads
+        its measured signals and sets its commanded inputs, held until the next sample.
+    sample_rate : float
+        Output samples per second [Hz].
+    rtol : float
+        Relative tolerance (see `state_tolerances`).
+    max_step : float
+        Largest step [s].
+    omega_min : float
+        Stop when omega_p falls to this [rad/s].
+    max_steps : int
+        Give up (incomplete result) after this many integration steps.
+    progress : bool
+        A progress bar on stderr (`empact._progress`).
+
+    Returns
+    -------
+    SimulationResult
+        ``u`` holds the inputs as applied (commands with their hold).
+    """
+    x = np.array(x0, dtype=float)
+    if x.shape != (model.n,):
+        raise ValueError(f"x0 has shape {x.shape}: expected ({model.n},)")
+    u0 = np.zeros(4) if u0 is None else np.asarray(u0, float)
+    sig_t, sig_v, sig_n, brk_arr = _signal_table(model, signals, u0, duration)
     n_t = int(np.floor(duration * sample_rate + 1e-9)) + 1
     samples = np.arange(n_t) / sample_rate
     X = np.full((n_t, model.n), np.nan)
-    Y = np.full((n_t, K.NY), np.nan)
+    Y = np.full((n_t, len(model.outputs)), np.nan)
     X[0] = x
-    y0 = np.empty(K.NY)
+    y = np.empty(len(model.outputs))
     dx = np.empty(model.n)
-    u_first = _inputs_at(0.0, sig_t, sig_v, sig_n)
-    K._eval(x, u_first, model.p, model.ix, dx, y0)
-    Y[0] = y0
     rel, atol = state_tolerances(model, rtol)
     cols = K.varying_columns(model.ix)
+    J = np.empty((model.n, model.n))
     t, h = 0.0, min(1e-5, max_step)
-    chunks = np.linspace(0.0, duration, 101)[1:]
     status, n_steps, n_rej, filled = 0, 0, 0, 1
     wall = time.perf_counter()
-    with progress_bar(total=len(chunks), desc=f"simulate {name}".strip(), unit="%",
-                      enabled=progress) as bar:
-        for t_chunk in chunks:
-            status, t, h, filled, ns, nr = integrate(
-                x, t, float(t_chunk), h, samples, model.p, model.ix, sig_t, sig_v, sig_n,
-                brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps, X, Y, cols)
-            n_steps += ns
-            n_rej += nr
-            bar.update(1)
-            if status != 0:
-                break
+    if controller is None:
+        K._eval(x, _inputs_at(0.0, sig_t, sig_v, sig_n), model.p, model.ix, dx, y)
+        Y[0] = y
+        chunks = np.linspace(0.0, duration, 101)[1:]
+        with progress_bar(total=len(chunks), desc=f"simulate {name}".strip(), unit="%",
+                          enabled=progress) as bar:
+            for k, t_chunk in enumerate(chunks):
+                status, t, h, filled, ns, nr = integrate(
+                    x, t, float(t_chunk), h, samples, model.p, model.ix, sig_t, sig_v, sig_n,
+                    brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps, X, Y,
+                    cols, J, k == 0)
+                n_steps += ns
+                n_rej += nr
+                bar.update(1)
+                if status != 0:
+                    break
+        U = _inputs_at(samples[:max(filled, 1)], sig_t, sig_v, sig_n)
+    else:
+        status, t, filled, n_steps, n_rej, U = _run_sampled(
+            model, controller, x, u0, duration, samples, sig_t, sig_v, sig_n, brk_arr, rel,
+            atol, max_step, omega_min, max_steps, X, Y, cols, J, progress, name)
     wall = time.perf_counter() - wall
     complete = status == 0
     if complete:
@@ -191,13 +245,86 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
         state = ", ".join(f"{s} = {v:.6g}" for s, v in zip(model.states, x))
         message = (f"stopped at t = {t:.6g} s: {STATUS[status]}; state: {state}")
     keep = slice(0, max(filled, 1))
-    tt = samples[keep]
-    U = _inputs_at(tt, sig_t, sig_v, sig_n)
-    return SimulationResult(t=tt, x=X[keep], y=Y[keep], u=U, states=model.states,
-                            outputs=model.outputs, inputs=model.inputs, complete=complete,
-                            message=message, scenario=name,
+    return SimulationResult(t=samples[keep], x=X[keep], y=Y[keep], u=U[keep],
+                            states=model.states, outputs=model.outputs, inputs=model.inputs,
+                            complete=complete, message=message, scenario=name,
                             stats={"n_steps": n_steps, "n_rejected": n_rej, "wall_time": wall,
                                    "t_end": t})
+
+
+def _measurement(model: EmpactModel, names: tuple[str, ...]):
+    """Where each measured signal lives: (0, output index), (1, state index) or (2, input
+    index)."""
+    where = []
+    for m in names:
+        if m in model.outputs:
+            where.append((0, model.outputs.index(m)))
+        elif m in model.states:
+            where.append((1, model.states.index(m)))
+        elif m in model.inputs:
+            where.append((2, model.inputs.index(m)))
+        else:
+            raise ParameterError(f"the controller measures {m!r}: not an output, state or "
+                                 f"input of the model (outputs: {', '.join(model.outputs)})")
+    return where
+
+
+def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_n, brk_arr,
+                 rel, atol, max_step, omega_min, max_steps, X, Y, cols, J, progress, name):
+    """The loop of `simulate` with a sampled controller: at every sample ``t_k = k dt`` the
+    controller reads its signals (outputs and states at ``x(t_k)``, inputs at ``t_k``) and
+    sets its commands, held by giving the integrator a constant signal for each commanded
+    input up to ``t_(k+1)``.  The inputs the controller does not drive are evaluated on the
+    sample grid once, before the loop."""
+    dt = float(check_number("controller dt", controller.dt, 0.0, duration, lo_open=True,
+                            unit="s"))
+    cmd = [model.input_index(c) for c in controller.commands]
+    free = [j for j in range(4) if j not in cmd]
+    where = _measurement(model, tuple(controller.measured))
+    n_k = int(round(duration / dt))
+    t_grid = np.minimum(np.arange(n_k + 1) * dt, duration)
+    U_grid = _inputs_at(t_grid, sig_t, sig_v, sig_n)  # the free inputs, right-continuous
+    commands = np.empty((n_k, len(cmd)))
+    u = np.array(u0, float)
+    y = np.empty(len(model.outputs))
+    dx = np.empty(model.n)
+    meas = np.empty(len(where))
+    for j in cmd:
+        sig_n[j] = 1
+    t, h = 0.0, min(1e-5, max_step)
+    status, n_steps, n_rej, filled, k = 0, 0, 0, 1, 0
+    every = max(1, n_k // 100)
+    with progress_bar(total=n_k, desc=f"simulate {name}".strip(), unit="samples",
+                      enabled=progress) as bar:
+        for k in range(n_k):
+            u[free] = U_grid[k, free]
+            K._eval(x, u, model.p, model.ix, dx, y)
+            if k == 0:
+                Y[0] = y
+            for i, (kind, j) in enumerate(where):
+                meas[i] = y[j] if kind == 0 else (x[j] if kind == 1 else u[j])
+            c = np.asarray(controller.step(float(t_grid[k]), meas), float)
+            commands[k] = c
+            u[cmd] = c
+            sig_v[cmd, 0] = c
+            status, t, h, filled, ns, nr = integrate(
+                x, t, float(t_grid[k + 1]), h, samples, model.p, model.ix, sig_t, sig_v,
+                sig_n, brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps,
+                X, Y, cols, J, k == 0)
+            n_steps += ns
+            n_rej += nr
+            if (k + 1) % every == 0:
+                bar.update(every)
+            if status != 0:
+                break
+    # the applied inputs at the output samples: the free ones from their signals, the
+    # commands of the period (t_k, t_(k+1)] that ends at or after each sample (u0 at t = 0)
+    n_out = max(filled, 1)
+    U = _inputs_at(samples[:n_out], sig_t, sig_v, sig_n)
+    idx = np.clip(np.ceil(samples[:n_out] / dt - 1e-9).astype(int) - 1, 0, max(k, 0))
+    U[:, cmd] = commands[idx]
+    U[0, cmd] = u0[cmd]
+    return status, t, filled, n_steps, n_rej, U
 
 
 def _inputs_at(t, sig_t, sig_v, sig_n) -> NDArray[np.float64]:
@@ -219,11 +346,13 @@ def _inputs_at(t, sig_t, sig_v, sig_n) -> NDArray[np.float64]:
 
 
 def scenario_model(scenario: Scenario, params: Params) -> tuple[EmpactModel, TrimResult]:
-    """The model and the trimmed initial point of a scenario."""
-    model = nonlinear_model(params, scenario.options)
-    req = dict(scenario.initial)
-    r_g, omega_p = req.pop("r_g"), req.pop("omega_p")
-    return model, trim(model, r_g, omega_p, **req)
+    """The model and the trimmed initial point of a scenario (``nu_r`` refers to the initial
+    point's ratio)."""
+    options = replace(scenario.options, reference_ratio=scenario.options.reference_ratio
+                      if scenario.options.reference_ratio is not None
+                      else scenario.initial.r_g)
+    model = nonlinear_model(params, options)
+    return model, trim(model, scenario.initial)
 
 
 def scenario_signals(scenario: Scenario, model: EmpactModel,
@@ -235,22 +364,31 @@ def scenario_signals(scenario: Scenario, model: EmpactModel,
     if "F_s_ref" in signals:
         a = model.params.actuation
         arr = np.array(signals.pop("F_s_ref"), float)
-        arr[:, 1] = a.i_e * a.s * model.p[K.P_SIG] * arr[:, 1] / a.i_c
+        arr[:, 1] = a.i_e * a.s * model.constants.sheave_sense * arr[:, 1] / a.i_c
         signals["T_ms"] = arr
     for name, arr in scenario.offsets.items():
         arr = np.array(arr, float)
-        arr[:, 1] += op.u[model.inputs.index(name)]
+        arr[:, 1] += op.u[model.input_index(name)]
         signals[name] = arr
     return signals
 
 
-def run_scenario(scenario: Scenario, params: Params, *, progress: bool = False) -> SimulationResult:
-    """Trim the scenario's initial point and simulate it (see `simulate`)."""
+def run_scenario(scenario: Scenario, params: Params, *,
+                 controller: SampledController | None = None,
+                 progress: bool = False) -> SimulationResult:
+    """Trim the scenario's initial point and simulate it (see `simulate`).
+
+    A closed-loop scenario (one with a ``[controller]`` table) needs its `controller` built
+    (`empact.control.closed_loop.run_closed_loop` does that)."""
+    if scenario.closed_loop and controller is None:
+        raise ParameterError(f"scenario {scenario.name!r} has a [controller] table: run it "
+                             "with empact.run_closed_loop (or 'empact control simulate')")
     model, op = scenario_model(scenario, params)
     return simulate(model, op.x, scenario_signals(scenario, model, op), scenario.duration,
-                    u0=op.u, sample_rate=scenario.sample_rate, rtol=scenario.rtol,
-                    max_step=scenario.max_step, omega_min=scenario.omega_min,
-                    max_steps=scenario.max_steps, progress=progress, name=scenario.name)
+                    u0=op.u, controller=controller, sample_rate=scenario.sample_rate,
+                    rtol=scenario.rtol, max_step=scenario.max_step,
+                    omega_min=scenario.omega_min, max_steps=scenario.max_steps,
+                    progress=progress, name=scenario.name)
 
 
 def csv_text(result: SimulationResult, states: bool = False) -> str:

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..lti import FrequencyResponse
 from ..slip import BeltRootLocus, PoleSweep, StabilityMap, ZeroLocus
-from ..traction import TractionCurves
+from ..variator.traction import TractionCurves
 from ._common import Plot, new_axes, styled
 from .linear import plot_bode
 
@@ -162,7 +162,7 @@ def plot_pole_sweep(sweep: PoleSweep, title: str = "", uncoupled_hz: Sequence[fl
         ax.legend(loc="upper left")
     b = sweep.base
     ax.set_title(title or f"Poles over {DISPLAY[sweep.name][1].split(' [')[0]} at "
-                          + ", ".join(_value(k, v) for k, v in b.as_dict().items()
+                          + ", ".join(_value(k, v) for k, v in b.to_dict().items()
                                       if k != sweep.name))
     return Plot(fig, axs, artists)
 
@@ -261,7 +261,7 @@ def plot_stability_map(sm: StabilityMap, title: str = "", ax: Any = None) -> Plo
     ax.grid(False)
     ax.set_xlabel(lx)
     ax.set_ylabel(ly)
-    fixed = ", ".join(_value(k, v) for k, v in sm.base.as_dict().items()
+    fixed = ", ".join(_value(k, v) for k, v in sm.base.to_dict().items()
                       if k not in (sm.x_name, sm.y_name))
     ax.set_title(title or f"Stability map (red, hatched: unstable) at {fixed}")
     return Plot(fig, axs, artists)

@@ -7,6 +7,7 @@ for scripts.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import asdict, dataclass, field
 from typing import Any, Iterable, Mapping
 
@@ -50,14 +51,20 @@ class Claim:
         """``"shown"`` or ``"NOT shown"``."""
         return "shown" if self.shown else "NOT shown"
 
-    def as_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         """Plain dictionary (for JSON)."""
         d = asdict(self)
         d["values"] = dict(self.values)
         d["verdict"] = self.verdict
         return d
 
+    def as_dict(self) -> dict[str, Any]:
+        """Deprecated: `to_dict`."""
+        warnings.warn("Claim.as_dict is deprecated; use to_dict", DeprecationWarning,
+                      stacklevel=2)
+        return self.to_dict()
+
 
 def claims_table(claims: Iterable[Claim]) -> list[dict[str, Any]]:
     """The claims as plain dictionaries, in order."""
-    return [c.as_dict() for c in claims]
+    return [c.to_dict() for c in claims]

@@ -10,10 +10,11 @@ from pathlib import Path
 import numpy as np
 
 from ..control.closed_loop import (ClosedLoopResult, control_example_path, control_examples,
-                                   load_control_scenario, run_closed_loop)
+                                   run_closed_loop)
 from ..control.controller import Controller, load_controller
 from ..control.family import PlantFamily, plant_family
 from ..control.robustness import RobustnessMap, robustness_map
+from ..nonlinear.scenario import load_scenario
 from ..params import Params
 from .claims import Claim
 
@@ -61,7 +62,7 @@ def control(params: Params) -> ControlSection:
     family = plant_family(params, **DESIGN_GRID)
     ctrls = {k: shipped_controller(k) for k in ("pi", "hinf")}
     maps = {k: robustness_map(family, c) for k, c in ctrls.items()}
-    runs = {name: run_closed_loop(load_control_scenario(control_example_path(name)), params)
+    runs = {name: run_closed_loop(load_scenario(control_example_path(name)), params)
             for name in control_examples()}
     src = "issue 13 (beyond the paper)"
     claims = []

@@ -14,7 +14,7 @@ from ..linear.actuation import actuation_model
 from ..lti import FrequencyResponse, channel_zeros, damping_ratio, system_response
 from ..nonlinear.linearization import linearize
 from ..params import Params
-from ..shift_law import creep_damping
+from ..variator.shift_law import creep_damping
 from .claims import Claim
 from .linear import MACHINE, READING
 

@@ -15,7 +15,7 @@ from ..nonlinear.model import nonlinear_model
 from ..nonlinear.nmp import SLIPS, NmpResult, nmp_analysis
 from ..nonlinear.scenario import Scenario, example_path, load_scenario
 from ..nonlinear.simulation import SimulationResult, run_scenario
-from ..params import Params
+from ..params import OperatingPoint, Params
 from .claims import Claim
 from .linear import MACHINE, READING, SEC21
 
@@ -177,11 +177,12 @@ def load_to_ratio(params: Params, r_g: float, tau: float = 0.5,
     model = nonlinear_model(params, drive="speed")
     base = params.operating
     _, mu_max = traction_peak(model, r_g)
-    unloaded = trim(model, r_g, base.omega_p, F_s=base.F_s, T_l=0.0)
+    unloaded = trim(model, base.replace(r_g=r_g, nu=None, T_l=0.0))
     R_s = model.output_dict(unloaded.x, unloaded.u)["R_s"]
     T_l = tau * 2 * mu_max * base.F_s * R_s / np.cos(params.variator.beta)
-    nu = trim(model, r_g, base.omega_p, F_s=base.F_s, T_l=T_l).nu
-    sys, op = plant(params, base.replace(r_g=r_g, nu=nu), model=model)
+    nu = trim(model, base.replace(r_g=r_g, nu=None, T_l=T_l)).nu
+    pl = plant(params, base.replace(r_g=r_g, nu=nu), model=model)
+    sys, op = pl.system, pl.trim
     i, j = list(sys.output_labels).index("r_g"), list(sys.input_labels).index("T_l")
     A, B, C, D = sys.A, sys.B, sys.C, sys.D
     dc = float((D - C @ np.linalg.solve(A, B))[i, j])
@@ -197,7 +198,8 @@ def held_servo_ratio(op, dT: float, dr: float) -> float:
 
     def ratio_at(T_l: float) -> float:
         def mismatch(r: float) -> float:  # servo torque needed minus the held one
-            return trim(model, r, op.omega_p, F_s=op.F_s, T_l=T_l).T_mp - op.T_mp
+            return trim(model, OperatingPoint(r_g=r, omega_p=op.omega_p, F_s=op.F_s,
+                                              T_l=T_l)).T_mp - op.T_mp
         return brentq(mismatch, op.r_g - 2 * dr, op.r_g + 2 * dr, xtol=1e-13, rtol=1e-13)
 
     return (ratio_at(op.T_l + dT / 2) - ratio_at(op.T_l - dT / 2)) / dT
@@ -209,7 +211,8 @@ def exact_plant(params: Params) -> PlantSection:
     f = np.logspace(-1, 3, 300)
     resps, rows, dc_rows = [], [], []
     for r in RATIOS:
-        sys, op = plant(params, params.operating.replace(r_g=r))
+        pl = plant(params, params.operating.replace(r_g=r))
+        sys, op = pl.system, pl.trim
         resps.append(system_response(sys, 2 * np.pi * f, label=f"r_g = {r:g}"))
         ev = np.linalg.eigvals(sys.A)
         rows.append([r, op.T_l, op.T_mp, op.T_ms, float(ev.real.max())])

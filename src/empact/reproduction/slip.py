@@ -12,7 +12,7 @@ from ..params import OperatingPoint, Params
 from ..slip import (BeltRootLocus, PoleSweep, StabilityMap, ZeroLocus, belt_root_locus,
                     coupled_limit, pole_sweep, slip_frequency_responses, slip_model,
                     stability_map, zero_locus)
-from ..traction import TractionCurves, traction_curves, traction_from_params
+from ..variator.traction import TractionCurves, traction_curves, traction_from_params
 from .claims import Claim
 
 __all__ = ["OMEGA", "FIG12B_SLIP", "fig11_point", "Fig9", "Fig10", "Fig11", "Fig12",

@@ -32,9 +32,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validate import check_values
-from ..geometry import variator_state
+from ..variator.geometry import variator_state
 from ..params import OPERATING_VARIABLES, OperatingPoint, Params
-from ..traction import TractionModel, traction_from_params
+from ..variator.traction import TractionModel, traction_from_params
 
 __all__ = ["VARIABLES", "BeltLinearisation", "slip", "belt_torque", "linearise_belt",
            "linearisation_terms", "check_speed", "check_clamp", "check_slip"]

@@ -19,11 +19,11 @@ from scipy.linalg import eigvals as generalized_eigvals, null_space
 
 from .._validate import check_choice, check_number
 from ..errors import ParameterError
-from ..geometry import variator_state
+from ..variator.geometry import variator_state
 from ..lti import (FrequencyResponse, RootLocus, damping_ratio, oscillatory, root_locus,
                    track_branches)
 from ..params import OperatingPoint, Params
-from ..traction import TractionModel
+from ..variator.traction import TractionModel
 from .coupling import VARIABLES, check_slip, linearisation_terms
 from .model import assemble_A, assemble_reduced, mass_stiffness, slip_model
 
@@ -187,7 +187,7 @@ def pole_sweep(params: Params, name: Variable, values: ArrayLike,
     """
     v = grid_values(name, values)
     base = OperatingPoint.from_params(params) if base is None else base
-    op = base.as_dict()
+    op = base.to_dict()
     op[name] = v
     terms = linearisation_terms(params, op["r_g"], op["nu"], op["F_s"], op["omega_p"], traction)
     t = {k: np.broadcast_to(a, v.shape) for k, a in terms.items()}

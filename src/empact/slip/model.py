@@ -38,7 +38,7 @@ from .._validate import check_values
 from ..linear.driveline import COORDINATES, driveline_model
 from ..lti import FrequencyResponse, frequency_response, statespace, transmission_zeros
 from ..params import OperatingPoint, Params
-from ..traction import TractionModel
+from ..variator.traction import TractionModel
 from .coupling import BeltLinearisation, linearisation_terms, linearise_belt
 
 __all__ = ["STATES", "INPUTS", "OUTPUTS", "N_STRUCTURAL_ZEROS", "REDUCED_STATES", "SlipModel",

@@ -23,7 +23,7 @@ from ..errors import ParameterError
 from ..lti import damping_ratio
 from ..params import OperatingPoint, Params
 from ..sweep import SweepOptions, plan_chunks, run_chunks
-from ..traction import TractionModel, traction_from_params
+from ..variator.traction import TractionModel, traction_from_params
 from .coupling import VARIABLES, linearisation_terms
 from .loci import Variable, grid_values
 from .model import N_STRUCTURAL_ZEROS, assemble_A, assemble_reduced, mass_stiffness
@@ -143,7 +143,7 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
     chunk_size = check_int("chunk_size", chunk_size, 1)
     workers = check_int("workers", (os.cpu_count() or 1) if workers is None else workers, 1)
     base = OperatingPoint.from_params(params) if base is None else base
-    fixed = base.as_dict()
+    fixed = base.to_dict()
     # Every variable is valid or not on its own: checking the two axes checks the whole grid,
     # so a bad value is reported at once, before any chunk is computed.
     for name, values in ((x_name, xv), (y_name, yv)):

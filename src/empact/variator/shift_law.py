@@ -1,0 +1,188 @@
+"""Creep-mode shifting of the pushbelt: the belt's resistance to a change of ratio.
+
+Carbone, Mangialardi, Bonsen, Tursi, Veenhuizen, "CVT dynamics: theory and experiments",
+Mechanism and Machine Theory 42 (2007) 409-428 (measured on a TU Eindhoven pushbelt rig): in
+creep mode the ratio changes at a rate proportional to the primary speed and linear in the
+log of the ratio of the actual to the equilibrium thrust ratio::
+
+    dr_g/dt = omega_p K_c(r_g, F_s) ln(kappa / kappa*(tau, r_g)),   kappa = F_p / F_s
+    K_c = gain D(F_s) (1 + cos^2 beta) / sin(2 beta) r_g (R_p / a) (a1 + a2 ln^2 r_g)
+    D(F_s) = D_ref (1 + k_D (F_s - F_ref))
+
+Ide et al. (VSD 24, 1995) take the rate linear in the thrust difference instead,
+``dr_g/dt = omega_p k_I (F_p - kappa* F_s)``; with ``k_I = K_c / (kappa* F_s)`` the two agree
+to first order at equilibrium, and empact uses that coefficient (no published k_I could be
+read), so the laws differ only away from equilibrium: ``ln(kappa / kappa*)`` against
+``kappa / kappa* - 1``.
+
+In the models the law is inverted: the thrust ratio it implies for a ratio rate,
+``kappa = kappa* exp(xi)`` (Ide: ``kappa* (1 + xi)``), ``xi = rdot / (omega_eff K_c)``
+saturated at ``xi_sat`` (beyond it the belt slides radially: slip-mode shifting, no published
+threshold), ``omega_eff = sqrt(omega_p^2 + omega_0^2)`` (no shifting at standstill).  The belt
+resists the ratio change with a generalised force ``Lambda`` conjugate to the ratio, acting on
+the sheaves by virtual work as ``-Lambda dr_g/dq5`` and ``-Lambda dr_g/dq6``, sized so that the
+clamping forces stand in the ratio ``kappa``.  Its static part (``kappa*`` away from the
+geometric ``kappa_geo``) is the path by which the torque moves the ratio.  Linearised at rest it
+is a damper on the ratio, ``C_Lambda = F_s kappa* / ((a + kappa* b) omega_eff K_c)`` [N m s]
+(``a = dr_g/dx_p``, ``b = |dr_g/dx_s|``): on the sheave translations the symmetric rank-one
+matrix ``C_Lambda grad(r_g) grad(r_g)^T`` (`creep_damping`), dissipative by construction.  In
+the limit of infinite resistance (``K_c -> 0``) it is the ideal constraint of constant ratio.
+
+The law is the physical content of Shafai's pulley damping ``c / |omega|`` (a sheave
+resistance that falls with speed): in the nonlinear model it *replaces* it (shift law
+``"carbone"`` or ``"ide"``); Shafai's term remains as shift law ``"shafai"`` and as the
+paper's illustrative levels of Fig. 6 in the linear model.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._section import Section, param
+from .._validate import check_choice, check_number
+from .geometry import VariatorParams, check_ratio, variator_state
+
+__all__ = ["ShiftParams", "SHIFT_LAWS", "creep_coefficient", "shift_rate", "CreepDamping",
+           "creep_damping", "g_beta"]
+
+
+@dataclass(frozen=True)
+class ShiftParams(Section):
+    """Creep-mode shifting of the pushbelt: the belt's resistance to a ratio change.
+
+    Carbone, Mangialardi, Bonsen, Tursi, Veenhuizen, "CVT dynamics: theory and experiments",
+    Mechanism and Machine Theory 42 (2007) 409-428: in creep mode the ratio rate is
+    proportional to the primary speed and linear in the log of the ratio of the actual to the
+    equilibrium thrust ratio::
+
+        dr_g/dt = |omega_p| K_c [ln(F_p / F_s) - ln kappa*(tau, r_g)]
+        K_c = gain D(F_s) (1 + cos^2 beta) / sin(2 beta) r_g (R_p / a) (a1 + a2 ln^2 r_g)
+        D(F_s) = D_ref (1 + k_D (F_s - F_ref))
+
+    D is the amplitude of the pulley deformation that lets the belt creep radially (rigid
+    pulleys: no creep).  The coefficients are a third party's reconstruction of the paper's
+    fits (eng-tools.dev, "How does a CVT actually change ratio?", its Eqs. 23 and 49 and the
+    calculator's a1, a2 fitted to the paper's Fig. 13); the paper's own tables could not be
+    read, so the magnitude is uncertain by about a factor 10 (hence `gain`).  The test rig of
+    the paper covered r_g = 0.6-1.8, F_s = 20-30 kN, 1000-2000 rpm.
+    """
+
+    _name = "shift"
+    D_ref: float = param("rad", "pulley deformation amplitude at F_ref (Carbone 2007, "
+                             "reconstructed: 1e-3)", 0.0, 5e-3)
+    F_ref: float = param("N", "clamping force of D_ref (Carbone 2007: 20 kN)", 1e3, 1e6)
+    k_D: float = param("1/N", "growth of D with the clamping force (Carbone 2007, "
+                           "reconstructed: 2e-5, i.e. 2 % per kN)", 0.0, 1e-4, lo_open=False)
+    a1: float = param("-", "ratio dependence g(r) = r q (a1 + a2 ln^2 r), constant term "
+                        "(reconstructed fit: 0.21)", 0.0, 5.0)
+    a2: float = param("-", "ratio dependence, quadratic term (reconstructed fit: 0.08)", 0.0, 5.0,
+                   lo_open=False)
+    gain: float = param("-", "overall factor on the creep rate: 1 is the published magnitude; "
+                          "the reconstruction is uncertain by about 10x", 0.1, 50.0,
+                     lo_open=False)
+    omega_0: float = param("rad/s", "speed below which creep fades (regularisation at "
+                                 "standstill: no shifting without rotation)", 0.01, 10.0)
+    xi_sat: float = param("-", "saturation of the log thrust-ratio error (slip mode beyond "
+                            "it; no published threshold)", 0.3, 3.0, lo_open=False)
+
+
+class _HasShift(Protocol):
+    """A parameter set (`empact.params.Params`): what the creep law reads of it."""
+
+    variator: VariatorParams
+    shift: ShiftParams
+
+#: shift laws of the nonlinear model
+SHIFT_LAWS = ("carbone", "ide", "shafai")
+
+
+def g_beta(beta: float) -> float:
+    """``(1 + cos^2 beta) / sin(2 beta)`` [-] (Carbone's wedge factor)."""
+    return (1 + np.cos(beta) ** 2) / np.sin(2 * beta)
+
+
+def creep_coefficient(params: _HasShift, r_g: ArrayLike, F_s: ArrayLike,
+                      R_p: ArrayLike | None = None) -> NDArray[np.float64]:
+    """``K_c`` [-]: ratio change per radian of primary rotation per unit log thrust-ratio
+    error, at ratio `r_g` and clamping force `F_s` [N] (broadcast); `R_p` [m] defaults to the
+    unstretched belt's primary radius."""
+    sh, v = params.shift, params.variator
+    r = np.asarray(r_g, float)
+    if R_p is None:
+        R_p = variator_state(r, v).R_p
+    lr = np.log(r)
+    D = sh.D_ref * (1 + sh.k_D * (np.asarray(F_s, float) - sh.F_ref))
+    return sh.gain * D * g_beta(v.beta) * r * (np.asarray(R_p) / v.a) * (sh.a1 + sh.a2 * lr**2)
+
+
+def shift_rate(params: _HasShift, r_g: ArrayLike, omega_p: ArrayLike, kappa: ArrayLike,
+               kappa_eq: ArrayLike, F_s: ArrayLike, law: str = "carbone") -> NDArray[np.float64]:
+    """Ratio rate ``dr_g/dt`` [1/s] of the creep law (unsaturated) for the thrust ratio
+    `kappa` against the equilibrium `kappa_eq`, at primary speed `omega_p` [rad/s]."""
+    check_choice("law", law, SHIFT_LAWS[:2])
+    w_eff = np.sqrt(np.asarray(omega_p, float) ** 2 + params.shift.omega_0 ** 2)
+    err = np.log(np.asarray(kappa) / kappa_eq) if law == "carbone" \
+        else np.asarray(kappa) / kappa_eq - 1
+    return w_eff * creep_coefficient(params, r_g, F_s) * err
+
+
+@dataclass(frozen=True)
+class CreepDamping:
+    """The creep law linearised at rest (``dr_g/dt = 0``) at one operating point.
+
+    Attributes
+    ----------
+    C_lambda : float
+        Damping on the ratio coordinate [N m s] (generalised force per unit ratio rate).
+    grad_r : array, shape (2,)
+        ``(dr_g/dx_p, dr_g/dx_s)`` [1/m] for the chosen kinematics.
+    matrix : array, shape (2, 2)
+        ``C_lambda grad_r grad_r^T`` [N s/m] on the sheave translations (q5, q6).
+    c_shift : float
+        Equivalent damping on x_p along the shift at constant belt length [N s/m].
+    c_shafai_equivalent : float
+        ``c_shift |omega_p|`` [N/m], the Shafai coefficient with the same shift damping.
+    """
+
+    C_lambda: float
+    grad_r: NDArray[np.float64]
+    matrix: NDArray[np.float64]
+    c_shift: float
+    c_shafai_equivalent: float
+
+
+def creep_damping(params: _HasShift, r_g: float, omega_p: float, F_s: float,
+                  kinematics: str = "equal-translation", kappa_eq: float | None = None) \
+        -> CreepDamping:
+    """Linearised creep resistance at ratio `r_g`, primary speed `omega_p` [rad/s] and
+    clamping force `F_s` [N], at rest and at the equilibrium thrust ratio `kappa_eq`
+    (default: the geometric one, i.e. zero torque with ``p0 = 1``), on the unstretched
+    belt's radii.
+
+    Both laws (Carbone, Ide) have the same linearisation: ``d kappa / d rdot =
+    kappa* / (omega_eff K_c)``.
+    """
+    check_choice("kinematics", kinematics, ("equal-translation", "paper-sec2.1"))
+    r = float(check_ratio(check_number("r_g", r_g), params.variator))
+    omega_p = check_number("omega_p", omega_p, 0.0, lo_open=True, unit="rad/s")
+    F_s = check_number("F_s", F_s, 0.0, lo_open=True, unit="N")
+    v = params.variator
+    geo = variator_state(r, v)
+    R_p, R_s, phi = float(geo.R_p), float(geo.R_s), float(geo.phi)
+    tb = np.tan(v.beta)
+    kgeo = (np.pi + 2 * phi) / (np.pi - 2 * phi)
+    k = kgeo if kappa_eq is None else check_number("kappa_eq", kappa_eq, 0.0, lo_open=True)
+    w_eff = np.hypot(omega_p, params.shift.omega_0)
+    a, b = r / (tb * R_p), r / (tb * R_s)
+    # at rest the clamping force equals the belt element's only when kappa* = kappa_geo;
+    # F_s here is the belt element's force (the law's)
+    C = F_s * k / ((a + k * b) * w_eff * float(creep_coefficient(params, r, F_s, R_p)))
+    sig = -1.0 if kinematics == "equal-translation" else 1.0
+    grad = np.array([a, sig * b])
+    G_p = (1 + kgeo * r) / (R_s * tb)  # dr_g/dx_p along the shift at constant belt length
+    c_shift = C * G_p**2
+    return CreepDamping(C_lambda=float(C), grad_r=grad, matrix=C * np.outer(grad, grad),
+                        c_shift=float(c_shift), c_shafai_equivalent=float(c_shift * omega_p))

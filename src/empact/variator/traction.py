@@ -1,0 +1,431 @@
+"""Traction curves ``mu(nu, r_g)`` of the pushbelt variator (paper Fig. 10).
+
+The belt torque (paper eq. 1) is ``T_b = 2 mu(nu, r_g) F_s R_s / cos(beta)``; its linearisation
+(eq. 3) needs the slope ``mu' = d mu / d nu``.  A traction model is any object with
+
+``mu(nu, r_g)``
+    traction coefficient [-], vectorised: `nu` (slip [-], a fraction: 0.01 is 1 %) and `r_g`
+    (geometric ratio [-]) broadcast against each other;
+``dmu(nu, r_g)``
+    its exact slope ``d mu / d nu`` [-] (the derivative of the model as implemented, not a
+    finite difference);
+``nu_range``
+    ``(nu_min, nu_max)``, the slips where the model is valid; both methods raise
+    `~empact.params.ParameterError` naming the value and the range for a slip outside it.
+
+Two models are provided:
+
+`MagicFormulaTraction`
+    A Pacejka-type "magic formula", smooth and odd in ``nu``::
+
+        phi(nu) = B nu - E (B nu - arctan(B nu))
+        mu(nu)  = D sin(C arctan(phi))
+        mu'(nu) = D C cos(C arctan(phi)) / (1 + phi^2) * B (1 - E + E / (1 + (B nu)^2))
+
+    ``D`` is the peak traction coefficient, ``B D C`` the slope at ``nu = 0``, ``C`` sets how far
+    ``mu`` falls beyond the peak (``C = 1``: no fall) and ``E`` close to 1 gives the steep
+    micro-slip rise followed by the flat top of a pushbelt curve.  The four coefficients are
+    given at three ratios (LOW, MED, OD) and interpolated *linearly in log(r_g)* between them,
+    held constant outside (``numpy.interp`` on ``log(r_g)``); `MagicFormulaTraction.coefficients`
+    returns them, for re-implementation elsewhere (e.g. a compiled simulation kernel).
+
+`TabulatedTraction`
+    A user's measured curves, one per ratio, from CSV (columns ``r_g,nu,mu``) or TOML
+    (``[[curve]]`` tables with ``r_g = ...``, ``nu = [...]``, ``mu = [...]``).  Shape-preserving
+    PCHIP interpolation in ``nu`` (no overshoot between samples, monotone where the data are),
+    the slope is the derivative of that interpolant; linear in ``r_g`` between the tabulated
+    ratios, held constant outside.  A curve that starts at ``nu = 0`` with ``mu = 0`` is
+    extended oddly to negative slip (``mu(-nu) = -mu(nu)``).
+
+`traction_from_params` builds the analytic model of a parameter set (section ``[traction]``).
+Compute only: plots are in `empact.plotting.slip`.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Mapping, Protocol, Sequence, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._lazy import lazy_module
+from .._section import Section, param
+from ..errors import ParameterError
+from ._tables import check_curve, read_curves
+
+interpolate = lazy_module("scipy.interpolate")
+
+__all__ = ["TractionParams", "TractionModel", "MagicFormulaTraction", "TabulatedTraction",
+           "TractionCurves", "traction_from_params", "load_traction", "traction_curves",
+           "MAGIC_NU_MAX"]
+
+
+@dataclass(frozen=True)
+class TractionParams(Section):
+    """Analytic traction curve mu(nu, r_g) (Fig. 10), a Pacejka-type magic formula.
+
+    ``mu = D sin(C arctan(B nu - E (B nu - arctan(B nu))))``; B, C, D, E are given at the
+    LOW, MED and OD ratios and interpolated linearly in log(r_g) in between (held
+    constant outside).
+    """
+
+    _name = "traction"
+    r_low: float = param("-", "LOW ratio where the *_low coefficients hold", 0.05, 20.0)
+    r_med: float = param("-", "MED ratio where the *_med coefficients hold", 0.05, 20.0)
+    r_od: float = param("-", "OD ratio where the *_od coefficients hold", 0.05, 20.0)
+    B_low: float = param("-", "stiffness factor at LOW", 1.0, 1e6)
+    B_med: float = param("-", "stiffness factor at MED", 1.0, 1e6)
+    B_od: float = param("-", "stiffness factor at OD", 1.0, 1e6)
+    C_low: float = param("-", "shape factor at LOW", 1.0, 2.0, lo_open=False)
+    C_med: float = param("-", "shape factor at MED", 1.0, 2.0, lo_open=False)
+    C_od: float = param("-", "shape factor at OD", 1.0, 2.0, lo_open=False)
+    D_low: float = param("-", "peak traction coefficient at LOW", 0.0, 1.0)
+    D_med: float = param("-", "peak traction coefficient at MED", 0.0, 1.0)
+    D_od: float = param("-", "peak traction coefficient at OD", 0.0, 1.0)
+    E_low: float = param("-", "curvature factor at LOW", -10.0, 1.0, lo_open=False)
+    E_med: float = param("-", "curvature factor at MED", -10.0, 1.0, lo_open=False)
+    E_od: float = param("-", "curvature factor at OD", -10.0, 1.0, lo_open=False)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not self.r_low < self.r_med < self.r_od:
+            raise ParameterError(
+                f"traction.r_med = {self.r_med!r}: must lie strictly between r_low = "
+                f"{self.r_low!r} and r_od = {self.r_od!r}")
+
+
+class _HasTraction(Protocol):
+    traction: TractionParams
+
+#: Slip range [-] in which the magic formula is used: beyond 20 % slip a pushbelt is destroyed
+#: (gross slip); the formula would be pure extrapolation there.
+MAGIC_NU_MAX = 0.2
+
+#: Fewest samples per tabulated curve.
+MIN_POINTS = 3
+
+
+@runtime_checkable
+class TractionModel(Protocol):
+    """What the slip model needs of a traction curve (see the module docstring)."""
+
+    nu_range: tuple[float, float]
+
+    def mu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
+        """Traction coefficient [-]."""
+
+    def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
+        """Slope ``d mu / d nu`` [-]."""
+
+
+def _fmt_range(lo: float, hi: float) -> str:
+    return f"[{lo:g}, {hi:g}]"
+
+
+def _check_inputs(nu: ArrayLike, r_g: ArrayLike, nu_range: tuple[float, float],
+                  what: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Broadcast `nu`, `r_g`; `ParameterError` for a slip outside `nu_range` or a bad ratio."""
+    nu_a, r_a = np.broadcast_arrays(np.asarray(nu, float), np.asarray(r_g, float))
+    lo, hi = nu_range
+    bad = ~np.isfinite(nu_a) | (nu_a < lo) | (nu_a > hi)
+    if np.any(bad):
+        value = float(nu_a[bad].flat[0])
+        raise ParameterError(f"nu = {value:g}: outside the valid slip range {_fmt_range(lo, hi)} "
+                             f"of {what}")
+    bad = ~np.isfinite(r_a) | (r_a <= 0)
+    if np.any(bad):
+        raise ParameterError(f"r_g = {float(r_a[bad].flat[0]):g}: must be a positive finite ratio")
+    return nu_a, r_a
+
+
+# --------------------------------------------------------------------------------------------
+# Analytic model
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class MagicFormulaTraction:
+    """Magic-formula traction curve with coefficients interpolated over the ratio.
+
+    Parameters
+    ----------
+    ratios : tuple of float, length 3
+        LOW, MED, OD ratios [-] where the coefficients hold (strictly increasing).
+    B, C, D, E : tuple of float, length 3
+        Stiffness, shape, peak and curvature factors [-] at those ratios.
+    nu_max : float
+        Valid slip range is ``[-nu_max, nu_max]`` [-].
+
+    Examples
+    --------
+    >>> from empact.params import default_params
+    >>> tr = MagicFormulaTraction.from_params(default_params().traction)
+    >>> float(tr.mu(0.0, 1.0))
+    0.0
+    """
+
+    ratios: tuple[float, float, float]
+    B: tuple[float, float, float]
+    C: tuple[float, float, float]
+    D: tuple[float, float, float]
+    E: tuple[float, float, float]
+    nu_max: float = MAGIC_NU_MAX
+
+    def __post_init__(self) -> None:
+        for name in ("ratios", "B", "C", "D", "E"):
+            value = tuple(float(x) for x in getattr(self, name))
+            if len(value) != 3 or not all(math.isfinite(x) for x in value):
+                raise ParameterError(f"MagicFormulaTraction.{name} = {value!r}: need three finite "
+                                     "values (LOW, MED, OD)")
+            object.__setattr__(self, name, value)
+        if not 0 < self.ratios[0] < self.ratios[1] < self.ratios[2]:
+            raise ParameterError(f"MagicFormulaTraction.ratios = {self.ratios!r}: must be positive "
+                                 "and strictly increasing")
+        if not (math.isfinite(self.nu_max) and 0 < self.nu_max < 1):
+            raise ParameterError(f"MagicFormulaTraction.nu_max = {self.nu_max!r}: allowed range "
+                                 "is (0, 1)")
+
+    @classmethod
+    def from_params(cls, traction: TractionParams, nu_max: float = MAGIC_NU_MAX) \
+            -> "MagicFormulaTraction":
+        """The model of a ``[traction]`` parameter section."""
+        t = traction
+        return cls(ratios=(t.r_low, t.r_med, t.r_od), B=(t.B_low, t.B_med, t.B_od),
+                   C=(t.C_low, t.C_med, t.C_od), D=(t.D_low, t.D_med, t.D_od),
+                   E=(t.E_low, t.E_med, t.E_od), nu_max=nu_max)
+
+    @property
+    def nu_range(self) -> tuple[float, float]:
+        """Valid slip range ``(-nu_max, nu_max)`` [-]."""
+        return (-self.nu_max, self.nu_max)
+
+    def coefficients(self, r_g: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+        """``(B, C, D, E)`` at ratio(s) `r_g`, each shaped like `r_g`.
+
+        Linear interpolation in ``log(r_g)`` between the LOW, MED and OD values, constant
+        outside: ``numpy.interp(log(r_g), log(ratios), values)``.
+        """
+        r = np.asarray(r_g, float)
+        if np.any(~np.isfinite(r) | (r <= 0)):
+            bad = r[~np.isfinite(r) | (r <= 0)] if r.ndim else r
+            raise ParameterError(f"r_g = {float(np.ravel(bad)[0]):g}: must be a positive finite "
+                                 "ratio")
+        x, xp = np.log(r), np.log(self.ratios)
+        return tuple(np.interp(x, xp, getattr(self, name)) for name in ("B", "C", "D", "E"))
+
+    def mu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
+        """Traction coefficient ``D sin(C arctan(phi))`` [-], shape of ``broadcast(nu, r_g)``."""
+        nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
+        B, C, D, E = self.coefficients(r_a)
+        bx = B * nu_a
+        phi = bx - E * (bx - np.arctan(bx))
+        return D * np.sin(C * np.arctan(phi))
+
+    def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
+        """Slope ``d mu / d nu`` [-] (analytic), shape of ``broadcast(nu, r_g)``."""
+        nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
+        B, C, D, E = self.coefficients(r_a)
+        bx = B * nu_a
+        phi = bx - E * (bx - np.arctan(bx))
+        dphi = B * (1 - E + E / (1 + bx**2))
+        return D * C * np.cos(C * np.arctan(phi)) / (1 + phi**2) * dphi
+
+
+# --------------------------------------------------------------------------------------------
+# Tabulated model
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class TabulatedTraction:
+    """Measured traction curves, one per ratio, interpolated shape-preservingly.
+
+    Parameters
+    ----------
+    ratios : tuple of float, shape (k,)
+        Tabulated ratios [-], strictly increasing.
+    nu_data : tuple of arrays
+        Slip samples [-] of each curve, strictly increasing, at least 3.
+    mu_data : tuple of arrays
+        Traction coefficients [-] of each curve, in [0, 1] (in [-1, 0] where ``nu < 0``).
+        After construction both hold the samples actually interpolated (with the odd
+        extension).
+    source : str
+        Where the table came from (used in messages).
+
+    Notes
+    -----
+    In ``nu``: `scipy.interpolate.PchipInterpolator` per curve (after the odd extension when a
+    curve starts at ``(0, 0)``); ``dmu`` evaluates ``PchipInterpolator.derivative()``, so it is
+    the exact slope of the interpolant.  In ``r_g``: linear between neighbouring tabulated
+    ratios, constant outside.  ``nu_range`` is the intersection of the curves' slip ranges.
+    Use `from_curves` or `load_traction` rather than the constructor.
+    """
+
+    ratios: tuple[float, ...]
+    nu_data: tuple[NDArray[np.float64], ...]
+    mu_data: tuple[NDArray[np.float64], ...]
+    source: str = "traction table"
+    _interp: tuple[interpolate.PchipInterpolator, ...] = field(init=False, repr=False,
+                                                               compare=False)
+    _slope: tuple[interpolate.PchipInterpolator, ...] = field(init=False, repr=False,
+                                                              compare=False)
+
+    def __post_init__(self) -> None:
+        ratios = tuple(float(r) for r in self.ratios)
+        if len(ratios) == 0 or len(ratios) != len(self.nu_data) \
+                or len(ratios) != len(self.mu_data):
+            raise ParameterError(f"{self.source}: need one (nu, mu) curve per ratio, got "
+                                 f"{len(ratios)} ratios")
+        for r in ratios:
+            if not (math.isfinite(r) and r > 0):
+                raise ParameterError(f"{self.source}: r_g = {r!r}: must be a positive finite ratio")
+        if any(b <= a for a, b in zip(ratios, ratios[1:])):
+            raise ParameterError(f"{self.source}: ratios {ratios!r} must be distinct and "
+                                 "increasing")
+        nus, mus, interp, slope = [], [], [], []
+        for r, nu, mu in zip(ratios, self.nu_data, self.mu_data):
+            nu, mu = _validate_curve(r, nu, mu, self.source)
+            if nu[0] == 0.0 and mu[0] == 0.0:  # odd extension to negative slip
+                nu = np.concatenate([-nu[:0:-1], nu])
+                mu = np.concatenate([-mu[:0:-1], mu])
+            p = interpolate.PchipInterpolator(nu, mu, extrapolate=False)
+            nus.append(nu)
+            mus.append(mu)
+            interp.append(p)
+            slope.append(p.derivative())
+        object.__setattr__(self, "ratios", ratios)
+        object.__setattr__(self, "nu_data", tuple(nus))
+        object.__setattr__(self, "mu_data", tuple(mus))
+        object.__setattr__(self, "_interp", tuple(interp))
+        object.__setattr__(self, "_slope", tuple(slope))
+
+    # -- construction ---------------------------------------------------------------------
+    @classmethod
+    def from_curves(cls, curves: Mapping[float, tuple[ArrayLike, ArrayLike]],
+                    source: str = "traction table") -> "TabulatedTraction":
+        """From ``{r_g: (nu, mu)}`` (curves in any order of ratio)."""
+        items = sorted(((float(r), c) for r, c in curves.items()), key=lambda t: t[0])
+        return cls(ratios=tuple(r for r, _ in items),
+                   nu_data=tuple(np.asarray(c[0], float) for _, c in items),
+                   mu_data=tuple(np.asarray(c[1], float) for _, c in items), source=source)
+
+    # -- evaluation -----------------------------------------------------------------------
+    @property
+    def nu_range(self) -> tuple[float, float]:
+        """Slip range [-] covered by every curve."""
+        return (max(float(n[0]) for n in self.nu_data), min(float(n[-1]) for n in self.nu_data))
+
+    def _weights(self, r: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Interpolation weights over the curves, shape ``r.shape + (k,)`` (linear in r_g)."""
+        k = len(self.ratios)
+        w = np.zeros(r.shape + (k,))
+        if k == 1:
+            w[..., 0] = 1.0
+            return w
+        rp = np.asarray(self.ratios)
+        rc = np.clip(r, rp[0], rp[-1])
+        j = np.clip(np.searchsorted(rp, rc, side="right") - 1, 0, k - 2)
+        t = (rc - rp[j]) / (rp[j + 1] - rp[j])
+        np.put_along_axis(w, j[..., None], (1 - t)[..., None], axis=-1)
+        np.put_along_axis(w, (j + 1)[..., None], t[..., None], axis=-1)
+        return w
+
+    def _evaluate(self, nu: ArrayLike, r_g: ArrayLike,
+                  funcs: Sequence[interpolate.PchipInterpolator]) -> NDArray[np.float64]:
+        nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, self.source)
+        w = self._weights(r_a)
+        out = np.zeros(nu_a.shape)
+        for i, f in enumerate(funcs):
+            wi = w[..., i]
+            used = wi != 0
+            if np.any(used):
+                out[used] += wi[used] * f(nu_a[used])
+        return out
+
+    def mu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
+        """Traction coefficient [-], shape of ``broadcast(nu, r_g)``."""
+        return self._evaluate(nu, r_g, self._interp)
+
+    def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
+        """Slope ``d mu / d nu`` of the interpolant [-], shape of ``broadcast(nu, r_g)``."""
+        return self._evaluate(nu, r_g, self._slope)
+
+
+def _validate_curve(r: float, nu: ArrayLike, mu: ArrayLike, source: str) \
+        -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Check one tabulated curve; raise `ParameterError` with a one-line reason."""
+    where = f"{source}, curve r_g = {r:g}"
+    nu_a, mu_a = check_curve(where, nu, mu, ("nu", "mu"), MIN_POINTS)
+    if np.any(np.abs(nu_a) >= 1):
+        i = int(np.flatnonzero(np.abs(nu_a) >= 1)[0])
+        raise ParameterError(f"{where}: nu[{i}] = {nu_a[i]:g}: allowed range is (-1, 1)")
+    lo = np.where(nu_a < 0, -1.0, 0.0)
+    hi = np.where(nu_a < 0, 0.0, 1.0)
+    bad = np.flatnonzero((mu_a < lo) | (mu_a > hi))
+    if bad.size:
+        i = int(bad[0])
+        allowed = "[-1, 0] where nu < 0" if nu_a[i] < 0 else "[0, 1]"
+        raise ParameterError(f"{where}: mu[{i}] = {mu_a[i]:g} (at nu = {nu_a[i]:g}): allowed "
+                             f"range is {allowed}")
+    return nu_a, mu_a
+
+
+def load_traction(path: str | os.PathLike[str]) -> TabulatedTraction:
+    """Read tabulated traction curves from a ``.csv`` or ``.toml`` file.
+
+    CSV: a header with the columns ``r_g``, ``nu``, ``mu`` (any order, further columns are an
+    error), one sample per row; rows with the same ``r_g`` form one curve, in file order.
+    TOML: ``[[curve]]`` tables, each with ``r_g = <float>``, ``nu = [...]``, ``mu = [...]``.
+    Slip ``nu`` is a fraction (0.01 is 1 %).
+
+    Raises
+    ------
+    ParameterError
+        For a missing file, a bad format, or a curve that `TabulatedTraction` refuses.
+    """
+    curves = read_curves(path, "traction table", "nu", "mu")
+    return TabulatedTraction.from_curves(curves, source=str(Path(path)))
+
+
+def traction_from_params(params: _HasTraction | TractionParams) -> MagicFormulaTraction:
+    """The analytic traction model of a parameter set (its ``[traction]`` section), or of the
+    section itself."""
+    section = params if isinstance(params, TractionParams) else params.traction
+    return MagicFormulaTraction.from_params(section)
+
+
+# --------------------------------------------------------------------------------------------
+# Result object for Fig. 10
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class TractionCurves:
+    """Traction curves sampled for display (Fig. 10).
+
+    Attributes
+    ----------
+    nu : slip [-], shape (n_nu,)
+    r_g : ratios [-], shape (n_r,)
+    mu : traction coefficient [-], shape (n_r, n_nu)
+    dmu : slope ``d mu / d nu`` [-], shape (n_r, n_nu)
+    label : name of the model
+    """
+
+    nu: NDArray[np.float64]
+    r_g: NDArray[np.float64]
+    mu: NDArray[np.float64]
+    dmu: NDArray[np.float64]
+    label: str = ""
+
+    def peak(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Slip [-] and value [-] of the largest ``mu`` of each curve, shapes (n_r,)."""
+        j = np.argmax(self.mu, axis=1)
+        return self.nu[j], self.mu[np.arange(len(self.r_g)), j]
+
+
+def traction_curves(traction: TractionModel, r_g: ArrayLike, nu: ArrayLike,
+                    label: str = "") -> TractionCurves:
+    """Sample `traction` at ratios `r_g` (shape (n_r,)) and slips `nu` (shape (n_nu,))."""
+    r = np.atleast_1d(np.asarray(r_g, float))
+    n = np.atleast_1d(np.asarray(nu, float))
+    return TractionCurves(nu=n, r_g=r, mu=traction.mu(n[None, :], r[:, None]),
+                          dmu=traction.dmu(n[None, :], r[:, None]), label=label)
