@@ -34,7 +34,7 @@ def workload(params, duration):
     op = trim(model, s.r_g, s.omega_p, nu=s.nu, F_s=s.F_s)
     n = int(round(s.duration * s.sample_rate))
     t = np.arange(n) / s.sample_rate
-    x = excitation_signal(s.excitation, n, s.sample_rate, s.band, s.rms, seed=s.seed,
+    x = excitation_signal(s.excitation, n, s.sample_rate, s.band_hz, s.rms, seed=s.seed,
                           period=s.period)
     j = model.inputs.index(s.excite)
     return model, op, {s.excite: np.column_stack([t, op.u[j] + x])}, t[-1], s.sample_rate

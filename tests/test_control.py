@@ -205,3 +205,16 @@ def test_closed_loop_metrics_are_the_runs_numbers(params):
     assert m["complete"] == res.complete
     # the load step reaches the load motor, and the ratio loop holds the ratio (1 %: target)
     assert res.output("T_l_act")[-1] == pytest.approx(150.2) and m["ratio_error"] < 0.01
+
+
+def test_family_point_is_the_default_plant(params):
+    """With no options on either side a family point equals `plant` at that point (both the
+    test bench by default), to 1e-10."""
+    fam = plant_family(params, r_g=np.array([0.7, 1.4]))
+    for i, r in enumerate((0.7, 1.4)):
+        ref = plant(params, params.operating.replace(r_g=r))
+        got = fam.plant(i)
+        assert got.states == ref.states and got.inputs == ref.inputs
+        for M in "ABCD":
+            a, b = getattr(got, M), getattr(ref, M)
+            assert np.abs(a - b).max() <= 1e-10 * max(np.abs(b).max(), 1e-300), M

@@ -55,7 +55,7 @@ def test_excitation_rms_and_band(kind):
 
 
 def test_rig_without_friction_matches_linear_model(params):
-    s = RigSettings(excite="T_ms", coulomb=(0.0, 0.0), band=(2.0, 100.0), duration=20.48,
+    s = RigSettings(excite="T_ms", coulomb=(0.0, 0.0), band_hz=(2.0, 100.0), duration=20.48,
                     noise={"theta_mp": 1e-5, "theta_ms": 1e-5, "nu": 1e-8})
     rec = run_rig(params, s)
     assert rec.complete

@@ -28,11 +28,13 @@ def _resolve(name: str, node: ast.ImportFrom, is_pkg: bool) -> str:
 
 
 def _graph():
+    """Module -> the empact modules it imports, counting every import statement: module level,
+    inside functions (the command line's lazy imports), under ``if TYPE_CHECKING:``."""
     graph = {}
     for name, path in _modules():
         tree = ast.parse(path.read_text())
         deps = set()
-        for node in tree.body:  # module-level imports only
+        for node in ast.walk(tree):
             if isinstance(node, ast.Import):
                 deps |= {a.name for a in node.names if a.name.startswith("empact")}
             elif isinstance(node, ast.ImportFrom):
@@ -46,6 +48,7 @@ def _graph():
 
 
 def test_no_import_circles():
+    """No circle of imports of any kind (module level, function level, TYPE_CHECKING)."""
     graph = _graph()
     # a package's __init__ re-exporting its submodules is not a circle of concepts: drop the
     # edges from a package to its own submodules and from submodules to their own package
@@ -99,3 +102,19 @@ def test_cli_start_up_imports_only_what_the_command_needs():
         assert _loaded(*args) & heavy == set(), args
     # a figure-free analysis command loads neither pyplot nor scipy.stats
     assert _loaded("modes", "driveline") & {"matplotlib.pyplot", "scipy.stats"} == set()
+
+
+def test_no_type_checking_imports():
+    """Annotations name only what a module imports for real (no ``if TYPE_CHECKING:`` block
+    hiding a dependency from the import graph)."""
+    bad = [name for name, path in _modules() if "TYPE_CHECKING" in path.read_text()]
+    assert bad == []
+
+
+def test_the_kernel_stays_inside_nonlinear():
+    """Only `empact.nonlinear` imports the compiled kernel and its integrator."""
+    graph = _graph()
+    users = sorted(k for k, deps in graph.items()
+                   if deps & {"empact.nonlinear._kernel", "empact.nonlinear._rosenbrock"}
+                   and not k.startswith("empact.nonlinear"))
+    assert users == []

@@ -337,3 +337,44 @@ def test_jacobian_columns_outside_varying_columns_are_constant(params, opts):
         scale = np.abs(A0).max(axis=1, keepdims=True) + 1e-300
         assert np.all(np.abs(A[:, fixed] - A0[:, fixed]) <= 1e-12 * scale), \
             [m.states[j] for j in fixed if np.any(np.abs(A[:, j] - A0[:, j]) > 1e-12 * scale[:, 0])]
+
+
+def test_trim_and_trim_grid_agree_point_by_point(params):
+    """`trim` at single points against one `trim_grid` call over all of them at once, for the
+    three pairs of the request and a torque ratio: the same state, inputs and solved variables
+    to 1e-10 relative (a point's result must not depend on the other points of the grid)."""
+    from empact.nonlinear.equilibrium import trim_grid
+
+    m = nonlinear_model(params, drive="speed")
+    rng = np.random.default_rng(7)
+    r = np.exp(rng.uniform(np.log(0.5), np.log(2.0), 12))
+    w = rng.uniform(150.0, 400.0, 12)
+    cases = {"nu, F_s": dict(nu=rng.uniform(0.002, 0.01, 12), F_s=rng.uniform(5e3, 2e4, 12)),
+             "F_s, T_l": dict(F_s=rng.uniform(8e3, 2e4, 12), T_l=rng.uniform(5.0, 40.0, 12)),
+             "nu, T_l": dict(nu=rng.uniform(0.002, 0.01, 12), T_l=rng.uniform(5.0, 60.0, 12)),
+             "tau, F_s": dict(tau=rng.uniform(0.3, 0.9, 12), F_s=rng.uniform(5e3, 2e4, 12))}
+    for label, pair in cases.items():
+        grid = trim_grid(m, r, w, **pair)
+        assert grid.ok.all(), (label, grid.reason)
+        for k in range(12):
+            op = trim(m, OperatingPoint(r_g=r[k], omega_p=w[k],
+                                        **{n: v[k] for n, v in pair.items()}))
+            for got, ref in ((op.x, grid.x[k]), (op.u, grid.u[k])):
+                assert np.abs(got - ref).max() <= 1e-10 * np.abs(ref).max(), (label, k)
+            assert op.nu == pytest.approx(grid.nu[k], rel=1e-10, abs=1e-15)
+            assert op.F_s == pytest.approx(grid.F_s[k], rel=1e-10)
+            assert op.T_l == pytest.approx(grid.T_l[k], rel=1e-10)
+
+
+def test_operating_point_by_torque_ratio(params):
+    """A point given by the torque ratio tau = mu / mu_max trims to that tau (1e-10), and to
+    the same state as the point given by the slip it implies."""
+    m = nonlinear_model(params)
+    op = trim(m, OperatingPoint(r_g=1.2, omega_p=300.0, tau=0.8, F_s=9e3))
+    assert op.tau == pytest.approx(0.8, rel=1e-10)
+    by_slip = trim(m, OperatingPoint(r_g=1.2, omega_p=300.0, nu=op.nu, F_s=9e3))
+    assert np.abs(by_slip.x - op.x).max() <= 1e-10 * np.abs(op.x).max()
+    with pytest.raises(ParameterError, match="nu or as tau, not both"):
+        OperatingPoint(r_g=1.0, omega_p=300.0, nu=0.01, tau=0.9)
+    with pytest.raises(ParameterError, match=r"operating.tau = 1.5: allowed range is \[-1, 1\]"):
+        OperatingPoint(r_g=1.0, omega_p=300.0, tau=1.5, F_s=1e4)

@@ -11,7 +11,7 @@ from empact.lti import track_branches
 from empact.lti import oscillatory
 from empact.params import OperatingPoint
 from empact.slip import (INPUTS, OUTPUTS, STATES, belt_root_locus, belt_torque, coupled_limit,
-                         dynamic_poles, linearise_belt, pole_sweep, reduced_matrices, slip,
+                         dynamic_poles, linearize_belt, pole_sweep, reduced_matrices, slip,
                          slip_model, slip_state_space, stability_map, stability_measures,
                          state_matrices, zero_locus)
 
@@ -42,7 +42,7 @@ def nonlinear_torque(params, r_g, w_p, w_s, F_s):
 @pytest.mark.parametrize("nu0", [0.002, 0.01, 0.04])
 def test_c_b_of_eq3_is_the_derivative_of_eqs1_2_at_ratio_1(params, nu0):
     op = FIG11.replace(nu=nu0)
-    lin = linearise_belt(params, op)
+    lin = linearize_belt(params, op)
     w_s, h = op.omega_s, 1e-7 * op.omega_p  # a slip step of 1e-7 (the knee is 1e-3 wide)
     fd_s = (nonlinear_torque(params, 1.0, op.omega_p, w_s + h, op.F_s)
             - nonlinear_torque(params, 1.0, op.omega_p, w_s - h, op.F_s)) / (2 * h)
@@ -62,7 +62,7 @@ def test_c_b_of_eq3_is_the_derivative_of_eqs1_2_at_ratio_1(params, nu0):
 def test_paper_c_b_is_the_primary_side_damping_away_from_ratio_1(params):
     # r_g = 2: the paper's c_b (with R_p) is r_g times the secondary-side derivative
     op = OperatingPoint(r_g=2.0, nu=0.01, F_s=1e4, omega_p=300.0)
-    lin = linearise_belt(params, op)
+    lin = linearize_belt(params, op)
     w_s, h = op.omega_s, 1e-7 * op.omega_s
 
     def fd(scale):

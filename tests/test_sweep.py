@@ -212,7 +212,7 @@ def test_plant_analysis_nominal_run_is_the_plant():
         "distribution": "uniform", "lower": P.actuation.k_w, "upper": P.actuation.k_w * (1 +
                                                                                    1e-12)}}}, P)
     res = monte_carlo(P, spread, 1, "plant", seed=0)
-    ref = nmp_analysis(P, [P.operating.r_g], f_max=100.0, drive="speed")  # the test bench
+    ref = nmp_analysis(P, [P.operating.r_g], f_max_hz=100.0, drive="speed")  # the test bench
     assert res.ok.all()
     assert res.values[0, res.outputs.index("n_rhp_zeros")] == ref.n_rhp[0] > 0
     np.testing.assert_allclose(res.values[0, res.outputs.index("rhp_zero_hz")],

@@ -210,7 +210,7 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
     params = get_params(params_file)
     op = operating_point(params, trim=True, ratio=r_g, slip=nu, clamp=F_s, speed=omega_p)
     settings = RigSettings(r_g=op.r_g, nu=op.nu, F_s=op.F_s, omega_p=op.omega_p, excite=excite,
-                           excitation=excitation, band=(lo, hi), rms=rms, duration=duration,
+                           excitation=excitation, band_hz=(lo, hi), rms=rms, duration=duration,
                            sample_rate=fs, coulomb=(friction, friction), seed=seed,
                            period=min(2048, int(duration * fs)),
                            settle=0.0)  # the records are written whole

@@ -222,7 +222,7 @@ def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, dampin
     base = operating_point(params, trim=True, slip=nu, tau=tau, clamp=F_s, load_torque=T_l,
                            speed=omega_p)
     check_ratio(r, params.variator, "--ratios")
-    res = nmp_analysis(params, r, base=base, f_max=f_max, slip=slip_signal,
+    res = nmp_analysis(params, r, base=base, f_max_hz=f_max, slip=slip_signal,
                        **_options(drive, load, damping, kinematics, shift_law, thrust_ratio))
     if plot:
         from ..plotting import plot_nmp

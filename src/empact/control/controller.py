@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
@@ -95,11 +96,17 @@ class Controller:
         """Number of controller states."""
         return self.A.shape[0]
 
-    def statespace(self):
+    def state_space(self):
         """The controller as a named `control.StateSpace`."""
         return statespace(self.A, self.B, self.C, self.D, inputs=self.inputs,
                           outputs=self.outputs, states=[f"xc{i}" for i in range(self.n)],
                           name=f"controller_{self.method}", dt=self.dt or None)
+
+    def statespace(self):
+        """Deprecated: `state_space`."""
+        warnings.warn("Controller.statespace is deprecated; use state_space",
+                      DeprecationWarning, stacklevel=2)
+        return self.state_space()
 
     def discretize(self, dt: float, method: str = "tustin") -> "Controller":
         """The controller at sample time `dt` [s] (Tustin by default; ``scipy.signal.

@@ -17,7 +17,8 @@ can hang (python-control issues #152 and #973) or return a useless controller.  
 3. sb10ad is called with a finite starting gamma (job 1, bisection), then again at 1.1 times
    the optimum (job 4), which gives a far better conditioned controller than the optimal one.
 
-Weights (outputs scaled by ``y_scale``: ratio 0.01, slip 0.001, so that 1 is a "unit error")::
+Weights (outputs scaled by `Y_SCALE`: ratio 0.01, slip 0.001, so that 1 is a "unit error"; the
+one source of the scaling, used to build the plant and to undo it on the controller)::
 
     W1_i = (s / M + w_b,i) / (s + w_b,i A)          performance on S: bandwidth w_b, peak M
     W2   = (s + w_bc / M_u) / (eps_u s + w_bc) / u_scale   control effort, biproper
@@ -40,15 +41,24 @@ control = lazy_module("control")
 slycot = lazy_module("slycot")
 sla = lazy_module("scipy.linalg")
 
-__all__ = ["check_wellposed", "residualize", "design_hinf", "mixed_sensitivity_plant"]
+__all__ = ["check_wellposed", "residualize", "design_hinf", "mixed_sensitivity_plant",
+           "Y_SCALE"]
+
+#: the size of a "unit error" of each measured output (ratio, slip) in the weights [-]
+Y_SCALE = (0.01, 0.001)
 
 
-def residualize(A, B, C, D, f_keep: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
-    """Remove the modes faster than `f_keep` [Hz] by residualisation (DC gain kept): real
+def residualize(A, B, C, D, f_keep_hz: float | None = None, *,
+                f_keep: float | None = None) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """Remove the modes faster than `f_keep_hz` [Hz] by residualisation (DC gain kept): real
     Schur form with the slow eigenvalues first; the fast block's states are set to their
-    quasi-static values (they must be stable)."""
+    quasi-static values (they must be stable).  (``f_keep``: deprecated name.)"""
+    if f_keep is not None:
+        warnings.warn("residualize(f_keep=) is deprecated; use f_keep_hz [Hz]",
+                      DeprecationWarning, stacklevel=2)
+        f_keep_hz = f_keep
     A, B, C, D = (np.asarray(M, float) for M in (A, B, C, D))
-    w = 2 * np.pi * f_keep
+    w = 2 * np.pi * f_keep_hz
     T, Z, k = sla.schur(A, output="real", sort=lambda re, im: np.hypot(re, im) < w)
     Bt, Ct = Z.T @ B, C @ Z
     A11, A12, A22 = T[:k, :k], T[:k, k:], T[k:, k:]
@@ -139,7 +149,7 @@ def _tf_weight(num, den):
 
 def mixed_sensitivity_plant(G, bandwidth_hz, *, M: float = 2.0, A_low: float = 1e-3,
                             u_bandwidth_hz: float = 20.0, u_scale: float = 1.0,
-                            y_scale=(0.01, 0.001)):
+                            y_scale=Y_SCALE):
     """``(P, W1, W2, Gs)``: the S / KS generalized plant of the output-scaled plant ``Gs``
     (python-control ``augw``) and its weights."""
     Sy = np.diag(1.0 / np.asarray(y_scale, float))
@@ -156,8 +166,8 @@ def mixed_sensitivity_plant(G, bandwidth_hz, *, M: float = 2.0, A_low: float = 1
 
 
 def design_hinf(family: PlantFamily, bandwidth_hz=(0.5, 0.2), *, slip: str = "nu",
-                nominal: tuple[int, ...] | None = None, f_keep: float = 100.0,
-                u_scale: float = 1.0) -> Controller:
+                nominal: tuple[int, ...] | None = None, f_keep_hz: float = 100.0,
+                u_scale: float = 1.0, f_keep: float | None = None) -> Controller:
     """H-infinity S / KS mixed-sensitivity controller on the family's nominal plant, checked
     against the whole family (`robustness_map`).
 
@@ -169,14 +179,20 @@ def design_hinf(family: PlantFamily, bandwidth_hz=(0.5, 0.2), *, slip: str = "nu
     slip : measured slip signal (see `empact.control.pi.design_pi`)
     nominal : grid index of the nominal plant (default: the well-posed point nearest the
         grid's middle; a given point that is ill-posed is an error)
-    f_keep : float
+    f_keep_hz : float
         Modes faster than this [Hz] are residualised before the synthesis.
     u_scale : float
         Servo torque regarded as large [N m] (scales W2).
+    f_keep : float, optional
+        Deprecated name of `f_keep_hz`.
     """
+    if f_keep is not None:
+        warnings.warn("design_hinf(f_keep=) is deprecated; use f_keep_hz [Hz]",
+                      DeprecationWarning, stacklevel=2)
+        f_keep_hz = f_keep
     if not np.all(family.ok):
         raise ParameterError("the family has points that did not trim")
-    f_keep = check_number("f_keep", f_keep, 1.0, 1e4, unit="Hz")
+    f_keep_hz = check_number("f_keep_hz", f_keep_hz, 1.0, 1e4, unit="Hz")
     if nominal is None:  # the well-posed point nearest the grid's middle
         middle = np.array([s // 2 for s in family.shape])
         order = sorted(np.ndindex(family.shape),
@@ -184,7 +200,7 @@ def design_hinf(family: PlantFamily, bandwidth_hz=(0.5, 0.2), *, slip: str = "nu
         for idx in order:
             try:
                 return design_hinf(family, bandwidth_hz, slip=slip, nominal=idx,
-                                   f_keep=f_keep, u_scale=u_scale)
+                                   f_keep_hz=f_keep_hz, u_scale=u_scale)
             except ParameterError as exc:
                 if "ill-posed" not in str(exc):
                     raise
@@ -195,7 +211,7 @@ def design_hinf(family: PlantFamily, bandwidth_hz=(0.5, 0.2), *, slip: str = "nu
     ii = [family.inputs.index(n) for n in outputs]
     A0, B0 = family.A[nominal], family.B[nominal][:, ii]
     C0 = measured_rows(family, measured)[nominal]
-    Ar, Br, Cr, Dr = residualize(A0, B0, C0, np.zeros((2, 2)), f_keep)
+    Ar, Br, Cr, Dr = residualize(A0, B0, C0, np.zeros((2, 2)), f_keep_hz)
     G = control.ss(Ar, Br, Cr, Dr)
     P, W1, W2, Gs = mixed_sensitivity_plant(G, bandwidth_hz, u_scale=u_scale)
     try:
@@ -212,17 +228,17 @@ def design_hinf(family: PlantFamily, bandwidth_hz=(0.5, 0.2), *, slip: str = "nu
             from None
     _, Ak, Bk, Ck, Dk = out[:5]
     # the controller works on the scaled errors: undo the output scaling
-    Sy = np.diag(1.0 / np.array([0.01, 0.001]))
+    Sy = np.diag(1.0 / np.asarray(Y_SCALE, float))
     ctrl = Controller(Ak, Bk @ Sy, Ck, Dk @ Sy, measured, outputs, 0.0, "hinf")
     rm = robustness_map(family, ctrl)
     worst = rm.worst()
     gm, pm = disk_gain_phase(worst["disk_margin"])
     design = {"gamma_opt": float(gam), "gamma": float(1.1 * gam), "n_states": int(Ak.shape[0]),
-              "bandwidth_hz": list(map(float, bandwidth_hz)), "f_keep_hz": f_keep,
+              "bandwidth_hz": list(map(float, bandwidth_hz)), "f_keep_hz": f_keep_hz,
               "reduced_order": int(Ar.shape[0]), "plant_order": int(A0.shape[0]),
               "weights": {"W1": "(s/2 + w_b) / (s + 1e-3 w_b)", "W2": "(s + w_bc/1e3) / "
                           "(1e-3 s + w_bc) / u_scale", "w_bc_hz": 20.0, "u_scale": u_scale,
-                          "y_scale": [0.01, 0.001]},
+                          "y_scale": list(Y_SCALE)},
               "worst": worst, "nominal": {k: float(v[nominal])
                                           for k, v in family.operating.items()},
               "family_axes": {k: v.tolist() for k, v in family.axes.items()},

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import csv
 import io
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import InitVar, dataclass, field
 from typing import Literal, Mapping
 
 import numpy as np
@@ -38,22 +39,23 @@ EXCITATIONS = ("multisine", "chirp", "noise")
 MEASURED = ("theta_mp", "theta_ms", "nu")
 
 
-def excitation_signal(kind: str, n: int, fs: float, band: tuple[float, float], rms: float,
+def excitation_signal(kind: str, n: int, fs: float, band_hz: tuple[float, float], rms: float,
                       seed: int = 0, period: int = 2048) -> np.ndarray:
-    """An excitation of `n` samples at `fs` [Hz] with content in `band` [Hz], scaled to `rms`.
+    """An excitation of `n` samples at `fs` [Hz] with content in `band_hz` [Hz], scaled to
+    `rms`.
 
     Parameters
     ----------
     kind : {"multisine", "chirp", "noise"}
     n : number of samples
     fs : sample rate [Hz]
-    band : (f_lo, f_hi) [Hz], 0 < f_lo < f_hi < fs / 2
+    band_hz : (f_lo, f_hi) [Hz], 0 < f_lo < f_hi < fs / 2
     rms : RMS value of the result (input units)
     seed : seed of the random phases / noise
     period : multisine period [samples]
     """
     check_choice("excitation", kind, EXCITATIONS)
-    f_lo, f_hi = band
+    f_lo, f_hi = band_hz
     if not 0 < f_lo < f_hi < fs / 2:
         raise ParameterError(f"band = ({f_lo:g}, {f_hi:g}) Hz: need 0 < f_lo < f_hi < fs/2 = "
                              f"{fs / 2:g} Hz")
@@ -89,7 +91,7 @@ class RigSettings:
         speed [rad/s] (Fig. 14: r_g = 0.5, nu0 = 0)
     excite : the servo torque excited, "T_mp" or "T_ms"
     excitation : "multisine", "chirp" or "noise"
-    band : excited band [Hz]
+    band_hz : excited band (lo, hi) [Hz] (``band``: deprecated name)
     rms : RMS of the excitation [N m]
     duration : record length [s]
     sample_rate : [Hz]
@@ -108,7 +110,7 @@ class RigSettings:
     omega_p: float = 300.0
     excite: Literal["T_mp", "T_ms"] = "T_mp"
     excitation: str = "multisine"
-    band: tuple[float, float] = (0.5, 100.0)
+    band_hz: tuple[float, float] = (0.5, 100.0)
     rms: float = 0.05
     duration: float = 16.384
     sample_rate: float = 1000.0
@@ -118,8 +120,13 @@ class RigSettings:
     noise: Mapping[str, float] = field(default_factory=lambda: {
         "theta_mp": 1e-4, "theta_ms": 1e-4, "nu": 1e-7})
     seed: int = 1
+    band: InitVar[tuple[float, float] | None] = None
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, band: tuple[float, float] | None = None) -> None:
+        if band is not None:
+            warnings.warn("RigSettings.band is deprecated; use band_hz [Hz]", DeprecationWarning,
+                          stacklevel=3)
+            object.__setattr__(self, "band_hz", tuple(band))
         check_choice("excite", self.excite, ("T_mp", "T_ms"))
         check_choice("excitation", self.excitation, EXCITATIONS)
         check_number("duration", self.duration, 0.0, lo_open=True, unit="s")
@@ -174,7 +181,7 @@ def run_rig(params, settings: RigSettings | None = None, *, progress: bool = Fal
     op = trim(model, OperatingPoint(r_g=s.r_g, nu=s.nu, F_s=s.F_s, omega_p=s.omega_p))
     n = int(round(s.duration * s.sample_rate))
     t = np.arange(n) / s.sample_rate
-    x = excitation_signal(s.excitation, n, s.sample_rate, s.band, s.rms, seed=s.seed,
+    x = excitation_signal(s.excitation, n, s.sample_rate, s.band_hz, s.rms, seed=s.seed,
                           period=s.period)
     j = model.inputs.index(s.excite)
     res = simulate(model, op.x, {s.excite: np.column_stack([t, op.u[j] + x])}, t[-1],

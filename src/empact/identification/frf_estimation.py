@@ -35,8 +35,8 @@ class FRFEstimate:
 
     Attributes
     ----------
-    frequencies_hz : numpy.ndarray
-        Frequencies [Hz], shape (n_f,), 0 .. fs/2.
+    omega : numpy.ndarray
+        Frequencies [rad/s], shape (n_f,), 0 .. pi fs (`frequencies_hz` in Hz).
     H : numpy.ndarray
         Complex FRF [output units / input units], shape (n_out, n_in, n_f).
     coherence : numpy.ndarray
@@ -53,7 +53,7 @@ class FRFEstimate:
         Number of Welch segments averaged.
     """
 
-    frequencies_hz: np.ndarray
+    omega: np.ndarray
     H: np.ndarray
     coherence: np.ndarray
     multiple_coherence: np.ndarray
@@ -61,6 +61,11 @@ class FRFEstimate:
     inputs: tuple[str, ...]
     outputs: tuple[str, ...]
     n_averages: int
+
+    @property
+    def frequencies_hz(self) -> np.ndarray:
+        """Frequencies [Hz], shape (n_f,)."""
+        return self.omega / (2 * np.pi)
 
 
 def _as_2d(name: str, x) -> np.ndarray:
@@ -191,6 +196,6 @@ def estimate_frf(u, y, fs: float, method: str = "H1", nperseg: int | None = None
     coherent = np.einsum("fji,fji->if", H1t.conj(), Suy).real     # S_yu S_uu^-1 S_uy
     multiple = _ratio(coherent, auto[m:])
     n_avg = 1 + (n_t - nperseg) // (nperseg - noverlap)
-    return FRFEstimate(frequencies_hz=f, H=Ht.transpose(2, 1, 0), coherence=coherence,
+    return FRFEstimate(omega=2 * np.pi * f, H=Ht.transpose(2, 1, 0), coherence=coherence,
                        multiple_coherence=multiple, method=method, inputs=in_names,
                        outputs=out_names, n_averages=int(n_avg))

@@ -31,7 +31,7 @@ from ..errors import ParameterError
 from ..lti import channel_zeros, oscillatory
 from ..nonlinear.linearization import plant
 from ..params import OperatingPoint, Params
-from ..slip.coupling import linearise_belt
+from ..slip.coupling import linearize_belt
 from ..slip.stability import stability_map
 
 __all__ = ["ANALYSES", "OUTPUTS", "AnalysisContext", "RunFailed", "evaluate"]
@@ -111,7 +111,7 @@ def _plant(params: Params, context: AnalysisContext) -> dict[str, float]:
 def _slip(params: Params, context: AnalysisContext) -> dict[str, float]:
     op: OperatingPoint = params.operating
     sm = stability_map(params, "nu", [op.nu], "r_g", [op.r_g], base=op, workers=1)
-    belt = linearise_belt(params, op)
+    belt = linearize_belt(params, op)
     return {"max_real": float(sm.max_real[0, 0]), "min_damping": float(sm.min_damping[0, 0]),
             "c_b": belt.c_b, "mu": belt.mu}
 

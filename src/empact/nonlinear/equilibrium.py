@@ -170,8 +170,10 @@ def trim(model: EmpactModel, op: OperatingPoint | float, omega_p: float | None =
     op : OperatingPoint
         The request: ``r_g`` inside the variator's range, ``omega_p`` > 0 and two of the
         slip (``nu`` or ``tau``), ``F_s`` > 0 and ``T_l``.  With ``belt="locked"`` give
-        ``F_s`` and ``T_l`` (the slip is 0).  (The form ``trim(model, r_g, omega_p, nu=...,
-        F_s=..., T_l=...)`` is deprecated.)
+        ``F_s`` and ``T_l`` (the slip is 0).
+    omega_p, nu, F_s, T_l : float, optional
+        The deprecated form ``trim(model, r_g, omega_p, nu=..., F_s=..., T_l=...)`` of empact
+        0.1 (a DeprecationWarning); give an `OperatingPoint` instead.
 
     Returns
     -------

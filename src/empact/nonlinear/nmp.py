@@ -20,6 +20,7 @@ ratio below -0.001): lightly damped zeros on the imaginary axis stay out of the 
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -81,7 +82,7 @@ class NmpResult:
     ----------
     r_g : ratios [-], shape (n_r,)
     zeros : tuple of arrays
-        Finite zeros [rad/s] (complex) of T_mp -> nu at each ratio, below `f_max`.
+        Finite zeros [rad/s] (complex) of T_mp -> nu at each ratio, below `f_max_hz`.
     rhp_zeros : tuple of arrays
         Those with a real part above 1e-3 of their magnitude (zeros at the origin, below
         1e-3 rad/s, are not counted).
@@ -92,7 +93,7 @@ class NmpResult:
     geometry : BeltLengthChange
     operating : dict
         nu, F_s [N], omega_p [rad/s], model options.
-    f_max : float
+    f_max_hz : float
         Zeros above this frequency [Hz] are left out.
     """
 
@@ -104,7 +105,14 @@ class NmpResult:
     slip: str
     geometry: BeltLengthChange
     operating: dict
-    f_max: float
+    f_max_hz: float
+
+    @property
+    def f_max(self) -> float:
+        """Deprecated: `f_max_hz`."""
+        warnings.warn("NmpResult.f_max is deprecated; use f_max_hz [Hz]", DeprecationWarning,
+                      stacklevel=2)
+        return self.f_max_hz
 
     def summary(self) -> list[dict]:
         """One row per ratio: RHP zeros [Hz] as (real, imag) pairs."""
@@ -115,8 +123,8 @@ class NmpResult:
 
 
 def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
-                 base: OperatingPoint | None = None, f_max: float = 200.0,
-                 slip: str = "nu", **options) -> NmpResult:
+                 base: OperatingPoint | None = None, f_max_hz: float = 200.0,
+                 slip: str = "nu", f_max: float | None = None, **options) -> NmpResult:
     """Zeros of the exactly linearised T_mp -> nu transfer over `ratios`.
 
     Parameters
@@ -128,16 +136,22 @@ def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
         Slip (on the rising branch of the traction curve, so the plant is stable), clamping
         force and primary speed of the points (default: ``params.operating``); its ratio is
         replaced by each of `ratios`.
-    f_max : float
-        Keep zeros below this frequency [Hz], > 0.
+    f_max_hz : float
+        Keep zeros below this frequency [Hz], > 0.  (``f_max``: deprecated name.)
     slip : {"nu", "nu_r"}
         The slip signal (see the module docstring).
+    f_max : float, optional
+        Deprecated name of `f_max_hz`.
     **options
         `empact.nonlinear.model.ModelOptions` (default: moderate damping, torque-controlled
         drive and load, the machine's kinematics and shift law).
     """
     check_choice("slip", slip, SLIPS)
-    f_max = check_number("f_max", f_max, 0.0, lo_open=True, unit="Hz")
+    if f_max is not None:
+        warnings.warn("nmp_analysis(f_max=) is deprecated; use f_max_hz [Hz]",
+                      DeprecationWarning, stacklevel=2)
+        f_max_hz = f_max
+    f_max_hz = check_number("f_max_hz", f_max_hz, 0.0, lo_open=True, unit="Hz")
     base = params.operating if base is None else base
     r = np.atleast_1d(np.asarray(ratios, float))
     model = nonlinear_model(params, **options)
@@ -146,13 +160,13 @@ def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
         sys = plant(params, base.replace(r_g=float(rg)), model=model,
                     disturbance=False).system
         z = channel_zeros(sys, "T_mp", slip, max_abs=1e7)
-        z = z[np.abs(z) < 2 * np.pi * f_max]
+        z = z[np.abs(z) < 2 * np.pi * f_max_hz]
         zs.append(z)
         rhp.append(z[(z.real > 1e-3 * np.abs(z)) & (np.abs(z) > 1e-3)])
     real = [int(np.sum(np.abs(z.imag) < 1e-6 * np.abs(z))) for z in rhp]
     return NmpResult(r_g=r, zeros=tuple(zs), rhp_zeros=tuple(rhp),
                      n_rhp=np.array([len(z) for z in rhp]), n_rhp_real=np.array(real), slip=slip,
-                     geometry=belt_length_change(params, r), f_max=f_max,
+                     geometry=belt_length_change(params, r), f_max_hz=f_max_hz,
                      operating={"nu": base.nu, "F_s": base.F_s, "omega_p": base.omega_p,
                                 "options": {k: getattr(model.options, k)
                                             for k in model.options.__dataclass_fields__}})

@@ -1,6 +1,6 @@
 """Figures drawn from result objects (the only part of empact that imports matplotlib).
 
-Every function takes result objects, draws into the caller's axes (``ax=`` / ``axes=``) or a
+Every function takes result objects, draws into the caller's axes (``ax=``: one Axes, or an array of them) or a
 new figure (no pyplot state), with one style (`STYLE`), and returns a `Plot` (figure, axes,
 artists); `save_figure` writes PNG / SVG / PDF atomically.
 

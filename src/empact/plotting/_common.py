@@ -1,7 +1,7 @@
 """Shared plotting machinery (private): the `Plot` result, axes handling, one style, saving.
 
-Every plotting function of `empact.plotting` takes result objects and optional axes (``ax``
-or ``axes``, to draw into a figure of the caller's), draws inside `STYLE`, and returns a
+Every plotting function of `empact.plotting` takes result objects and optional axes (``ax``,
+to draw into a figure of the caller's), draws inside `STYLE`, and returns a
 `Plot` with the figure, the axes and the artists it made.  Figures are built without pyplot
 (no global state); `save_figure` writes PNG and SVG atomically.
 """
@@ -10,6 +10,7 @@ from __future__ import annotations
 import functools
 import os
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -58,9 +59,14 @@ class Plot:
 
 
 def styled(fn: Callable[..., Plot]) -> Callable[..., Plot]:
-    """Decorator: draw inside ``matplotlib.rc_context(STYLE)``."""
+    """Decorator: draw inside ``matplotlib.rc_context(STYLE)``; the keyword ``axes=`` of empact
+    0.1 still works for one release (a DeprecationWarning names ``ax=``)."""
     @functools.wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Plot:
+        if "axes" in kwargs:
+            warnings.warn(f"{fn.__name__}(axes=...) is deprecated; use ax=", DeprecationWarning,
+                          stacklevel=2)
+            kwargs["ax"] = kwargs.pop("axes")
         with mpl.rc_context(STYLE):
             return fn(*args, **kwargs)
     return wrapper

@@ -19,11 +19,11 @@ __all__ = ["plot_family_poles", "plot_loop_shapes", "plot_robustness_maps",
 
 
 @styled
-def plot_family_poles(family: PlantFamily, f_max: float = 60.0, title: str = "",
-                      axes: Any = None) -> Plot:
+def plot_family_poles(family: PlantFamily, f_max_hz: float = 60.0, title: str = "",
+                      ax: Any = None) -> Plot:
     """Poles (left) and the zeros of T_mp -> r_g and T_ms -> nu (right) of every plant of a
-    family below `f_max` [Hz], coloured by ratio (complex plane in Hz)."""
-    fig, axs = new_axes(axes, 1, 2, size=(11, 4.2))
+    family below `f_max_hz` [Hz], coloured by ratio (complex plane in Hz)."""
+    fig, axs = new_axes(ax, 1, 2, size=(11, 4.2))
     r = family.operating["r_g"].ravel()
     norm = (np.log(r) - np.log(r).min()) / max(np.ptp(np.log(r)), 1e-12)
     cmap = matplotlib.colormaps["viridis"]
@@ -34,11 +34,11 @@ def plot_family_poles(family: PlantFamily, f_max: float = 60.0, title: str = "",
             continue
         c = cmap(norm[k])
         p = np.linalg.eigvals(family.A[idx])
-        p = p[np.abs(p) < 2 * np.pi * f_max] / (2 * np.pi)
+        p = p[np.abs(p) < 2 * np.pi * f_max_hz] / (2 * np.pi)
         artists += axs[0, 0].plot(p.real, p.imag, "x", color=c, ms=4)
         sys = family.plant(idx).system
         for inp, out, mk in (("T_mp", "r_g", "o"), ("T_ms", "nu", "s")):
-            z = channel_zeros(sys, inp, out, max_abs=2 * np.pi * f_max)
+            z = channel_zeros(sys, inp, out, max_abs=2 * np.pi * f_max_hz)
             z = z / (2 * np.pi)
             artists += axs[0, 1].plot(z.real, z.imag, mk, mfc="none", color=c, ms=4)
     for ax, what in zip(axs[0], ("poles", "zeros (o: T_mp -> r_g, s: T_ms -> nu)")):
@@ -56,12 +56,12 @@ def plot_family_poles(family: PlantFamily, f_max: float = 60.0, title: str = "",
 @styled
 def plot_loop_shapes(family: PlantFamily, controllers: Mapping[str, Controller],
                      f_hz: np.ndarray | None = None, title: str = "",
-                     axes: Any = None) -> Plot:
+                     ax: Any = None) -> Plot:
     """Diagonal loop gains |L_ii| = |(K G)_ii| over the family (thin lines, one per plant)
     for each controller (one column per loop, one colour per controller)."""
     f = np.logspace(-2, 2, 150) if f_hz is None else np.asarray(f_hz)
     w = 2 * np.pi * f
-    fig, axs = new_axes(axes, 1, 2, size=(11, 4.0), sharex=True)
+    fig, axs = new_axes(ax, 1, 2, size=(11, 4.0), sharex=True)
     artists = []
     for c, (name, ctrl) in enumerate(controllers.items()):
         G = plant_responses(family, ctrl.outputs, ctrl.measured, w).reshape(
@@ -87,12 +87,12 @@ def plot_loop_shapes(family: PlantFamily, controllers: Mapping[str, Controller],
 
 @styled
 def plot_robustness_maps(family: PlantFamily, maps: Mapping[str, RobustnessMap],
-                         title: str = "", axes: Any = None) -> Plot:
+                         title: str = "", ax: Any = None) -> Plot:
     """Multiloop disk margin over the family's two axes, one panel per controller."""
     names = list(family.axes)
     if len(names) != 2:
         raise ValueError("robustness maps need a family with two axes")
-    fig, axs = new_axes(axes, 1, len(maps), size=(5.5 * len(maps), 4.0))
+    fig, axs = new_axes(ax, 1, len(maps), size=(5.5 * len(maps), 4.0))
     artists = []
     x, y = family.axes[names[0]], family.axes[names[1]]
     for ax, (name, m) in zip(axs[0], maps.items()):
@@ -116,10 +116,10 @@ def plot_robustness_maps(family: PlantFamily, maps: Mapping[str, RobustnessMap],
 
 @styled
 def plot_closed_loop(runs: Sequence[ClosedLoopResult], title: str = "",
-                     axes: Any = None) -> Plot:
+                     ax: Any = None) -> Plot:
     """Slip, ratio and clamping force over time for closed-loop runs (one colour per run,
     references dashed)."""
-    fig, axs = new_axes(axes, 3, 1, size=(11, 7.5), sharex=True)
+    fig, axs = new_axes(ax, 3, 1, size=(11, 7.5), sharex=True)
     artists = []
     for c, run in enumerate(runs):
         res = run.result

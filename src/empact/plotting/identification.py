@@ -17,7 +17,7 @@ __all__ = ["plot_frf_estimate", "plot_identified_plant"]
 def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None = None,
                       models: Sequence[FrequencyResponse] = (), title: str = "",
                       fmin: float | None = None, min_coherence: float = 0.5,
-                      axes: Any = None) -> Plot:
+                      ax: Any = None) -> Plot:
     """Magnitude [dB], phase [deg] and coherence of an FRF estimate, one column per pair.
 
     Parameters
@@ -29,10 +29,10 @@ def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None 
     fmin : lowest frequency shown [Hz] (default: the first non-zero bin)
     min_coherence : the estimate's phase is drawn only where the coherence reaches this
         (elsewhere noise, unwrapped, runs off by many turns); the magnitude is drawn everywhere
-    axes : shape (3, len(pairs)); default a new figure
+    ax : shape (3, len(pairs)); default a new figure
     """
     pairs = list(pairs or [(o, i) for i in est.inputs for o in est.outputs])
-    fig, ax = new_axes(axes, 3, len(pairs), size=(4.4 * len(pairs) + 0.8, 7.2), sharex="col")
+    fig, ax = new_axes(ax, 3, len(pairs), size=(4.4 * len(pairs) + 0.8, 7.2), sharex="col")
     f = est.frequencies_hz
     keep = (f >= (fmin if fmin is not None else f[1])) & np.all(np.isfinite(est.H), axis=(0, 1))
     artists = []
@@ -67,7 +67,7 @@ def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None 
 
 
 @styled
-def plot_identified_plant(results, f_hz: np.ndarray, title: str = "", axes: Any = None) -> Plot:
+def plot_identified_plant(results, f_hz: np.ndarray, title: str = "", ax: Any = None) -> Plot:
     """Fig. 2: |(T_mp, T_ms) -> (r_g, nu, nu_r)| of identified (solid) and exact (dashed)
     models, one row per output.
 
@@ -76,12 +76,12 @@ def plot_identified_plant(results, f_hz: np.ndarray, title: str = "", axes: Any 
     results : sequence of `empact.experiments.plant_id.PlantIdentification`
     f_hz : frequencies [Hz]
     title : figure title
-    axes : shape (n_outputs, 2); default a new figure
+    ax : shape (n_outputs, 2); default a new figure
     """
     names_in = tuple(results[0].realization.inputs)
     names_out = tuple(results[0].realization.outputs)
     n_out = len(names_out)
-    fig, ax = new_axes(axes, n_out, 2, size=(10, 2.6 * n_out + 1.3), sharex=True)
+    fig, ax = new_axes(ax, n_out, 2, size=(10, 2.6 * n_out + 1.3), sharex=True)
     w = 2 * np.pi * np.asarray(f_hz)
     artists = []
     for k, res in enumerate(results):

@@ -31,7 +31,7 @@ def _mode_bars(ax, modes: Modes, idx: Sequence[int], values: np.ndarray,
 
 @styled
 def plot_mode_shapes(modes: Modes, split: int | None = None, title: str = "",
-                     axes: Any = None) -> Plot:
+                     ax: Any = None) -> Plot:
     """Normalised mode shapes as bars per coordinate (Fig. 4 / Fig. 8 left).
 
     Parameters
@@ -40,11 +40,11 @@ def plot_mode_shapes(modes: Modes, split: int | None = None, title: str = "",
     split : modes with index >= `split` (default: none) go to a second panel (the
         high-frequency modes)
     title : figure title
-    axes : one Axes, or two (shape (1, 2)) with `split`; default a new figure
+    ax : one Axes, or two (shape (1, 2)) with `split`; default a new figure
     """
     n = modes.shapes.shape[1]
     groups = [list(range(n))] if split is None else [list(range(split)), list(range(split, n))]
-    fig, ax = new_axes(axes, 1, len(groups), size=(4.8 * len(groups) + 1, 3.8))
+    fig, ax = new_axes(ax, 1, len(groups), size=(4.8 * len(groups) + 1, 3.8))
     labels = [f"q{i + 1}\n{symbol(name)}" for i, name in enumerate(modes.coordinates)]
     artists = []
     for a, idx in zip(ax[0], groups):
@@ -79,7 +79,7 @@ def plot_modal_energy(modes: Modes, title: str = "", ax: Any = None) -> Plot:
 
 @styled
 def plot_bode(responses: Sequence[FrequencyResponse], pairs: Sequence[tuple[str, str]],
-              title: str = "", phase: bool = True, units: str = "", axes: Any = None) -> Plot:
+              title: str = "", phase: bool = True, units: str = "", ax: Any = None) -> Plot:
     """Bode plot (magnitude [dB], phase [deg] over frequency [Hz]) of several responses.
 
     Parameters
@@ -89,7 +89,7 @@ def plot_bode(responses: Sequence[FrequencyResponse], pairs: Sequence[tuple[str,
     title : figure title
     phase : draw the phase row under the magnitude row
     units : unit of the response for the magnitude label (e.g. ``"rad/(N m)"``)
-    axes : axes of shape (2, len(pairs)) (or (1, len(pairs)) without phase); default new
+    ax : axes of shape (2, len(pairs)) (or (1, len(pairs)) without phase); default new
 
     Notes
     -----
@@ -97,7 +97,7 @@ def plot_bode(responses: Sequence[FrequencyResponse], pairs: Sequence[tuple[str,
     frequency (`empact.lti.unwrapped_phase_deg`).
     """
     rows = 2 if phase else 1
-    fig, ax = new_axes(axes, rows, len(pairs), size=(4.4 * len(pairs) + 1, 2.7 * rows + 0.8),
+    fig, ax = new_axes(ax, rows, len(pairs), size=(4.4 * len(pairs) + 1, 2.7 * rows + 0.8),
                        sharex="col")
     artists = []
     for col, (out, inp) in enumerate(pairs):

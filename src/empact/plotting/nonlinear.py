@@ -21,13 +21,13 @@ __all__ = ["plot_nmp", "plot_simulation", "plot_plant_magnitude"]
 
 
 @styled
-def plot_nmp(result: NmpResult, title: str = "", axes: Any = None) -> Plot:
+def plot_nmp(result: NmpResult, title: str = "", ax: Any = None) -> Plot:
     """Left: Delta_x and the belt-length change over the ratio; right: zeros of T_mp -> nu.
 
     The zeros are drawn in the complex plane [Hz], one colour per ratio; right-half-plane
     zeros filled.
     """
-    fig, axs = new_axes(axes, 1, 2, size=(11, 4.2))
+    fig, axs = new_axes(ax, 1, 2, size=(11, 4.2))
     g = result.geometry
     ax = axs[0, 0]
     artists = []
@@ -76,7 +76,7 @@ def plot_simulation(result: SimulationResult,
                                                            ("omega_p", "omega_s"),
                                                            ("T_b", "T_l_act", "T_d_act"),
                                                            ("T_mp_act",)),
-                    title: str = "", axes: Any = None) -> Plot:
+                    title: str = "", ax: Any = None) -> Plot:
     """Time histories, one panel per group of signal names (missing names are skipped).
 
     Each panel's y label gives the unit of its signals (`empact.nonlinear.model` units; slip
@@ -87,7 +87,7 @@ def plot_simulation(result: SimulationResult,
     groups = [g for g in groups if g]
     ncol = 2
     nrow = (len(groups) + 1) // 2
-    fig, axs = new_axes(axes, nrow, ncol, size=(11, 2.4 * nrow + 0.8), sharex=True)
+    fig, axs = new_axes(ax, nrow, ncol, size=(11, 2.4 * nrow + 0.8), sharex=True)
     units = {**STATE_UNITS, **INPUT_UNITS, **OUTPUT_UNITS}
     artists = []
     for k, grp in enumerate(groups):
@@ -113,14 +113,14 @@ def plot_simulation(result: SimulationResult,
 
 @styled
 def plot_plant_magnitude(responses: Sequence[FrequencyResponse], title: str = "",
-                         axes: Any = None) -> Plot:
+                         ax: Any = None) -> Plot:
     """Magnitudes of the plant (e.g. T_mp, T_ms, T_l -> r_g, nu, nu_r), one line style per
     response (Fig. 2).
 
-    `axes`: shape (n_out, n_in) of the responses; default a new figure.
+    `ax`: shape (n_out, n_in) of the responses; default a new figure.
     """
     n_out, n_in = len(responses[0].outputs), len(responses[0].inputs)
-    fig, axs = new_axes(axes, n_out, n_in, size=(3.6 * n_in + 1.2, 2.3 * n_out + 1.0),
+    fig, axs = new_axes(ax, n_out, n_in, size=(3.6 * n_in + 1.2, 2.3 * n_out + 1.0),
                         sharex=True)
     artists = []
     for k, resp in enumerate(responses):

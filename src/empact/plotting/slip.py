@@ -84,9 +84,9 @@ def plot_belt_root_locus(rl: BeltRootLocus, title: str = "", ax: Any = None) -> 
 
 @styled
 def plot_traction(curves: TractionCurves, names: Sequence[str] | None = None,
-                  title: str = "", axes: Any = None) -> Plot:
+                  title: str = "", ax: Any = None) -> Plot:
     """Traction coefficient and its slope over slip, one line per ratio (Fig. 10)."""
-    fig, axs = new_axes(axes, 1, 2, size=(10.0, 3.8))
+    fig, axs = new_axes(ax, 1, 2, size=(10.0, 3.8))
     x = 100 * curves.nu
     artists = []
     for k, r in enumerate(curves.r_g):
@@ -168,26 +168,26 @@ def plot_pole_sweep(sweep: PoleSweep, title: str = "", uncoupled_hz: Sequence[fl
 
 
 def plot_slip_bode(responses: Sequence[FrequencyResponse], title: str = "",
-                   axes: Any = None) -> Plot:
+                   ax: Any = None) -> Plot:
     """Bode plot of ``F_s -> nu`` responses (Fig. 12), one line per operating point.
 
-    `axes`: shape (2, 1) (magnitude, phase); default a new figure.
+    `ax`: shape (2, 1) (magnitude, phase); default a new figure.
     """
     return plot_bode(responses, [(responses[0].outputs[0], responses[0].inputs[0])], title=title,
-                     units="1/N", axes=axes)
+                     units="1/N", ax=ax)
 
 
 @styled
 def plot_zero_locus(zl: ZeroLocus, title: str = "",
                     reference_hz: dict[float, Sequence[float]] | None = None,
-                    axes: Any = None) -> Plot:
+                    ax: Any = None) -> Plot:
     """Zeros of ``F_s -> nu`` over the ratio (Fig. 13).
 
     Left: the zeros in the complex plane (upper half), coloured by ``r_g``, arrows for
     increasing ``r_g``.  Right: their magnitudes [Hz] over ``r_g`` with the coupled-limit poles
     (dashed) and optional reference points ``{r_g: [Hz, ...]}`` (e.g. Table 2).
     """
-    fig, axs = new_axes(axes, 1, 2, size=(10.5, 4.2))
+    fig, axs = new_axes(ax, 1, 2, size=(10.5, 4.2))
     ax, ax2 = axs[0]
     Z = zl.zeros
     artists = []

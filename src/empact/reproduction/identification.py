@@ -230,8 +230,8 @@ def fig14(params: Params) -> Fig14:
         lin = linearize(rec.op, ["T_mp", "T_ms"], ["theta_mp", "theta_ms", "nu"])
         f = est.frequencies_hz[1:]
         model = system_response(lin, 2 * np.pi * f, label="linearised, no friction")
-        band = (est.frequencies_hz >= rec.settings.band[0]) & \
-            (est.frequencies_hz <= rec.settings.band[1])
+        band = (est.frequencies_hz >= rec.settings.band_hz[0]) & \
+            (est.frequencies_hz <= rec.settings.band_hz[1])
         for out, inp in pairs:
             i = est.outputs.index(out)
             h, fl = np.abs(est.H[i, 0]), est.frequencies_hz

@@ -26,6 +26,7 @@ the parameter set).
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,7 +37,8 @@ from ..variator.geometry import variator_state
 from ..params import OPERATING_VARIABLES, OperatingPoint, Params
 from ..variator.traction import TractionModel, traction_from_params
 
-__all__ = ["VARIABLES", "BeltLinearisation", "slip", "belt_torque", "linearise_belt",
+__all__ = ["VARIABLES", "BeltLinearisation", "slip", "belt_torque", "linearize_belt",
+           "linearise_belt",
            "linearisation_terms", "check_speed", "check_clamp", "check_slip"]
 
 #: Operating-point variables, their units and descriptions (names as in the paper).
@@ -157,7 +159,7 @@ def linearisation_terms(params: Params, r_g: ArrayLike, nu: ArrayLike, F_s: Arra
                 c_s=c_s, c_b=r * c_s, g_F=2 * mu * geo.R_s / cb, rho=r * (1 - n))
 
 
-def linearise_belt(params: Params, op: OperatingPoint | None = None,
+def linearize_belt(params: Params, op: OperatingPoint | None = None,
                    traction: TractionModel | None = None) -> BeltLinearisation:
     """Eq. 3 at `op` (default: the ``[operating]`` point of `params`)."""
     op = OperatingPoint.from_params(params) if op is None else op
@@ -165,3 +167,11 @@ def linearise_belt(params: Params, op: OperatingPoint | None = None,
     return BeltLinearisation(op=op, **{k: float(t[k]) for k in
                                        ("R_p", "R_s", "mu", "dmu", "c_b", "c_s", "g_F", "rho")})
 
+
+
+def linearise_belt(params: Params, op: OperatingPoint | None = None,
+                   traction: TractionModel | None = None) -> BeltLinearisation:
+    """Deprecated: `linearize_belt`."""
+    warnings.warn("linearise_belt is deprecated; use linearize_belt", DeprecationWarning,
+                  stacklevel=2)
+    return linearize_belt(params, op, traction)

@@ -39,7 +39,7 @@ from ..linear.driveline import COORDINATES, driveline_model
 from ..lti import FrequencyResponse, frequency_response, statespace, transmission_zeros
 from ..params import OperatingPoint, Params
 from ..variator.traction import TractionModel
-from .coupling import BeltLinearisation, linearisation_terms, linearise_belt
+from .coupling import BeltLinearisation, linearisation_terms, linearize_belt
 
 __all__ = ["STATES", "INPUTS", "OUTPUTS", "N_STRUCTURAL_ZEROS", "REDUCED_STATES", "SlipModel",
            "slip_model", "slip_state_space", "state_matrices", "reduced_matrices",
@@ -263,7 +263,7 @@ def slip_model(params: Params, op: OperatingPoint | None = None,
     traction : traction model (default `traction_from_params(params)`)
     """
     op = OperatingPoint.from_params(params) if op is None else op
-    belt = linearise_belt(params, op, traction)
+    belt = linearize_belt(params, op, traction)
     A, B, C, D = (m[0] for m in state_matrices(params, [op.r_g], [op.nu], [op.F_s],
                                                [op.omega_p], traction))
     return SlipModel(belt=belt, A=A, B=B, C=C, D=D, name="slip")
