@@ -378,3 +378,41 @@ def test_operating_point_by_torque_ratio(params):
         OperatingPoint(r_g=1.0, omega_p=300.0, nu=0.01, tau=0.9)
     with pytest.raises(ParameterError, match=r"operating.tau = 1.5: allowed range is \[-1, 1\]"):
         OperatingPoint(r_g=1.0, omega_p=300.0, tau=1.5, F_s=1e4)
+
+
+@pytest.mark.parametrize("key, new", [("controller", r"\[controller\] file"),
+                                      ("controller_rate", r"\[controller\] rate"),
+                                      ("feedforward", r"\[controller\] feedforward"),
+                                      ("rtol", r"\[solver\] rtol")])
+def test_old_closed_loop_layout_names_the_new_key(tmp_path, key, new):
+    """A scenario in the 0.1 closed-loop layout (controller keys in [scenario]) gets one line
+    naming the key to use instead."""
+    value = '"shipped:pi"' if key == "controller" else ("true" if key == "feedforward"
+                                                        else "1000.0")
+    path = tmp_path / "old.toml"
+    path.write_text(f"[scenario]\nduration = 1.0\n{key} = {value}\n[initial]\nr_g = 1\n"
+                    "omega_p = 300.0\nnu = 0.01\nT_l = 50.0\n")
+    with pytest.raises(ParameterError, match=rf"scenario\.{key} belongs in {new} now") as exc:
+        load_scenario(path)
+    assert "\n" not in str(exc.value)
+
+
+def test_one_scenario_format_for_both_loops(tmp_path, params):
+    """The same loader reads an open-loop and a closed-loop file; a closed-loop one needs the
+    controller (run_scenario refuses it with the function to use), and the controller's
+    servo inputs may not also be signals."""
+    from empact.control.closed_loop import run_closed_loop
+
+    sc = load_scenario(example_path("slip-load-step-r1"))
+    assert sc.closed_loop and sc.controller.file == "shipped:pi" and "nu" in sc.references
+    with pytest.raises(ParameterError, match="run it with empact.run_closed_loop"):
+        run_scenario(sc, params)
+    run = run_closed_loop(sc.with_duration(0.2), params)
+    assert run.result.complete
+    path = tmp_path / "bad.toml"
+    path.write_text('[scenario]\nduration = 1.0\n[controller]\nfile = "shipped:pi"\n'
+                    "[initial]\nr_g = 1\nomega_p = 300.0\nnu = 0.01\nT_l = 50.0\n"
+                    "[inputs]\nT_ms = [[0.0, 1.0]]\n")
+    with pytest.raises(ParameterError, match=r"unknown input 'T_ms' for this model \(the "
+                                             r"\[controller\] drives the servos\)"):
+        load_scenario(path)
