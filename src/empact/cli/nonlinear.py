@@ -75,21 +75,28 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
 
 
 def _options(drive: str, load: str, damping: str, kinematics: str, shift_law: str,
-             thrust_ratio: str | None) -> dict:
+             thrust_ratio: str | None, creep_map: str | None = None) -> dict:
     opts = {"drive": drive, "load": load, "damping": damping, "kinematics": kinematics,
             "shift_law": shift_law}
     if thrust_ratio:
         from ..variator.thrust_ratio import load_thrust_ratio
 
         opts["thrust_ratio"] = load_thrust_ratio(thrust_ratio)
+    if creep_map:
+        from ..variator.shift_law import load_creep_map
+
+        opts["creep_map"] = load_creep_map(creep_map)
     return opts
 
 
+_TABLES = ("thrust_ratio", "creep_map")
+
+
 def _described(opts: dict) -> dict:
-    """The model options for JSON / metadata (a thrust-ratio table by its source)."""
-    return {k: (v.source if k == "thrust_ratio" and v is not None else v)
+    """The model options for JSON / metadata (a tabulated map by its source)."""
+    return {k: (v.source if k in _TABLES and v is not None else v)
             for k, v in opts.items()
-            if not (k in ("thrust_ratio", "reference_ratio") and v is None)}
+            if not (k in _TABLES + ("reference_ratio",) and v is None)}
 
 
 def model_options_for(drive: str = "torque") -> list:
@@ -114,6 +121,9 @@ def model_options_for(drive: str = "torque") -> list:
         click.option("--thrust-ratio", "thrust_ratio", type=click.Path(dir_okay=False),
                      default=None, help="Measured thrust-ratio map kappa*(tau, r_g), .csv "
                      "(r_g,tau,kappa) or .toml (default: the analytic [thrust_ratio])."),
+        click.option("--creep-map", "creep_map", type=click.Path(dir_okay=False),
+                     default=None, help="Measured shift-speed map K_c(r_g, F_s), .csv "
+                     "(r_g,F_s,K_c) or .toml (default: the analytic creep law of [shift])."),
     ]
 
 
@@ -145,7 +155,7 @@ def _add(options):
 @params_option
 @force_option
 def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, drive, load,
-                  kinematics, shift_law, thrust_ratio, params_file, force) -> None:
+                  kinematics, shift_law, thrust_ratio, creep_map, params_file, force) -> None:
     """Exact linear plant at an operating point: A, B, C, D.
 
     Inputs T_mp, T_ms (control) and the load T_l (or omega_l_ref with --load speed) as the
@@ -165,7 +175,7 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, dr
     params = get_params(params_file)
     point = operating_point(params, trim=True, ratio=r_g, slip=nu, tau=tau, clamp=F_s,
                             load_torque=T_l, speed=omega_p)
-    opts = _options(drive, load, damping, kinematics, shift_law, thrust_ratio)
+    opts = _options(drive, load, damping, kinematics, shift_law, thrust_ratio, creep_map)
     model = nonlinear_model(params, **opts)
     op = trim(model, point)
     dist = disturbance_input(model)
@@ -205,7 +215,8 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, dr
 @json_options
 @force_option
 def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, damping, drive, load,
-            kinematics, shift_law, thrust_ratio, params_file, as_json, json_out, force) -> None:
+            kinematics, shift_law, thrust_ratio, creep_map, params_file, as_json, json_out,
+            force) -> None:
     """Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio (Sec 2.3)."""
     from ..nonlinear.nmp import nmp_analysis
 
@@ -223,7 +234,8 @@ def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, dampin
                            speed=omega_p)
     check_ratio(r, params.variator, "--ratios")
     res = nmp_analysis(params, r, base=base, f_max_hz=f_max, slip=slip_signal,
-                       **_options(drive, load, damping, kinematics, shift_law, thrust_ratio))
+                       **_options(drive, load, damping, kinematics, shift_law, thrust_ratio,
+                                  creep_map))
     if plot:
         from ..plotting import plot_nmp
 

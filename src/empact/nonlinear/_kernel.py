@@ -4,9 +4,10 @@ Private: the public interface, the state ordering and the sign conventions are d
 `empact.nonlinear`.  Everything here works on flat arrays:
 
 * ``x`` state, shape (n,); ``u`` inputs, shape (4,);
-* ``p`` float parameters, shape (NP + n_table,), laid out by the ``P_*`` indices below and
-  followed by an optional tabulated thrust-ratio map
-  (`empact.thrust_ratio.TabulatedThrustRatio.encode`);
+* ``p`` float parameters, shape (NP + n_tables,), laid out by the ``P_*`` indices below and
+  followed by the optional tabulated maps (a measured thrust-ratio map and a measured
+  shift-speed map, `empact.variator._tables.encode_curves`), each found at the offset that
+  ``p[P_TAB]`` / ``p[P_CTAB]`` holds (0: the analytic law);
 * ``ix`` int64, shape (4,): positions in ``x`` of the optional states (belt stretch, drive and
   load speed-loop integrators, ratio-controller integrator), -1 when absent.
 
@@ -38,8 +39,8 @@ from numba import njit
  P_B0, P_B1, P_B2, P_C0, P_C1, P_C2, P_D0, P_D1, P_D2, P_E0, P_E1, P_E2,
  P_DKP, P_DKI, P_LKP, P_LKI, P_RKP, P_RKD, P_RKI, P_SIG, P_RS0,
  P_LAW, P_DREF, P_FREF, P_KD, P_A1, P_A2, P_GAIN, P_W0, P_XSAT, P_GBETA,
- P_KP0, P_KB0, P_KB1, P_RREF, P_TAB) = range(76)
-NP = 76
+ P_KP0, P_KB0, P_KB1, P_RREF, P_TAB, P_CTAB) = range(77)
+NP = 77
 
 #: names of the parameter vector's entries, in the order of the ``P_*`` indices
 PARAMETER_NAMES = (
@@ -55,7 +56,7 @@ PARAMETER_NAMES = (
     "drive_kp", "drive_ki", "load_kp", "load_ki", "ratio_kp", "ratio_kd", "ratio_ki",
     "sheave_sense", "R_s0",
     "shift_law", "D_ref", "F_ref", "k_D", "a1", "a2", "gain", "omega_0", "xi_sat", "g_beta",
-    "kappa_p0", "kappa_b0", "kappa_b1", "r_ref", "tabulated")
+    "kappa_p0", "kappa_b0", "kappa_b1", "r_ref", "thrust_table", "creep_table")
 assert len(PARAMETER_NAMES) == NP
 
 #: the kernel's parameters read back by name (`constants`)
@@ -86,15 +87,23 @@ NY = len(OUTPUTS)
  Y_TMP, Y_TD, Y_TL, Y_EN, Y_PIN, Y_PDISS, Y_PCREEP, Y_TMS, Y_TDS, Y_MUMAX) = range(NY)
 
 
-def pack_parameters(values: Mapping[str, float], table: np.ndarray) -> np.ndarray:
-    """The parameter vector ``p`` from values by name (every name of `PARAMETER_NAMES`),
-    followed by the encoded thrust-ratio `table` (empty for the analytic map)."""
-    missing = set(PARAMETER_NAMES) - set(values)
+def pack_parameters(values: Mapping[str, float], thrust_table: np.ndarray,
+                    creep_table: np.ndarray) -> np.ndarray:
+    """The parameter vector ``p`` from values by name (every name of `PARAMETER_NAMES` but the
+    table offsets), followed by the encoded thrust-ratio and shift-speed tables (each empty
+    for its analytic law); ``thrust_table`` and ``creep_table`` hold their offsets."""
+    names = [k for k in PARAMETER_NAMES if k not in ("thrust_table", "creep_table")]
+    missing = set(names) - set(values)
     if missing:
         raise KeyError(f"kernel parameters missing: {', '.join(sorted(missing))}")
-    p = np.zeros(NP + len(table))
-    p[:NP] = [float(values[k]) for k in PARAMETER_NAMES]
-    p[NP:] = table
+    p = np.zeros(NP + len(thrust_table) + len(creep_table))
+    p[:NP] = [float(values.get(k, 0.0)) for k in PARAMETER_NAMES]
+    if len(thrust_table):
+        p[P_TAB] = NP
+        p[NP:NP + len(thrust_table)] = thrust_table
+    if len(creep_table):
+        p[P_CTAB] = NP + len(thrust_table)
+        p[NP + len(thrust_table):] = creep_table
     return p
 
 
@@ -168,30 +177,38 @@ def _curve(tau, p, start):
 
 
 @njit(cache=True)
-def log_kappa_eq(tau, lr, kgeo, p):
-    """``ln kappa*(tau, r_g)``: the equilibrium thrust ratio F_p* / F_s at torque ratio `tau`
-    and log-ratio `lr` (kappa_geo = `kgeo`), analytic or tabulated (linear in ln r_g between
-    the tabulated curves, held constant outside)."""
-    if p[P_TAB] == 0.0:
-        return p[P_KP0] * np.log(kgeo) + (p[P_KB0] - p[P_KB1] * lr) * tau
-    base = NP
+def _table(xv, lr, p, base):
+    """A tabulated map at `xv` and log-ratio `lr` (the table encoded at ``p[base:]``): linear
+    in x along each curve, linear in ln r_g between the curves, held constant outside."""
     n_r = int(p[base])
     if n_r == 1 or lr.real <= p[base + 1]:
-        return _curve(tau, p, base + int(p[base + 1 + n_r]))
+        return _curve(xv, p, base + int(p[base + 1 + n_r]))
     for i in range(n_r - 1):
         if lr.real <= p[base + 2 + i]:
             w = (lr - p[base + 1 + i]) / (p[base + 2 + i] - p[base + 1 + i])
-            c0 = _curve(tau, p, base + int(p[base + 1 + n_r + i]))
-            c1 = _curve(tau, p, base + int(p[base + 2 + n_r + i]))
+            c0 = _curve(xv, p, base + int(p[base + 1 + n_r + i]))
+            c1 = _curve(xv, p, base + int(p[base + 2 + n_r + i]))
             return c0 + w * (c1 - c0)
-    return _curve(tau, p, base + int(p[base + 2 * n_r]))
+    return _curve(xv, p, base + int(p[base + 2 * n_r]))
+
+
+@njit(cache=True)
+def log_kappa_eq(tau, lr, kgeo, p):
+    """``ln kappa*(tau, r_g)``: the equilibrium thrust ratio F_p* / F_s at torque ratio `tau`
+    and log-ratio `lr` (kappa_geo = `kgeo`), analytic or tabulated."""
+    if p[P_TAB] == 0.0:
+        return p[P_KP0] * np.log(kgeo) + (p[P_KB0] - p[P_KB1] * lr) * tau
+    return _table(tau, lr, p, int(p[P_TAB]))
 
 
 @njit(cache=True)
 def creep_coefficient(r_g, R_p, F_s, p):
     """``K_c`` [-]: creep rate per radian of primary rotation per unit log thrust-ratio error
-    (Carbone et al. 2007): ``gain D(F_s) G_beta r_g (R_p / a) (a1 + a2 ln^2 r_g)``."""
+    (Carbone et al. 2007): ``gain D(F_s) G_beta r_g (R_p / a) (a1 + a2 ln^2 r_g)``, or
+    ``gain`` times a measured shift-speed map ``K_c(F_s, r_g)``."""
     lr = np.log(r_g)
+    if p[P_CTAB] != 0.0:
+        return p[P_GAIN] * _table(F_s, lr, p, int(p[P_CTAB]))
     D = p[P_DREF] * (1.0 + p[P_KD] * (F_s - p[P_FREF]))
     return p[P_GAIN] * D * p[P_GBETA] * r_g * (R_p / p[P_A]) * (p[P_A1] + p[P_A2] * lr * lr)
 

@@ -110,7 +110,7 @@ from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
 from ..linear.actuation import actuation_model
 from ..params import DAMPING_LEVELS, Params
-from ..variator.shift_law import SHIFT_LAWS, g_beta
+from ..variator.shift_law import SHIFT_LAWS, CreepMap, g_beta, load_creep_map
 from ..variator.thrust_ratio import TabulatedThrustRatio, load_thrust_ratio
 from . import _kernel as K
 
@@ -201,8 +201,11 @@ class ModelOptions:
         both are a sheave resistance that falls with speed, and keeping both would count the
         belt's resistance twice.
     thrust_ratio : TabulatedThrustRatio, optional
-        A measured map ``kappa*(tau, r_g)`` (`empact.thrust_ratio.load_thrust_ratio`);
+        A measured map ``kappa*(tau, r_g)`` (`empact.variator.thrust_ratio.load_thrust_ratio`);
         default the analytic one of ``[thrust_ratio]``.
+    creep_map : CreepMap, optional
+        A measured shift-speed map ``K_c(r_g, F_s)`` (`empact.variator.shift_law.
+        load_creep_map`); default the analytic creep coefficient of ``[shift]``.
     reference_ratio : float, optional
         Ratio of the output ``nu_r = 1 - omega_s / (r_ref omega_p)`` (the slip of eq. 3 and
         Fig. 12, at a fixed operating ratio); default ``params.operating.r_g``.  The
@@ -225,6 +228,7 @@ class ModelOptions:
     shift_law: Literal["carbone", "ide", "shafai"] = "carbone"
     thrust_ratio: TabulatedThrustRatio | None = None
     reference_ratio: float | None = None
+    creep_map: CreepMap | None = None
     drive_bandwidth: InitVar[float | None] = None
     load_bandwidth: InitVar[float | None] = None
     ratio_bandwidth: InitVar[float | None] = None
@@ -245,7 +249,11 @@ class ModelOptions:
         if self.thrust_ratio is not None and not isinstance(self.thrust_ratio,
                                                             TabulatedThrustRatio):
             raise ParameterError(f"thrust_ratio = {self.thrust_ratio!r}: must be a "
-                                 "TabulatedThrustRatio (empact.thrust_ratio.load_thrust_ratio)")
+                                 "TabulatedThrustRatio (empact.variator.thrust_ratio."
+                                 "load_thrust_ratio)")
+        if self.creep_map is not None and not isinstance(self.creep_map, CreepMap):
+            raise ParameterError(f"creep_map = {self.creep_map!r}: must be a CreepMap "
+                                 "(empact.variator.shift_law.load_creep_map)")
         if self.reference_ratio is not None:
             object.__setattr__(self, "reference_ratio", check_number(
                 "reference_ratio", self.reference_ratio, 0.0, lo_open=True))
@@ -272,6 +280,8 @@ class ModelOptions:
         values = dict(values)
         if isinstance(values.get("thrust_ratio"), (str, os.PathLike)):
             values["thrust_ratio"] = load_thrust_ratio(values["thrust_ratio"])
+        if isinstance(values.get("creep_map"), (str, os.PathLike)):
+            values["creep_map"] = load_creep_map(values["creep_map"])
         return cls(**values)
 
 
@@ -481,7 +491,8 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
     v, a, d = params.variator, params.actuation, params.driveline
     lvl = params.damping.level(o.damping)
     t, sh, kr = params.traction, params.shift, params.thrust_ratio
-    table = o.thrust_ratio.encode() if o.thrust_ratio is not None else np.zeros(0)
+    thrust_table = o.thrust_ratio.encode() if o.thrust_ratio is not None else np.zeros(0)
+    creep_table = o.creep_map.encode() if o.creep_map is not None else np.zeros(0)
     sig = sheave_sense(o.kinematics)
     k_w, k_c, k_belt, k_tp, k_ts = stiffnesses(params, o.kinematics)
     values = dict(
@@ -502,8 +513,7 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
         D_ref=sh.D_ref, F_ref=sh.F_ref, k_D=sh.k_D, a1=sh.a1, a2=sh.a2, gain=sh.gain,
         omega_0=sh.omega_0, xi_sat=sh.xi_sat, g_beta=g_beta(v.beta), kappa_p0=kr.p0,
         kappa_b0=kr.b0, kappa_b1=kr.b1,
-        r_ref=params.operating.r_g if o.reference_ratio is None else o.reference_ratio,
-        tabulated=1.0 if len(table) else 0.0)
+        r_ref=params.operating.r_g if o.reference_ratio is None else o.reference_ratio)
     for loop, J, f in (("drive", d.J_d, o.drive_bandwidth_hz),
                        ("load", d.J_l, o.load_bandwidth_hz)):
         w = 2 * np.pi * f
@@ -511,7 +521,7 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
     w = 2 * np.pi * o.ratio_bandwidth_hz
     J = shift_inertia(params, o.kinematics)
     values.update(ratio_kp=J * w * w, ratio_kd=2 * 0.7 * w * J, ratio_ki=J * w**3 / 4)
-    return K.pack_parameters(values, table)
+    return K.pack_parameters(values, thrust_table, creep_table)
 
 
 def _index(names: tuple[str, ...], name: str, what: str) -> int:

@@ -239,11 +239,12 @@ def check_tables(data: Mapping[str, Any], schema: Mapping[str, Any], src: str) -
 def model_options(table: Mapping[str, Any], src: str,
                   defaults: Mapping[str, Any] | None = None) -> ModelOptions:
     """A scenario file's ``[model]`` table as `ModelOptions` (over `defaults`); a relative
-    ``thrust_ratio`` path is read relative to the scenario file."""
+    ``thrust_ratio`` or ``creep_map`` path is read relative to the scenario file."""
     model = {**(defaults or {}), **dict(table)}
-    path = model.get("thrust_ratio")
-    if isinstance(path, str) and not Path(path).is_absolute() and Path(src).is_file():
-        model["thrust_ratio"] = str(Path(src).parent / path)
+    for key in ("thrust_ratio", "creep_map"):
+        path = model.get(key)
+        if isinstance(path, str) and not Path(path).is_absolute() and Path(src).is_file():
+            model[key] = str(Path(src).parent / path)
     try:
         return ModelOptions.from_mapping(model)
     except ParameterError as exc:

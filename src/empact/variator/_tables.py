@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ParameterError
 
-__all__ = ["check_curve", "read_curves"]
+__all__ = ["check_curve", "read_curves", "encode_curves"]
 
 Curves = dict[float, tuple[list[float], list[float]]]
 
@@ -37,6 +37,44 @@ def read_curves(path: str | os.PathLike[str], what: str, x: str, y: str) -> Curv
     if suffix == ".toml":
         return _read_toml(p, x, y)
     raise ParameterError(f"{p}: {what} must be .csv or .toml, not {suffix or 'no suffix'!r}")
+
+
+def encode_curves(ratios, xs, ys) -> NDArray[np.float64]:
+    """Flat encoding of curves ``y(x)`` at several ratios for the compiled model, appended to
+    its parameter vector (`empact.nonlinear._kernel._table` reads it)::
+
+        [n_r, ln r_1 .. ln r_n, start_1 .. start_n,
+         (n_x, x_1 .. x_nx, y_1 .. y_nx) per curve]
+
+    with each curve's start as an offset from the beginning of the table; the kernel
+    interpolates linearly in x along each curve and in ln r_g between curves, held constant
+    outside."""
+    n_r = len(ratios)
+    head = [float(n_r), *np.log(np.asarray(ratios, float))]
+    starts: list[float] = []
+    body: list[float] = []
+    for x, y in zip(xs, ys):
+        starts.append(float(1 + 2 * n_r + len(body)))
+        body += [float(len(x)), *np.asarray(x, float), *np.asarray(y, float)]
+    return np.array(head + starts + body, dtype=float)
+
+
+def interpolate_curves(ratios, xs, ys, x: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
+    """The interpolation `encode_curves` gives the kernel, in numpy: linear in x along each
+    curve (held constant outside its samples), linear in ln r_g between the curves (held
+    constant outside), at points `x`, `r_g` (broadcast)."""
+    x, r = np.broadcast_arrays(np.asarray(x, float), np.asarray(r_g, float))
+    vals = [np.interp(x, xc, yc) for xc, yc in zip(xs, ys)]
+    lr = np.log(np.asarray(ratios, float))
+    if len(lr) == 1:
+        return vals[0]
+    q = np.clip(np.log(r), lr[0], lr[-1])
+    j = np.clip(np.searchsorted(lr, q, side="right") - 1, 0, len(lr) - 2)
+    w = (q - lr[j]) / (lr[j + 1] - lr[j])
+    stack = np.stack(vals)
+    lo = np.take_along_axis(stack, j[None], 0)[0]
+    hi = np.take_along_axis(stack, (j + 1)[None], 0)[0]
+    return lo + w * (hi - lo)
 
 
 def check_curve(where: str, x: ArrayLike, y: ArrayLike, names: tuple[str, str],

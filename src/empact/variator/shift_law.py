@@ -35,7 +35,9 @@ paper's illustrative levels of Fig. 6 in the linear model.
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Protocol
 
 import numpy as np
@@ -43,10 +45,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._section import Section, param
 from .._validate import check_choice, check_number
+from ..errors import ParameterError
+from ._tables import check_curve, encode_curves, interpolate_curves, read_curves
 from .geometry import VariatorParams, check_ratio, variator_state
 
 __all__ = ["ShiftParams", "SHIFT_LAWS", "creep_coefficient", "shift_rate", "CreepDamping",
-           "creep_damping", "g_beta"]
+           "creep_damping", "g_beta", "CreepMap", "load_creep_map"]
 
 
 @dataclass(frozen=True)
@@ -104,13 +108,97 @@ def g_beta(beta: float) -> float:
     return (1 + np.cos(beta) ** 2) / np.sin(2 * beta)
 
 
+@dataclass(frozen=True)
+class CreepMap:
+    """A measured shift-speed map: the creep coefficient ``K_c`` [-] (ratio change per radian
+    of primary rotation per unit log thrust-ratio error, ``dr_g/dtheta_p = K_c ln(kappa /
+    kappa*)``) as one curve ``K_c(F_s)`` per ratio, replacing the analytic law's ``D(F_s)
+    G_beta r_g (R_p / a) (a1 + a2 ln^2 r_g)`` (``[shift] gain`` still multiplies it).
+
+    Interpolated linearly in ``F_s`` along each curve and in ``ln r_g`` between curves, held
+    constant outside: what the compiled model does (`empact.variator._tables.encode_curves`).
+    Read with `load_creep_map` (CSV columns ``r_g, F_s, K_c``, or TOML ``[[curve]]`` tables).
+
+    Parameters
+    ----------
+    ratios : tuple of float
+        Ratios [-], strictly increasing.
+    F_s_data, K_c_data : tuple of arrays
+        Per curve: clamping forces [N] strictly increasing (at least 2), > 0, and creep
+        coefficients [-] > 0.
+    source : str
+        Where the table came from (used in messages).
+    """
+
+    ratios: tuple[float, ...]
+    F_s_data: tuple[NDArray[np.float64], ...]
+    K_c_data: tuple[NDArray[np.float64], ...]
+    source: str = "shift-speed map"
+
+    def __post_init__(self) -> None:
+        ratios = tuple(float(r) for r in self.ratios)
+        if not ratios or len(ratios) != len(self.F_s_data) or len(ratios) != len(self.K_c_data):
+            raise ParameterError(f"{self.source}: need one (F_s, K_c) curve per ratio, got "
+                                 f"{len(ratios)} ratios")
+        if any(not (np.isfinite(r) and r > 0) for r in ratios):
+            raise ParameterError(f"{self.source}: ratios must be positive finite numbers")
+        if any(b <= a for a, b in zip(ratios, ratios[1:])):
+            raise ParameterError(f"{self.source}: ratios {ratios!r} must be distinct and "
+                                 "increasing")
+        xs, ys = [], []
+        for r, F, Kc in zip(ratios, self.F_s_data, self.K_c_data):
+            where = f"{self.source}, curve r_g = {r:g}"
+            F, Kc = check_curve(where, F, Kc, ("F_s", "K_c"), 2)
+            for name, arr, unit in (("F_s", F, "N"), ("K_c", Kc, "-")):
+                bad = np.flatnonzero(~(arr > 0))
+                if bad.size:
+                    raise ParameterError(f"{where}: {name}[{bad[0]}] = {arr[bad[0]]:g}: allowed "
+                                         f"range is (0, inf) [{unit}]")
+            xs.append(F)
+            ys.append(Kc)
+        object.__setattr__(self, "ratios", ratios)
+        object.__setattr__(self, "F_s_data", tuple(xs))
+        object.__setattr__(self, "K_c_data", tuple(ys))
+
+    def __hash__(self) -> int:  # arrays are not hashable: hash the contents
+        return hash((self.ratios, tuple(a.tobytes() for a in self.F_s_data),
+                     tuple(a.tobytes() for a in self.K_c_data)))
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, CreepMap) and hash(self) == hash(other)
+
+    def K_c(self, r_g: ArrayLike, F_s: ArrayLike) -> NDArray[np.float64]:
+        """The map's creep coefficient [-] at ratios `r_g` and clamping forces `F_s` [N]."""
+        return interpolate_curves(self.ratios, self.F_s_data, self.K_c_data, F_s, r_g)
+
+    def encode(self) -> NDArray[np.float64]:
+        """Flat encoding for the compiled model (`empact.variator._tables.encode_curves`)."""
+        return encode_curves(self.ratios, self.F_s_data, self.K_c_data)
+
+
+def load_creep_map(path: str | os.PathLike[str]) -> CreepMap:
+    """Read a measured shift-speed map from ``.csv`` (header ``r_g,F_s,K_c``; rows with the
+    same ``r_g`` form one curve) or ``.toml`` (``[[curve]]`` tables with ``r_g``, ``F_s``,
+    ``K_c``).  Raises `ParameterError` naming the file, row and value."""
+    curves = read_curves(path, "shift-speed map", "F_s", "K_c")
+    items = sorted(curves.items())
+    return CreepMap(ratios=tuple(r for r, _ in items),
+                    F_s_data=tuple(np.asarray(c[0], float) for _, c in items),
+                    K_c_data=tuple(np.asarray(c[1], float) for _, c in items),
+                    source=str(Path(path)))
+
+
 def creep_coefficient(params: _HasShift, r_g: ArrayLike, F_s: ArrayLike,
-                      R_p: ArrayLike | None = None) -> NDArray[np.float64]:
+                      R_p: ArrayLike | None = None,
+                      creep_map: CreepMap | None = None) -> NDArray[np.float64]:
     """``K_c`` [-]: ratio change per radian of primary rotation per unit log thrust-ratio
     error, at ratio `r_g` and clamping force `F_s` [N] (broadcast); `R_p` [m] defaults to the
-    unstretched belt's primary radius."""
+    unstretched belt's primary radius.  With a measured `creep_map` its ``K_c(r_g, F_s)``
+    times ``[shift] gain``."""
     sh, v = params.shift, params.variator
     r = np.asarray(r_g, float)
+    if creep_map is not None:
+        return sh.gain * creep_map.K_c(r, F_s)
     if R_p is None:
         R_p = variator_state(r, v).R_p
     lr = np.log(r)
@@ -155,15 +243,15 @@ class CreepDamping:
 
 
 def creep_damping(params: _HasShift, r_g: float, omega_p: float, F_s: float,
-                  kinematics: str = "equal-translation", kappa_eq: float | None = None) \
-        -> CreepDamping:
+                  kinematics: str = "equal-translation", kappa_eq: float | None = None,
+                  creep_map: CreepMap | None = None) -> CreepDamping:
     """Linearised creep resistance at ratio `r_g`, primary speed `omega_p` [rad/s] and
     clamping force `F_s` [N], at rest and at the equilibrium thrust ratio `kappa_eq`
     (default: the geometric one, i.e. zero torque with ``p0 = 1``), on the unstretched
     belt's radii.
 
     Both laws (Carbone, Ide) have the same linearisation: ``d kappa / d rdot =
-    kappa* / (omega_eff K_c)``.
+    kappa* / (omega_eff K_c)``; `creep_map` replaces the analytic ``K_c`` by a measured one.
     """
     check_choice("kinematics", kinematics, ("equal-translation", "paper-sec2.1"))
     r = float(check_ratio(check_number("r_g", r_g), params.variator))
@@ -179,7 +267,8 @@ def creep_damping(params: _HasShift, r_g: float, omega_p: float, F_s: float,
     a, b = r / (tb * R_p), r / (tb * R_s)
     # at rest the clamping force equals the belt element's only when kappa* = kappa_geo;
     # F_s here is the belt element's force (the law's)
-    C = F_s * k / ((a + k * b) * w_eff * float(creep_coefficient(params, r, F_s, R_p)))
+    K_c = float(creep_coefficient(params, r, F_s, R_p, creep_map))
+    C = F_s * k / ((a + k * b) * w_eff * K_c)
     sig = -1.0 if kinematics == "equal-translation" else 1.0
     grad = np.array([a, sig * b])
     G_p = (1 + kgeo * r) / (R_s * tb)  # dr_g/dx_p along the shift at constant belt length

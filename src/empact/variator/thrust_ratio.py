@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._section import Section, param
 from ..errors import ParameterError
-from ._tables import check_curve, read_curves
+from ._tables import check_curve, encode_curves, interpolate_curves, read_curves
 from .geometry import VariatorParams, radii, wrap_angle
 
 __all__ = ["ThrustRatioParams", "kappa_geo", "AnalyticThrustRatio", "TabulatedThrustRatio", "load_thrust_ratio",
@@ -163,35 +163,13 @@ class TabulatedThrustRatio:
 
     def kappa(self, tau: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
         """``kappa`` [-] at torque ratios `tau` and ratios `r_g` (broadcast)."""
-        tau, r = np.broadcast_arrays(np.asarray(tau, float), np.asarray(r_g, float))
-        lk = [np.interp(tau, t, np.log(k)) for t, k in zip(self.tau_data, self.kappa_data)]
-        lr = np.log(self.ratios)
-        if len(lr) == 1:
-            return np.exp(lk[0])
-        x = np.clip(np.log(r), lr[0], lr[-1])
-        j = np.clip(np.searchsorted(lr, x, side="right") - 1, 0, len(lr) - 2)
-        w = (x - lr[j]) / (lr[j + 1] - lr[j])
-        stack = np.stack(lk)
-        lo = np.take_along_axis(stack, j[None], 0)[0]
-        hi = np.take_along_axis(stack, (j + 1)[None], 0)[0]
-        return np.exp(lo + w * (hi - lo))
+        return np.exp(interpolate_curves(self.ratios, self.tau_data,
+                                         [np.log(k) for k in self.kappa_data], tau, r_g))
 
     def encode(self) -> NDArray[np.float64]:
-        """Flat encoding for the compiled model, appended to its parameter vector::
-
-            [n_r, ln r_1 .. ln r_n, start_1 .. start_n,
-             (n_t, tau_1 .. tau_nt, ln kappa_1 .. ln kappa_nt) per curve]
-
-        with each curve's start as an offset from the beginning of the table
-        (`empact.nonlinear._kernel.log_kappa_eq` reads it)."""
-        n_r = len(self.ratios)
-        head = [float(n_r), *np.log(self.ratios)]
-        starts: list[float] = []
-        body: list[float] = []
-        for tau, kap in zip(self.tau_data, self.kappa_data):
-            starts.append(float(1 + 2 * n_r + len(body)))
-            body += [float(len(tau)), *tau, *np.log(kap)]
-        return np.array(head + starts + body, dtype=float)
+        """Flat encoding for the compiled model (`empact.variator._tables.encode_curves` of
+        the curves ``ln kappa(tau)``)."""
+        return encode_curves(self.ratios, self.tau_data, [np.log(k) for k in self.kappa_data])
 
 
 def _validate_curve(r: float, tau: ArrayLike, kap: ArrayLike, source: str):
