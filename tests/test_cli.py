@@ -67,7 +67,9 @@ def test_cli_poles_json():
     res = run("slip", "poles", "--slip", "0.001,0.04", "--json")
     assert res.exit_code == 0, res.output
     data = json.loads(res.output)
-    assert data["operating_point"] == load_params().operating.to_dict()  # [operating]
+    # [operating] given by its torque ratio, resolved to the slip the linear model needs
+    p = load_params()
+    assert data["operating_point"] == p.operating.resolve(p).to_dict()
     assert data["variable"] == "nu" and len(data["points"]) == 2
     poles = np.array(data["points"][1]["poles"])
     assert poles.shape == (8, 2)  # [re, im] in rad/s
@@ -446,8 +448,9 @@ BAD_INPUT = [
     (["control", "design", "--bandwidth", "1", "--out", "c.json"],
      "--bandwidth '1': two numbers RATIO,SLIP"),
     (["control", "design", "--bandwidth", "0,1", "--out", "c.json"], "--bandwidth = 0"),
-    (["control", "design", "--method", "hinf", "--nominal", "3,2", "--out", "c.json"],
-     "nominal point (3, 2) (r_g = 1, nu = 0.01): H-infinity ill-posed (A1)"),
+    (["control", "design", "--method", "hinf", "--drive", "torque", "--nominal", "3,2",
+      "--out", "c.json"],
+     "nominal point (3, 2) (r_g = 1, tau = 0.9): H-infinity ill-posed (A1)"),
     (["control", "design", "--nominal", "9,9", "--out", "c.json"],
      "--nominal '9,9': indices in a grid of shape (7, 4)"),
     (["control", "check", "nosuch.json", "--family", "f.npz"], "nosuch.json: no such controller"),

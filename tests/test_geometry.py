@@ -57,3 +57,16 @@ def test_ratio_range_is_symmetric_and_binding(params):
 def test_out_of_range_ratio(params, r):
     with pytest.raises(ParameterError, match="r_g = "):
         variator_state(r, params.variator)
+
+
+def test_primary_radius_per_ratio_is_the_derivative_of_the_radii(params):
+    """dR_p/dr_g along a shift at constant belt length against a central difference of
+    `radii` (relative step 1e-6: error ~1e-10), 1e-7 relative."""
+    from empact.variator.geometry import primary_radius_per_ratio
+
+    v = params.variator
+    for r in (0.45, 0.8, 1.0, 1.6, 2.2):
+        e = 1e-6
+        fd = (radii(r * (1 + e), v.L_belt, v.a)[0] - radii(r * (1 - e), v.L_belt, v.a)[0]) \
+            / (2 * e * r)
+        assert float(primary_radius_per_ratio(r, v)) == pytest.approx(float(fd), rel=1e-7)

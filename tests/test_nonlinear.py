@@ -259,18 +259,23 @@ def test_belt_length_change_first_order(params):
 
 
 def test_nmp_zeros_on_the_machine(params):
-    """Pinned model results (the claims' verdicts in the report rest on them): with the creep
-    law, T_mp -> nu_r has one real right-half-plane zero at every ratio (measured 1.53, 1.67,
-    2.03 Hz), T_mp -> nu (eq. 2) none; the Sec. 2.1 rows give eq. 2's slip one at every
-    ratio (measured 0.48, 0.60, 0.87 Hz)."""
+    """Pinned model results (regression guard; the claims' verdicts in the report rest on
+    them), at the shipped [operating] point (tau = 0.9, 10 kN, 300 rad/s), the bare machine:
+    T_mp -> nu_r has one real right-half-plane zero at every ratio (measured 8.8, 13.1, 25.6
+    Hz; 3.6, 4.1, 5.4 Hz at shift.gain 1: the creep rate sets it); T_mp -> nu (eq. 2) none at
+    r_g = 0.5 and 1 and one slow one (0.0045 Hz) at r_g = 2; the Sec. 2.1 rows give eq. 2's
+    slip one at r_g = 0.5 and 1 (3.0, 4.0 Hz)."""
     nu_r = nmp_analysis(params, [0.5, 1.0, 2.0], slip="nu_r")
     real = [z[np.abs(z.imag) < 1e-6 * np.abs(z)].real / (2 * np.pi) for z in nu_r.rhp_zeros]
-    # bounds 1-3 Hz: set by the creep law's time scale against the clamping transient
-    assert all(len(z) == 1 and 1 < z[0] < 3 for z in real), real
+    # bounds 5-40 Hz, rising with the ratio
+    assert all(len(z) == 1 and 5 < z[0] < 40 for z in real), real
+    assert real[0][0] < real[1][0] < real[2][0]
     nu = nmp_analysis(params, [0.5, 1.0, 2.0], slip="nu")
-    assert np.all(nu.n_rhp_real == 0)
+    assert nu.n_rhp_real.tolist() == [0, 0, 1]
+    slow = nu.rhp_zeros[2][np.abs(nu.rhp_zeros[2].imag) < 1e-6 * np.abs(nu.rhp_zeros[2])]
+    assert abs(slow[0]) / (2 * np.pi) < 0.01
     sec21 = nmp_analysis(params, [0.5, 1.0, 2.0], kinematics="paper-sec2.1")
-    assert np.all(sec21.n_rhp_real == 1)
+    assert sec21.n_rhp_real.tolist()[:2] == [1, 1]
     with pytest.raises(ValueError, match="slip = 'eq2'"):
         nmp_analysis(params, [1.0], slip="eq2")
 
@@ -293,13 +298,15 @@ def test_shift_and_load_step_example(params):
     sc = load_scenario(example_path("shift-and-load-step"))
     res = run_scenario(sc, params)
     assert res.complete, res.message
-    r = res.output("r_g")
-    # LOW -> OD: the creep law limits the shift rate, so the ratio lags the 1.3-s reference and
-    # is still rising at the end (measured 1.96 at 2 s); it never overshoots the OD reference
-    assert r[0] == pytest.approx(0.43, rel=1e-9) and 1.8 < r[-1] < 2.25
-    assert np.all(np.diff(r[res.t > 0.5]) > 0)
+    r, ref = res.output("r_g"), res.output("r_g_ref")
+    # LOW -> OD in 5 s under the ratio controller: within 0.05 of the reference throughout
+    # (measured 0.022), at OD at the end (2.25, within 1 %), no macro slip (below the traction
+    # peak's slip at every instant; measured up to 0.67 %)
+    assert r[0] == pytest.approx(0.43, rel=1e-9) and r[-1] == pytest.approx(2.25, rel=0.01)
+    assert np.abs(r - ref).max() < 0.05
+    assert res.output("nu").max() < 0.02 and res.output("tau").max() < 0.95
     # the load step reaches the load motor; the belt transmits throughout (T_b > 0, F_s > 0)
-    assert res.output("T_l_act")[-1] == 60.0
+    assert res.output("T_l_act")[-1] == 40.0
     assert np.all(res.output("T_b") > 0) and np.all(res.output("F_s") > 0)
 
 

@@ -72,3 +72,21 @@ def test_describe_lists_units(params):
     assert ("J_d", "kg m^2") == rows[0][:2]
     assert all(not math.isnan(0) for _ in rows)
     assert isinstance(params, Params)
+
+
+def test_every_shipped_parameter_has_a_source_and_a_plausible_band():
+    """Issue 20: `params show --describe` gives every shipped value its source (or rationale)
+    and a plausible band; the value lies in its band and the band inside the allowed range."""
+    import math
+
+    from empact.params import describe_parameters
+
+    infos = [p for p in describe_parameters() if p.value is not None]
+    assert len(infos) > 80
+    for p in infos:
+        assert p.source, p.name
+        lo, hi = p.band
+        assert lo <= p.value <= hi, (p.name, p.value, p.band)
+        a_lo, a_hi = (float(x.strip("[]() ")) for x in p.allowed.split(","))
+        assert a_lo <= lo and hi <= a_hi, (p.name, p.band, p.allowed)
+        assert math.isfinite(lo) and math.isfinite(hi)

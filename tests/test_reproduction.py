@@ -13,21 +13,21 @@ KNOWN_DEVIATIONS = {
     # Sec. 2.2: the uncoupled sides' labels (15.5 Hz primary, 24.6 Hz secondary) fit no
     # parameter set of Fig. 7 together with Table 2; empact uses them swapped
     "fig9.labels",
-    # Secs. 2.3 and 3 on the machine with the creep law: eq. 2's slip has no real RHP zero at
-    # any ratio, nu_r one at every ratio (the creep law separates the clamping transient from
-    # the slow shift); with the Sec. 2.1 rows eq. 2's slip has one at every ratio
-    "nmp.nu", "nmp.nu_r", "nmp.sec21",
-    # Sec. 3 on Fig. 2: at the creep law's published magnitude the actuation modes move down
-    # rather than gain much damping; the 48 Hz zeros lie just below their pole, not above it
-    "fig2.damping", "fig2.zeros_48hz",
-    # Sec. 4 / Fig. 14: the -1 slope of the servo angle ends near 0.35 Hz (creep law at its
-    # published magnitude), and the machine's secondary servo clamps (flat T_ms -> theta_ms)
-    "fig14.slope.T_mp", "fig14.slope.T_ms",
-    # issue 13's closed-loop targets on the machine (beyond the paper): with slip control at
-    # 1 % on the flat top of the shipped traction curve the load steps end in a slip limit
-    # cycle, and the 1 /s shift at the creep law's published magnitude slackens the belt
-    "control.slip-load-step-r0.5", "control.slip-load-step-r1", "control.slip-load-step-r2",
-    "control.shift", "control.clamping_reduction",
+    # Sec. 3: nu_r (the slip at the operating ratio) has a real RHP zero at every ratio (9-26
+    # Hz, where the ratio's own response wins), not only at r_g = 0.5
+    "nmp.nu_r",
+    # Sec. 3 on Fig. 2: the 48 Hz chain mode, which the belt does not reach, keeps its linear
+    # damping, and its zeros lie just below its pole, not above it
+    "fig2.damping_48hz", "fig2.zeros_48hz",
+    # Sec. 4 / Fig. 14: the phase of T_mp -> theta_mp rises near 1.8 Hz, not in 2-6 Hz (the
+    # creep rate that would move it there makes the bench unstable), and the machine's
+    # secondary servo clamps (flat T_ms -> theta_ms)
+    "fig14.phase_rise", "fig14.slope.T_ms",
+    # issue 13's closed-loop targets on the machine (beyond the paper; the next issue's): the
+    # shipped decentralised PI is slow (0.05 / 0.025 Hz), the coupling of the primary servo
+    # into the clamping allows no faster decentralised design
+    "control.slip-load-step-r1", "control.slip-load-step-r2", "control.shift",
+    "control.clamping_reduction",
 }
 
 
@@ -69,3 +69,11 @@ def test_only_the_known_deviations_are_not_shown(claims):
 def test_claim_needs_an_explanation_when_not_shown():
     with pytest.raises(ValueError, match="no explanation"):
         Claim(key="x", source="s", claim="c", computed="v", shown=False)
+
+
+def test_claims_record_the_slip_reading(claims):
+    """Issue 20: the Fig. 11 / 12 / 13 claims carry the reading of the slips the paper does
+    not state."""
+    read = [c for c in claims if c["key"].startswith(("fig11.", "fig12a.", "fig12b.", "fig13."))]
+    assert read and all("the paper gives none; read near the traction peak" in c["reading"]
+                        for c in read)

@@ -143,10 +143,12 @@ def test_linear_creep_damping_is_the_models_jacobian(params):
 
 def test_creep_coefficient_published_magnitude(params):
     """K_c at r_g = 1, 20 kN: gain D G_beta r (R_p / a)(a1 + a2 ln^2 r) with D = 1e-3 rad,
-    G_beta = 5.24 at beta = 11 deg (hand value from the reconstruction's numbers, 1e-3)."""
+    G_beta = 5.24 at beta = 11 deg and the shipped gain 15 (hand value from the
+    reconstruction's numbers, 1e-3)."""
     R_p = 0.0545  # approximately, at r_g = 1; passed explicitly
     g_beta = (1 + np.cos(np.radians(11)) ** 2) / np.sin(np.radians(22))
-    expect = 1e-3 * g_beta * (R_p / 0.155) * 0.21
+    assert params.shift.gain == 15.0
+    expect = 15.0 * 1e-3 * g_beta * (R_p / 0.155) * 0.21
     assert creep_coefficient(params, 1.0, 2e4, R_p) == pytest.approx(expect, rel=1e-3)
     assert g_beta == pytest.approx(5.24, abs=0.01)
 
@@ -157,9 +159,10 @@ def test_analytic_thrust_ratio_agrees_with_geometry_at_zero_torque(params):
     r = np.array([0.5, 1.0, 2.0])
     np.testing.assert_allclose(zero_torque_difference(kmap, params.variator, r), 0.0,
                                atol=1e-15)
-    # rising with torque at LOW and MED, falling at OD (b0 - b1 ln r < 0 at r_g = 2)
+    # rising with torque, faster at LOW, nearly flat at OD (b0 - b1 ln r > 0 up to r_g =
+    # e^(b0/b1) = 2.38 with the shipped b1 = 0.30: statically stable ratio, issue 20)
     k0, k1 = kmap.kappa(0.0, r), kmap.kappa(0.5, r)
-    assert k1[0] > k0[0] and k1[1] > k0[1] and k1[2] < k0[2]
+    assert np.all(k1 > k0) and np.all(np.diff(np.log(k1 / k0)) < 0)
     # kappa_geo is the wrap-angle ratio: 1 at r_g = 1, reciprocal at reciprocal ratios
     # (symmetric geometry: phi(1/r) = -phi(r) for the same belt), to 1e-12
     assert kappa_geo(1.0, params.variator) == pytest.approx(1.0, abs=1e-12)
@@ -238,3 +241,29 @@ def test_thrust_ratio_toml_table(tmp_path):
     path.write_text("[[curve]]\nr_g = 1.0\ntau = [0.0, 1.0]\n")
     with pytest.raises(ParameterError, match="expected r_g, tau, kappa"):
         load_thrust_ratio(path)
+
+
+@pytest.mark.parametrize("r_g", [0.5, 1.0, 1.5, 2.0])
+def test_ratio_is_statically_stable_at_the_shipped_set_points(params, r_g):
+    """Servo torques held at a set-point with a torque reserve (tau = 0.9, 10 kN, 300 rad/s,
+    the test bench): d ln kappa*/d r_g > 0 at fixed load torque (`ratio_stability`) and the
+    plant's every pole in the left half-plane; at gain 1 (creep slow against the driveline)
+    the slow real pole is the quasi-static -omega_eff K_c d ln kappa*/d r_g (model notes Sec.
+    9) within 10 %."""
+    from empact import OperatingPoint
+    from empact.nonlinear.linearization import plant
+    from empact.variator.thrust_ratio import ratio_stability, thrust_ratio_from_params
+    from empact.variator.traction import traction_from_params
+
+    op = OperatingPoint(r_g=r_g, omega_p=300.0, tau=0.9, F_s=1e4)
+    S = ratio_stability(thrust_ratio_from_params(params), params.variator,
+                        traction_from_params(params).mu_max, r_g, 0.9)
+    assert S > 0
+    assert np.linalg.eigvals(plant(params, op).A).real.max() < 0
+    slow = params.from_dotted({"shift.gain": 1.0})
+    pl = plant(slow, op)
+    ev = np.linalg.eigvals(pl.A)
+    real = ev[(np.abs(ev.imag) < 1e-9) & (np.abs(ev) < 1.0)]
+    predicted = -np.hypot(300.0, slow.shift.omega_0) * creep_coefficient(
+        slow, r_g, 1e4, pl.trim.model.output_dict(pl.trim.x, pl.trim.u)["R_p"]) * S
+    assert real.size == 1 and real[0].real == pytest.approx(predicted, rel=0.1)

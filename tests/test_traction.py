@@ -49,19 +49,36 @@ def test_coefficients_interpolate_in_log_ratio(params):
     assert_allclose(magic.coefficients(r_mid)[3], (t.E_med + t.E_od) / 2, rtol=1e-12)
 
 
+#: issue 20's bands for the shipped curve: slip at 90 % of the peak about 1-2 % (1.0-2.0 %),
+#: the peak at 2-4.5 % depending on ratio, peaks 0.09-0.12 (published pushbelt curves)
+NU90_BAND, PEAK_BAND, MU_BAND = (0.010, 0.020), (0.020, 0.045), (0.09, 0.12)
+
+
+@pytest.mark.parametrize("r_g", [0.43, 0.5, 1.0, 2.0, 2.25])
+def test_shipped_curve_has_a_micro_slip_slope(magic, r_g):
+    """At LOW, MED, OD and r_g = 0.5, 2: the slip at 90 % of the peak, the peak slip and the
+    peak inside the issue's bands (on a 1e-5 slip grid: the statistics to 1e-5)."""
+    nu = np.linspace(0.0, 0.1, 10001)
+    mu = magic.mu(nu, r_g)
+    k = int(np.argmax(mu))
+    nu90 = nu[np.argmax(mu >= 0.9 * mu[k])]
+    assert NU90_BAND[0] <= nu90 <= NU90_BAND[1]
+    assert PEAK_BAND[0] <= nu[k] <= PEAK_BAND[1]
+    assert MU_BAND[0] <= mu[k] <= MU_BAND[1]
+    assert mu[k] == pytest.approx(float(magic.mu_max(r_g)), rel=1e-6)  # D is the peak
+
+
 def test_shipped_curves_show_fig10_and_the_slip_claims(magic):
+    """Fig. 10: rises to a maximum, declines beyond it (MED and OD within 10 %); at r_g = 1
+    the slope is negative by 4 % (Fig. 11's instability), steep at 0.1 % (full coupling,
+    mu' > 1) and small near the peak (weak coupling at the Fig. 11 slips read near it:
+    mu' < 0.64 from 2.5 % on, model notes Sec. 4 with alpha = 10)."""
     curves = traction_curves(magic, RATIOS, np.linspace(0, 0.1, 4001))
     nu_pk, mu_pk = curves.peak()
-    # model notes Sec. 4: published pushbelt curves peak around mu = 0.09-0.12
-    assert np.all((mu_pk >= 0.09 - 1e-9) & (mu_pk <= 0.12))
-    # Fig. 10: rises to a maximum, declines beyond it at some ratios (here MED and OD)
     assert curves.mu[1, -1] < mu_pk[1] and curves.mu[2, -1] < mu_pk[2]
-    # paper Sec. 2.2: at r_g = 1 the slope is small positive at 1-3 % and negative by 4 %
-    assert np.all(magic.dmu([0.01, 0.02, 0.03], 1.0) > 0)
-    assert magic.dmu([0.01, 0.02, 0.03], 1.0).max() < 0.05
     assert magic.dmu(0.04, 1.0) < 0
-    # steep micro-slip: mu' > 1 at 0.1 % (full coupling, model notes Sec. 4)
     assert magic.dmu(0.001, 1.0) > 1
+    assert np.all(np.abs(magic.dmu([0.025, 0.03, 0.035, 0.04, 0.045], 1.0)) < 0.64)
 
 
 def test_slip_outside_the_range_is_an_error(magic):
@@ -87,12 +104,10 @@ def test_tabulated_agrees_with_the_analytic_curve_it_samples(magic):
         # PCHIP through 600 log-spaced samples: interpolation error below 1e-6 (measured:
         # largest about 2e-8, in the micro-slip knee)
         assert_allclose(tab.mu(nu, r), magic.mu(nu, r), atol=1e-6)
-        flat = np.abs(nu) >= 0.005
-        # slopes: the interpolant's derivative; within 5 % of the analytic slope (plus 2e-3
-        # absolute near mu' = 0) away from the steep knee
-        assert_allclose(tab.dmu(nu[flat], r), magic.dmu(nu[flat], r), rtol=0.05, atol=2e-3)
-        same_sign = np.sign(tab.dmu(nu[flat], r)) == np.sign(magic.dmu(nu[flat], r))
-        assert np.all(same_sign | (np.abs(magic.dmu(nu[flat], r)) < 2e-3))
+        # slopes: the interpolant's derivative; within 5 % of the analytic slope plus 5e-3
+        # absolute (about 0.1 % of the largest slope, 8-13: PCHIP's derivative error near
+        # mu' = 0, where the curve's peak is)
+        assert_allclose(tab.dmu(nu, r), magic.dmu(nu, r), rtol=0.05, atol=5e-3)
 
 
 def test_tabulated_slope_is_the_derivative_of_the_interpolant(magic):

@@ -28,8 +28,14 @@ COUPLED_R1_HZ: tuple[float, float] = (4.14, 22.5)
 #: Fig. 11 operating point: r_g, F_s0 [N], omega_p0 [rad/s].
 FIG11_POINT = {"r_g": 1.0, "F_s": 10e3, "omega_p": 300.0}
 
-#: Fig. 12(a) slip values [-].
-FIG12_SLIPS: tuple[float, ...] = (0.001, 0.005, 0.01, 0.02, 0.04)
+#: Fig. 12(a) slip values [-].  The paper states only 0.1 % (fully coupled) and 4.0 %
+#: (unstable); the intermediate curves are a reading ("the paper gives none; read near the
+#: traction peak"): 2-3 %, below the MED peak (3.3 % on the shipped curve), so that only the
+#: 4 % curve is unstable, as the paper's text says.
+FIG12_SLIPS: tuple[float, ...] = (0.001, 0.02, 0.025, 0.03, 0.04)
+#: Fig. 11 slip range [-] (a reading: the paper gives none; its poles end in the right
+#: half-plane "when mu' becomes negative", so the range straddles the traction peak).
+FIG11_SLIPS: tuple[float, float] = (0.025, 0.045)
 
 #: Fig. 10 ratios LOW, MED, OD.
 FIG10_RATIOS: tuple[float, float, float] = (0.43, 1.0, 2.25)

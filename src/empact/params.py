@@ -49,7 +49,7 @@ __all__ = [
     "DrivelineParams", "TractionParams", "ShiftParams", "ThrustRatioParams", "Sec21Stiffness",
     "OperatingPoint", "Params", "default_params",
     "load_params", "save_params", "dumps_params", "read_toml", "DAMPING_LEVELS",
-    "OPERATING_VARIABLES",
+    "OPERATING_VARIABLES", "ParameterInfo", "describe_parameters", "parameter_sources",
 ]
 
 DAMPING_LEVELS = ("none", "moderate", "large")
@@ -257,6 +257,16 @@ class OperatingPoint(Section):
         out["omega_p"] = self.omega_p
         return out
 
+    def label(self, ratio: bool = False) -> str:
+        """The given variables as text with units (``"tau = 0.9, F_s = 10000 N, omega_p = 300
+        rad/s"``; the ratio first with `ratio`)."""
+        names = (("r_g",) if ratio else ()) + tuple(k for k in ("nu", "tau", "F_s", "T_l")
+                                                     if getattr(self, k) is not None)
+        parts = [f"{k} = {getattr(self, k):g}" + (f" {OPERATING_VARIABLES[k][0]}"
+                                                  if OPERATING_VARIABLES[k][0] != "-" else "")
+                 for k in names + ("omega_p",)]
+        return ", ".join(parts)
+
     def as_dict(self) -> dict[str, float]:
         """Deprecated: `to_dict`."""
         warnings.warn("OperatingPoint.as_dict is deprecated; use to_dict", DeprecationWarning,
@@ -401,14 +411,18 @@ class Params:
             node[last] = value
         return Params.from_dict(nested, base=self)
 
-    def get(self, dotted: str) -> float:
-        """The value of a dotted name such as ``"actuation.k_w"``."""
+    def get(self, dotted: str, *, unset_ok: bool = False) -> float | None:
+        """The value of a dotted name such as ``"actuation.k_w"`` (with `unset_ok`, None for
+        an operating-point variable the set does not give, e.g. ``operating.nu`` of a point
+        given by its torque ratio)."""
         node: Any = self
         for part in dotted.split("."):
             if not hasattr(node, part) or part.startswith("_"):
                 raise ParameterError(f"unknown parameter {dotted!r}")
             node = getattr(node, part)
         if node is None:
+            if unset_ok:
+                return None
             raise ParameterError(f"parameter {dotted!r} is not set in this parameter set")
         if not isinstance(node, float):
             raise ParameterError(f"parameter {dotted!r} is a section, not a value")
@@ -416,7 +430,7 @@ class Params:
 
     def unit(self, dotted: str) -> str:
         """The unit of a dotted parameter name, e.g. ``"N m/rad"`` for ``"actuation.k_w"``."""
-        self.get(dotted)
+        self.get(dotted, unset_ok=True)
         *path, last = dotted.split(".")
         node: Any = self
         for part in path:
@@ -499,6 +513,68 @@ def default_params() -> Params:
         text = resources.files("empact.data").joinpath("default.toml").read_text()
         _DEFAULT = Params.from_dict(tomllib.loads(text), source="default.toml")
     return _DEFAULT
+
+
+@dataclass(frozen=True)
+class ParameterInfo:
+    """What `describe_parameters` says of one parameter.
+
+    Attributes
+    ----------
+    name : dotted name (``"traction.B_med"``)
+    unit : SI unit
+    allowed : the interval a value must lie in (validation)
+    doc : what it is
+    value : the shipped value
+    band : ``(lo, hi)``, the plausible band of the shipped value (a value outside it is
+        allowed but not physically credible for a pushbelt CVT and its test bench)
+    source : where the shipped value comes from, or the stated rationale for it
+    """
+
+    name: str
+    unit: str
+    allowed: str
+    doc: str
+    value: float | None
+    band: tuple[float, float]
+    source: str
+
+
+def parameter_sources() -> dict[str, dict[str, Any]]:
+    """Source and plausible band of every shipped parameter (``data/parameter_sources.toml``):
+    dotted name -> ``{"source": str, "band": [lo, hi]}``."""
+    text = resources.files("empact.data").joinpath("parameter_sources.toml").read_text()
+    return dict(tomllib.loads(text))
+
+
+def describe_parameters(params: Params | None = None) -> list[ParameterInfo]:
+    """Every parameter of a set (default: the shipped one) with its unit, allowed interval,
+    meaning, value, plausible band and source, in file order."""
+    params = default_params() if params is None else params
+    sources = parameter_sources()
+    out = []
+    blocks: list[tuple[str, Any]] = []
+    for name in ("variator", "actuation", "damping", "driveline", "traction", "shift",
+                 "thrust_ratio", "paper_sec21", "operating"):
+        block = getattr(params, name)
+        if name == "damping":
+            blocks += [(f"damping.{lvl}", getattr(block, lvl)) for lvl in DAMPING_LEVELS]
+            blocks.append(("damping", block))
+        else:
+            blocks.append((name, block))
+    for prefix, block in blocks:
+        if isinstance(block, DampingParams):
+            rows = [("omega_pulley", "rad/s", "(0, 2000]", "pulley speed of Shafai's model "
+                     "in the linear actuation model (Fig. 6)")]
+        else:
+            rows = type(block).describe()
+        for key, unit, allowed, doc in rows:
+            dotted = f"{prefix}.{key}"
+            info = sources.get(dotted, {})
+            band = tuple(float(v) for v in info.get("band", (float("nan"), float("nan"))))
+            out.append(ParameterInfo(dotted, unit, allowed, doc, getattr(block, key),
+                                     band, str(info.get("source", ""))))
+    return out
 
 
 def load_params(path: str | os.PathLike[str] | None = None) -> Params:

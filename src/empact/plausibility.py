@@ -49,15 +49,19 @@ def check_plausible(params: Params, source: str = "parameters") -> Params:
     source : the file it came from (named in the message)
     """
     where = f"{source}: "
-    op = params.operating
     tr = traction_from_params(params)
     lo, hi = tr.nu_range
-    if not lo <= op.nu <= hi:
+    op = params.operating
+    if op.nu is not None and not lo <= op.nu <= hi:
         raise ParameterError(f"{where}operating.nu = {op.nu:g}: outside the valid slip range "
                              f"[{lo:g}, {hi:g}] of the traction curve")
-    if op.F_s <= 0:
+    if op.F_s is not None and op.F_s <= 0:
         raise ParameterError(f"{where}operating.F_s = {op.F_s:g}: allowed range is (0, inf) [N] "
                              "(the operating point must transmit torque)")
+    try:
+        op = op.resolve(params)
+    except ParameterError as exc:
+        raise ParameterError(f"{where}[operating]: {exc}") from None
     nu = np.linspace(lo, hi, 41)
     r_lo, r_hi = ratio_range(params.variator)
     ratios = sorted({r_lo, 1.0, r_hi} if r_lo <= 1.0 <= r_hi else {r_lo, r_hi})

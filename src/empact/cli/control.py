@@ -73,7 +73,7 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
 
     values = {}
     for opt, text in raw.items():
-        v = parse_values(text, opt)
+        v = text if isinstance(text, np.ndarray) else parse_values(text, opt)
         if v is None:
             continue
         var, unit, _ = GRID[opt]
@@ -150,8 +150,8 @@ def control_group() -> None:
 @click.option("--method", type=click.Choice(["pi", "hinf"]), default="pi", show_default=True,
               help="Decentralised PI for the family, or H-infinity mixed sensitivity.")
 @click.option("--bandwidth", default=None, metavar="RATIO,SLIP",
-              help="Loop bandwidths [Hz] (default pi 0.5,0.2; hinf 0.1,0.05).")
-@click.option("--alpha-min", "alpha_min", type=float, default=0.4, show_default=True,
+              help="Loop bandwidths [Hz] (default 0.1,0.05: the shipped designs).")
+@click.option("--alpha-min", "alpha_min", type=float, default=0.2, show_default=True,
               help="PI: smallest multiloop disk margin at every grid point.")
 @click.option("--slip-signal", "slip_signal", type=click.Choice(["nu", "nu_r"]), default="nu",
               show_default=True, help="The measured slip.")
@@ -167,13 +167,14 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
                speed, load_torque, damping, kinematics, shift_law, drive, load_mode, out,
                params_file, as_json, json_out, force) -> None:
     """Design a controller (T_mp, T_ms) from the errors of (r_g, slip) on a plant family
-    (default family: r_g 0.5..2 (7, geometric), slip 0.6..1.2 % (4) at [operating])."""
+    (default family: r_g 0.5..2 (7, geometric), torque ratio tau 0.8..0.95 (4) at
+    [operating]'s clamping force and speed; empact.control.family.DESIGN_GRID)."""
     from ..control.hinf import design_hinf
     from ..control.pi import design_pi
 
     output_file(out, "--out", force=force, suffixes=("json", "mat"))
     output_file(json_out, "--json-out", force=True)
-    bw_text = bandwidth or ("0.5,0.2" if method == "pi" else "0.1,0.05")
+    bw_text = bandwidth or "0.1,0.05"
     try:
         bw = tuple(float(x) for x in bw_text.split(","))
     except ValueError:
@@ -183,11 +184,11 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
     for b in bw:
         check_number("--bandwidth", b, 0.0, 50.0, lo_open=True, unit="Hz")
     params = get_params(params_file)
-    raw = {"ratio": ratio or "0.5:2:7",
-           "slip": slip or (None if tau else "0.006,0.008,0.01,0.012"), "tau": tau,
+    from ..control.family import DESIGN_GRID
+
+    raw = {"ratio": ratio or DESIGN_GRID["r_g"],
+           "slip": slip, "tau": tau or (None if slip else DESIGN_GRID["tau"]),
            "clamp": clamp, "speed": speed, "load-torque": load_torque}
-    if raw["ratio"] == "0.5:2:7":
-        raw["ratio"] = ",".join(f"{x:.6g}" for x in np.geomspace(0.5, 2, 7))
     fam = family_from_options(params, raw, damping, kinematics, shift_law, drive, load_mode)
     if not fam.ok.all():
         raise InputError(f"{int((~fam.ok).sum())} grid points do not trim ("

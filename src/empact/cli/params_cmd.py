@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from ..params import dumps_params, load_params
+from ..params import describe_parameters, dumps_params, load_params
 from ._common import ErrorGroup, get_params
 
 
@@ -14,7 +14,8 @@ def params_group() -> None:
 
 @params_group.command("show")
 @click.argument("file", required=False, type=click.Path(dir_okay=False))
-@click.option("--describe", is_flag=True, help="List every key with unit, range and meaning.")
+@click.option("--describe", is_flag=True, help="List every key with its unit, allowed range, "
+              "meaning, value, plausible band and source.")
 def show(file: str | None, describe: bool) -> None:
     """Print the complete parameter set of FILE (default: the shipped set) as TOML.
 
@@ -22,11 +23,12 @@ def show(file: str | None, describe: bool) -> None:
     they define."""
     params = load_params(file)
     if describe:
-        for name, section in params.to_dict().items():
-            kind = type(getattr(params, name))
-            if hasattr(kind, "describe"):
-                for key, unit, rng, doc in kind.describe():
-                    click.echo(f"{name}.{key:10s} [{unit}] {rng}: {doc}")
+        for p in describe_parameters(params):
+            value = "not set" if p.value is None else f"{p.value:.6g}"
+            band = "" if p.band[0] != p.band[0] else f"; plausible [{p.band[0]:g}, " \
+                f"{p.band[1]:g}]"
+            click.echo(f"{p.name} [{p.unit}] = {value}{band}; allowed {p.allowed}: {p.doc}"
+                       + (f" (source: {p.source})" if p.source else ""))
         return
     click.echo(dumps_params(params), nl=False)
 

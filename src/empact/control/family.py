@@ -60,7 +60,7 @@ from ..sweep import SweepOptions, plan_chunks, run_chunks
 interpolate = lazy_module("scipy.interpolate")
 
 __all__ = ["VARIABLES", "PlantFamily", "plant_family", "save_family", "load_family",
-           "BENCH_OPTIONS"]
+           "BENCH_OPTIONS", "DESIGN_GRID"]
 
 #: operating variables of a family: unit, and whether it is interpolated in its logarithm
 #: (when all its grid values are positive: the plant depends on the slip through the slope of
@@ -70,6 +70,11 @@ VARIABLES = {"r_g": ("-", True), "nu": ("-", True), "tau": ("-", True), "F_s": (
 
 #: most points of one family
 MAX_POINTS = 1_000_000
+
+#: the default design family of the shipped controllers and of ``empact control design``:
+#: ratio (7, geometric 0.5-2) x torque ratio (0.8-0.95: set-points with a 5-20 % torque
+#: reserve on the traction curve) at ``params.operating``'s clamping force and speed
+DESIGN_GRID = {"r_g": np.geomspace(0.5, 2.0, 7), "tau": np.array([0.8, 0.85, 0.9, 0.95])}
 
 
 @dataclass(frozen=True, eq=False)

@@ -8,10 +8,9 @@ ratio ``r_g0``) are realised as a
 continuous state-space model with `realize_steps`.  The exact linearisation at the same point
 (`empact.nonlinear.linearization.plant`) is the reference the identified model is compared with.
 
-The slip responds strongly to the primary servo: at the default point (torque ratio near 1,
-the flat top of the traction curve) a 3e-5 N m step already makes the identified T_mp -> nu
-response deviate up to 7 % from the exact one (measured), so the default steps are 1e-5 N m
-and the model is integrated with a tight tolerance.
+The slip responds strongly to the primary servo (with equal translation its torque presses
+both sheaves), so the default steps are small (1e-5 N m: the response stays linear) and the
+model is integrated with a tight tolerance.
 """
 from __future__ import annotations
 

@@ -136,10 +136,15 @@ def _distribution(name: str, table: Any, params: Params, src: str) -> Distributi
     if not isinstance(table, Mapping):
         raise ParameterError(f"{where} must be a table with a distribution, not {table!r}")
     try:
-        nominal = params.get(name)
+        nominal = params.get(name, unset_ok=True)
     except ParameterError:
         raise ParameterError(f"{where}: unknown parameter {name!r} (use a dotted name of a "
                              "parameter file, e.g. 'actuation.k_w')") from None
+    if nominal is None and table.get("distribution") in DISTRIBUTIONS and not (
+            {"mean", "median", "lower"} & set(table) and "rel_std" not in table):
+        raise ParameterError(f"{where}: {name} is not set in this parameter set (the "
+                             "operating point is given by other variables): give the "
+                             "distribution's mean, median or bounds explicitly")
     kind = table.get("distribution")
     if kind not in DISTRIBUTIONS:
         raise ParameterError(f"{where}: distribution = {kind!r}; choose one of "

@@ -364,11 +364,14 @@ def _eval(x, u, p, ix, dx, y):
         T_on_p = -r_g * T_b
         P_slip = T_b * (r_g * wp - ws)
 
-    # servo torques: direct, or the ratio controller (PID on the shift coordinate; the integral
-    # carries the holding torque)
+    # servo torques: direct, or the ratio controller (the integral carries the holding torque)
     if ix[3] >= 0:
-        G = (-s * i_e / (i_w * tb)) * (R_s + R_p * (pi + 2.0 * phi) / (pi - 2.0 * phi)) \
-            / (R_s * R_s)
+        if p[P_LAW] == LAW_SHAFAI:  # PID on the shift coordinate of an inertia
+            G = (-s * i_e / (i_w * tb)) * (R_s + R_p * (pi + 2.0 * phi) / (pi - 2.0 * phi)) \
+                / (R_s * R_s)
+        else:  # PI on the ratio rate per N m of primary servo torque the creep law gives
+            w_eff = np.sqrt(wp * wp + p[P_W0] * p[P_W0])
+            G = -w_eff * creep_coefficient(r_g, R_p, F_s_el, p) * i_w / (i_e * s * F_p_el)
         err = (u[0] - r_g) / G
         T_mp = x[ix[3]] + p[P_RKP] * err - p[P_RKD] * w1
         dx[ix[3]] = p[P_RKI] * err

@@ -77,8 +77,14 @@ Construction choices (documented, not hidden):
   `empact.linear.driveline` (stiffness ``driveline.k_belt``), the limit in which the belt does not slip.
 * **Controllers** (optional, for a test bench): PI speed loops on the drive and load motors,
   and a ratio controller (``r_g_ref`` input): ``T_mp = z_r + K_p e - K_d omega_mp``,
-  ``dz_r/dt = K_i e``, with ``e = (r_g_ref - r_g) / G`` and ``G = d r_g / d q1`` along the
-  shift (rigid-body) motion, so that the gains hold over the ratio range.  (A feedforward of
+  ``dz_r/dt = K_i e``, with ``e = (r_g_ref - r_g) / G``.  With a creep law the shift is a
+  damper, not an inertia: ``G = -omega_eff K_c i_w / (i_e s F_p)`` is the ratio rate per N m of
+  primary servo torque at rest (the creep law ``dr_g/dt = omega_eff K_c ln(kappa / kappa*)``
+  with ``dF_p = -(i_w / (i_e s)) dT_mp`` through the worm and the screw), evaluated at the
+  current state, so that the loop ``K_p G / s`` crosses over at ``K_p = 2 pi
+  ratio_bandwidth_hz`` at every ratio, speed and clamping force (``K_i = K_p^2 / 4``;
+  ``K_d`` damps the servo as below).  With Shafai's law ``G = d r_g / d q1`` along the shift
+  (rigid-body) motion and a PID on its inertia.  (A feedforward of
   the static holding torque ``-(i_e s / i_w)(F_p + F_s)`` from the current belt forces was
   tried and dropped: it feeds the clamping-force transients of a fast shift back into the
   shift and destabilised the loop.)  Keep the ratio bandwidth below about 3 Hz: the P path
@@ -181,8 +187,7 @@ class ModelOptions:
         Speed-loop bandwidths [Hz]: ``K_p = 2 pi f J``, ``K_i = K_p 2 pi f / 4``.
         (``drive_bandwidth``, ``load_bandwidth``: deprecated names.)
     ratio_bandwidth_hz : float
-        Ratio-loop natural frequency [Hz] (damping ratio 0.7, integral at a quarter of it),
-        gains from the shift-mode inertia at r_g = 1 referred to the primary servo.
+        Ratio-loop crossover [Hz] (see the module notes; integral at a quarter of it).
         (``ratio_bandwidth``: deprecated name.)
     kinematics : {"equal-translation", "paper-sec2.1"}
         Sheave kinematics.  ``"equal-translation"`` (default, the Empact as built, Secs. 1 and
@@ -520,7 +525,10 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
         values[f"{loop}_kp"], values[f"{loop}_ki"] = J * w, J * w * w / 4
     w = 2 * np.pi * o.ratio_bandwidth_hz
     J = shift_inertia(params, o.kinematics)
-    values.update(ratio_kp=J * w * w, ratio_kd=2 * 0.7 * w * J, ratio_ki=J * w**3 / 4)
+    if o.shift_law == "shafai":  # PID on the shift inertia: natural frequency w
+        values.update(ratio_kp=J * w * w, ratio_kd=2 * 0.7 * w * J, ratio_ki=J * w**3 / 4)
+    else:  # PI on the creep law's ratio rate per N m: crossover w (servo damping kept)
+        values.update(ratio_kp=w, ratio_kd=2 * 0.7 * w * J, ratio_ki=w * w / 4)
     return K.pack_parameters(values, thrust_table, creep_table)
 
 

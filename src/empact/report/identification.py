@@ -32,10 +32,10 @@ def fig2(ctx: Context, res: rep.Fig2) -> str:
                                        "-1 slope of T_mp -> theta_mp up to [Hz]"],
                         res.gain_rows,
                         "Sensitivity to the creep law's magnitude (shift.gain; 1 is the "
-                        "published magnitude, uncertain by about 10x): the machine's two "
-                        "lowest actuation modes at r_g = 1 with the law's linearisation as "
-                        "pulley damping. The damping peaks at an intermediate magnitude; "
-                        "the shipped value stays at 1.")
+                        "reconstruction's magnitude, the shipped 15 is calibrated against the "
+                        "creep anchors, see the machine sheet): the machine's two lowest "
+                        "actuation modes at r_g = 1 with the law's linearisation as pulley "
+                        "damping. The damping peaks at an intermediate magnitude.")
             + ctx.table("fig2_identification", ["r_g", "order", "worst step fit [%]",
                                                 "largest median FRF error [%]",
                                                 "RHP zeros T_mp -> nu, identified [Hz]",

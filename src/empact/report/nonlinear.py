@@ -33,8 +33,8 @@ def nmp(ctx: Context, res: rep.NmpSection) -> str:
                                       "RHP zeros of T_mp -> nu [Hz]"], rows,
                         "Sec. 2.3 on the machine: geometry and right-half-plane zeros")
             + ctx.claims(res.claims)
-            + f"<p>Zeros of the exactly linearised T_mp -> slip channel at nu = {op.nu:g}, "
-              f"F_s = {op.F_s:g} N, omega_p = {op.omega_p:g} rad/s (moderate damping, "
+            + f"<p>Zeros of the exactly linearised T_mp -> slip channel at {op.label()} "
+              "(moderate damping, "
               "torque-controlled drive and load, creep law). The paper names neither the slip "
               "signal nor, consistently, the kinematics; the table separates both: the machine "
               "(equal translation) and the paper's Sec. 2.1 rows, and the slip nu of eq. 2 on "
@@ -62,9 +62,8 @@ def simulation(ctx: Context, res: rep.SimulationSection) -> str:
 def exact_plant(ctx: Context, res: rep.PlantSection) -> str:
     """The exact plant's magnitudes, operating points and the load -> ratio gains."""
     op = ctx.params.operating
-    return (ctx.figure(plot_plant_magnitude(res.responses, title=r"Exact linearised plant, $\nu$ = "
-                                            f"{op.nu:g}, $F_s$ = {op.F_s / 1e3:g} kN, "
-                                            rf"$\omega_p$ = {op.omega_p:g} rad/s"),
+    return (ctx.figure(plot_plant_magnitude(res.responses, title="Exact linearised plant, "
+                                            + op.label()),
                        "fig2_exact_plant", "Fig. 2 (exact): magnitudes of T_mp, T_ms, T_l -> "
                        "r_g, nu, nu_r at r_g = 0.5, 1, 2, from the complex-step linearisation of "
                        "the nonlinear model (the machine, creep law)")

@@ -4,9 +4,10 @@ from __future__ import annotations
 from ..reproduction import control as rctl
 from ..reproduction import identification as rid
 from ..reproduction import linear as rlin
+from ..reproduction import machine as rmach
 from ..reproduction import nonlinear as rnl
 from ..reproduction import slip as rslip
-from . import control, identification, linear, nonlinear, slip
+from . import control, identification, linear, machine, nonlinear, slip
 from .context import Section
 
 __all__ = ["SECTIONS"]
@@ -44,6 +45,8 @@ SECTIONS: tuple[Section, ...] = (
             "responses", "fig2", rid.fig2, identification.fig2, cost=3.3),
     Section("Figure 14: FRFs on the virtual test rig (r_g = 0.5, nu0 = 0)", "fig14", rid.fig14,
             identification.fig14, cost=2.7),
+    Section("Beyond the paper: the machine sheet (traction, creep, thrust ratio, torque "
+            "reserve)", "machine", rmach.machine, machine.machine, cost=1.5),
     Section("Beyond the paper: plant family, robust slip and ratio control, closed loop on "
             "the machine", "control", rctl.control, control.control, cost=6.3),
 )

@@ -186,7 +186,7 @@ def pole_sweep(params: Params, name: Variable, values: ArrayLike,
     traction : traction model (default `traction_from_params(params)`)
     """
     v = grid_values(name, values)
-    base = OperatingPoint.from_params(params) if base is None else base
+    base = (params.operating if base is None else base).resolve(params, traction)
     op = base.to_dict()
     op[name] = v
     terms = linearisation_terms(params, op["r_g"], op["nu"], op["F_s"], op["omega_p"], traction)
@@ -259,7 +259,7 @@ def zero_locus(params: Params, r_g: ArrayLike, base: OperatingPoint | None = Non
     Zeros with ``|z| < origin_tol * max |z|`` count as zeros at the origin.
     """
     r = grid_values("r_g", r_g)
-    base = OperatingPoint.from_params(params) if base is None else base
+    base = (params.operating if base is None else base).resolve(params, traction)
     found, origin, coupled = [], [], []
     for rk in r:
         m = slip_model(params, base.replace(r_g=float(rk)), traction)

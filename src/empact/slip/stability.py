@@ -142,7 +142,7 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
     check_choice("method", method, METHODS)
     chunk_size = check_int("chunk_size", chunk_size, 1)
     workers = check_int("workers", (os.cpu_count() or 1) if workers is None else workers, 1)
-    base = OperatingPoint.from_params(params) if base is None else base
+    base = (params.operating if base is None else base).resolve(params, traction)
     fixed = base.to_dict()
     # Every variable is valid or not on its own: checking the two axes checks the whole grid,
     # so a bad value is reported at once, before any chunk is computed.

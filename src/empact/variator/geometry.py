@@ -32,7 +32,8 @@ from .._validate import check_values
 from ..errors import ParameterError
 
 __all__ = ["VariatorParams", "wrap_angle", "belt_length", "radii", "stretched_radii",
-           "ratio_range", "VariatorState", "variator_state", "check_ratio"]
+           "ratio_range", "VariatorState", "variator_state", "check_ratio",
+           "primary_radius_per_ratio"]
 
 
 @dataclass(frozen=True)
@@ -220,6 +221,18 @@ def check_ratio(r_g: ArrayLike, variator: VariatorParams, name: str = "r_g") -> 
         raise ParameterError(f"{name} = {value:g}: outside the geometric ratio range "
                              f"[{lo:.4g}, {hi:.4g}] of the variator")
     return r
+
+
+def primary_radius_per_ratio(r_g: ArrayLike, variator: VariatorParams) -> NDArray[np.float64]:
+    """``dR_p / dr_g`` [m] along a shift at constant belt length: eq. 6 gives ``dR_s =
+    -kappa_geo dR_p`` with ``kappa_geo = (pi + 2 phi) / (pi - 2 phi)``, so ``dr_g = dR_p (1 +
+    r_g kappa_geo) / R_s``."""
+    v = variator
+    r = check_ratio(r_g, v)
+    R_p, R_s = radii(r, v.L_belt, v.a)
+    phi = wrap_angle(R_p, R_s, v.a)
+    kgeo = (np.pi + 2 * phi) / (np.pi - 2 * phi)
+    return R_s / (1 + r * kgeo)
 
 
 @dataclass(frozen=True)

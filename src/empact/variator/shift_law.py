@@ -70,8 +70,12 @@ class ShiftParams(Section):
     pulleys: no creep).  The coefficients are a third party's reconstruction of the paper's
     fits (eng-tools.dev, "How does a CVT actually change ratio?", its Eqs. 23 and 49 and the
     calculator's a1, a2 fitted to the paper's Fig. 13); the paper's own tables could not be
-    read, so the magnitude is uncertain by about a factor 10 (hence `gain`).  The test rig of
-    the paper covered r_g = 0.6-1.8, F_s = 20-30 kN, 1000-2000 rpm.
+    read.  The magnitude is calibrated by `gain` against the creep anchors (15, band 10-20:
+    0.1-0.2 mm of primary radius per revolution at a 20 % thrust imbalance, about 1e6 N s/m of
+    equivalent axial damping at 300 rad/s, the creep-to-slip transition at ordinary shift
+    rates, Fig. 14's -1 slope; issue 20).  The test rig of the paper covered r_g = 0.6-1.8,
+    F_s = 20-30 kN, 1000-2000 rpm.  A measured shift-speed map (`CreepMap`) replaces the
+    analytic coefficient.
     """
 
     _name = "shift"
@@ -84,8 +88,9 @@ class ShiftParams(Section):
                         "(reconstructed fit: 0.21)", 0.0, 5.0)
     a2: float = param("-", "ratio dependence, quadratic term (reconstructed fit: 0.08)", 0.0, 5.0,
                    lo_open=False)
-    gain: float = param("-", "overall factor on the creep rate: 1 is the published magnitude; "
-                          "the reconstruction is uncertain by about 10x", 0.1, 50.0,
+    gain: float = param("-", "overall factor on the creep rate: 1 is the reconstruction's "
+                          "magnitude, which the creep anchors put 10-20 times too slow", 0.1,
+                     50.0,
                      lo_open=False)
     omega_0: float = param("rad/s", "speed below which creep fades (regularisation at "
                                  "standstill: no shifting without rotation)", 0.01, 10.0)

@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Callable, Protocol
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +42,8 @@ from ..errors import ParameterError
 from ._tables import check_curve, encode_curves, interpolate_curves, read_curves
 from .geometry import VariatorParams, radii, wrap_angle
 
-__all__ = ["ThrustRatioParams", "kappa_geo", "AnalyticThrustRatio", "TabulatedThrustRatio", "load_thrust_ratio",
+__all__ = ["ThrustRatioParams", "ratio_stability", "ratio_stability_map", "RatioStabilityMap",
+           "kappa_geo", "AnalyticThrustRatio", "TabulatedThrustRatio", "load_thrust_ratio",
            "thrust_ratio_from_params", "zero_torque_difference", "TAU_RANGE"]
 
 #: Torque ratios a tabulated map may cover (|tau| > 1 is beyond the traction limit).
@@ -212,3 +213,75 @@ def zero_torque_difference(kmap: AnalyticThrustRatio | TabulatedThrustRatio,
     non-zero value is a static shift force at zero load: ``F_s (kappa* - kappa_geo)``."""
     r = np.asarray(r_g, float)
     return kmap.kappa(np.zeros_like(r), r) / kappa_geo(r, variator) - 1
+
+
+def ratio_stability(kmap: AnalyticThrustRatio | TabulatedThrustRatio, variator: VariatorParams,
+                    mu_max: Callable[[NDArray], NDArray], r_g: ArrayLike, tau: ArrayLike,
+                    dr: float = 1e-5) -> NDArray[np.float64]:
+    """``d ln kappa* / d r_g`` at a fixed load torque and clamping force [-] (arrays
+    broadcast): the static stability of the ratio with the servo torques held.
+
+    With the servo torques held the actual thrust ratio stays put, and a ratio disturbance
+    obeys ``d(delta r)/dt = -omega_p K_c (d ln kappa*/d r_g) delta r`` (model notes Sec. 9):
+    the ratio is statically unstable where this derivative is negative.  Along the
+    derivative the load torque and the clamping force are fixed, so the torque ratio
+    ``tau = T_l cos(beta) / (2 mu_max F_s R_s)`` moves with the ratio as ``tau(r) = tau0
+    mu_max(r0) R_s(r0) / (mu_max(r) R_s(r))`` (the unstretched belt's radii); central
+    difference of relative step `dr`.
+
+    Parameters
+    ----------
+    kmap : the equilibrium thrust-ratio map
+    variator : the geometry
+    mu_max : the traction curve's peak value over the ratio (e.g.
+        ``traction_from_params(params).mu_max``)
+    r_g, tau : ratios [-] and torque ratios [-] of the operating points
+    dr : relative ratio step of the central difference
+    """
+    r, t = np.broadcast_arrays(np.asarray(r_g, float), np.asarray(tau, float))
+
+    def capacity(rr):
+        return np.asarray(mu_max(rr), float) * radii(rr, variator.L_belt, variator.a)[1]
+
+    c0 = capacity(r)
+    out = []
+    for s in (1 + dr, 1 - dr):
+        rr = r * s
+        out.append(np.log(kmap.kappa(t * c0 / capacity(rr), rr)))
+    return (out[0] - out[1]) / (2 * dr * r)
+
+
+@dataclass(frozen=True)
+class RatioStabilityMap:
+    """`ratio_stability` over a grid of torque ratios and ratios.
+
+    Attributes
+    ----------
+    tau : torque ratios [-], shape (n_tau,)
+    r_g : ratios [-], shape (n_r,)
+    S : ``d ln kappa* / d r_g`` at fixed load torque [-], shape (n_r, n_tau); the ratio is
+        statically unstable with the servo torques held where it is negative
+    points : optional marked operating points ``(tau, r_g)`` (e.g. shipped set-points)
+    """
+
+    tau: NDArray[np.float64]
+    r_g: NDArray[np.float64]
+    S: NDArray[np.float64]
+    points: tuple[tuple[float, float], ...] = ()
+
+    @property
+    def unstable_fraction(self) -> float:
+        """Share of the grid where the ratio is statically unstable [-]."""
+        return float(np.mean(self.S < 0))
+
+
+def ratio_stability_map(kmap: AnalyticThrustRatio | TabulatedThrustRatio,
+                        variator: VariatorParams, mu_max: Callable[[NDArray], NDArray],
+                        tau: ArrayLike, r_g: ArrayLike,
+                        points: tuple[tuple[float, float], ...] = ()) -> RatioStabilityMap:
+    """`ratio_stability` on the grid ``r_g x tau`` (1-D arrays), with optional marked
+    ``(tau, r_g)`` points."""
+    t = np.atleast_1d(np.asarray(tau, float))
+    r = np.atleast_1d(np.asarray(r_g, float))
+    S = ratio_stability(kmap, variator, mu_max, r[:, None], t[None, :])
+    return RatioStabilityMap(t, r, S, tuple((float(a), float(b)) for a, b in points))

@@ -23,8 +23,9 @@ Two models are provided:
         mu'(nu) = D C cos(C arctan(phi)) / (1 + phi^2) * B (1 - E + E / (1 + (B nu)^2))
 
     ``D`` is the peak traction coefficient, ``B D C`` the slope at ``nu = 0``, ``C`` sets how far
-    ``mu`` falls beyond the peak (``C = 1``: no fall) and ``E`` close to 1 gives the steep
-    micro-slip rise followed by the flat top of a pushbelt curve.  The four coefficients are
+    ``mu`` falls beyond the peak (``C = 1``: no fall) and ``E`` shapes the knee (``E = 0``, the
+    shipped curve: a micro-slip slope up to the peak; ``E`` close to 1: a steep rise and a flat
+    top).  The four coefficients are
     given at three ratios (LOW, MED, OD) and interpolated *linearly in log(r_g)* between them,
     held constant outside (``numpy.interp`` on ``log(r_g)``); `MagicFormulaTraction.coefficients`
     returns them, for re-implementation elsewhere (e.g. a compiled simulation kernel).
@@ -213,6 +214,12 @@ class MagicFormulaTraction:
                                  "ratio")
         x, xp = np.log(r), np.log(self.ratios)
         return tuple(np.interp(x, xp, getattr(self, name)) for name in ("B", "C", "D", "E"))
+
+    def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
+        """The curve's peak value ``D(r_g)`` [-] (reached where ``C arctan(phi) = pi / 2``,
+        for ``C >= 1``): the torque ratio is ``tau = mu / mu_max``, as the compiled model
+        computes it."""
+        return self.coefficients(r_g)[2]
 
     def mu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
         """Traction coefficient ``D sin(C arctan(phi))`` [-], shape of ``broadcast(nu, r_g)``."""
