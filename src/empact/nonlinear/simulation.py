@@ -227,8 +227,11 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     if controller is None:
         K._eval(x, _inputs_at(0.0, sig_t, sig_v, sig_n), model.p, model.ix, dx, y)
         Y[0] = y
-        chunks = np.linspace(0.0, duration, 101)[1:]
-        with progress_bar(total=len(chunks), desc=f"simulate {name}".strip(), unit="%",
+        # calls of the integrator (progress-bar ticks): every call ends on a step, so no
+        # shorter than 20 largest steps, at most 100; the same with and without a bar
+        n_chunks = int(min(100, max(1, np.ceil(duration / (20.0 * max_step) - 1e-9))))
+        chunks = np.linspace(0.0, duration, n_chunks + 1)[1:]
+        with progress_bar(total=100, desc=f"simulate {name}".strip(), unit="%",
                           enabled=progress) as bar:
             for k, t_chunk in enumerate(chunks):
                 status, t, h, filled, ns, nr = step(
@@ -237,7 +240,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
                     cols, J, k == 0)
                 n_steps += ns
                 n_rej += nr
-                bar.update(1)
+                bar.update(100 * (k + 1) // n_chunks - 100 * k // n_chunks)
                 if status != 0:
                     break
         U = _inputs_at(samples[:max(filled, 1)], sig_t, sig_v, sig_n)
