@@ -263,7 +263,7 @@ def test_solver_method_is_chosen_and_checked(params):
             "initial": {"r_g": 1.0, "omega_p": 300.0, "F_s": 10e3, "T_l": 50.0},
             "solver": {"method": "rodas5p"}}
     assert scenario_from_dict(data).method == "rodas5p"
-    assert scenario_from_dict({**data, "solver": {}}).method == "ros2"  # the default
+    assert scenario_from_dict({**data, "solver": {}}).method == "rodas4"  # the default
     with pytest.raises(ParameterError) as exc:
         scenario_from_dict({**data, "solver": {"method": "rk45"}}, "x.toml")
     msg = str(exc.value)

@@ -5,10 +5,10 @@ piecewise-linear input signals; `run_scenario` trims a scenario's initial point
 (`empact.nonlinear.scenario`) and simulates it.
 
 The integrator is a compiled, L-stable Rosenbrock method with an exact Jacobian: by
-default the order-2 method of `empact.nonlinear._rosenbrock` (``method="ros2"``), or the
-order-5 Rodas5P or order-4 Rodas4 of `empact.nonlinear._rodas` (``"rodas5p"``, ``"rodas4"``;
-see `METHODS`).  It stops - keeping everything computed so far, marked
-incomplete - when omega_p reaches ``omega_min`` (the slip of eq. 2 is undefined at a standing
+default the order-4 Rodas4 of `empact.nonlinear._rodas` (``method="rodas4"``), or the
+order-5 Rodas5P (``"rodas5p"``) or the order-2 method of `empact.nonlinear._rosenbrock`
+(``"ros2"``, the default up to 0.1); see `METHODS`.  It stops - keeping everything computed
+so far, marked incomplete - when omega_p reaches ``omega_min`` (the slip of eq. 2 is undefined at a standing
 primary), the belt goes slack, a radius leaves the variator's range, or the solver fails.
 """
 from __future__ import annotations
@@ -33,12 +33,12 @@ from . import _kernel as K
 from . import _rodas
 from ._rosenbrock import STATUS, integrate
 from .model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
-from .scenario import METHODS, Scenario
+from .scenario import DEFAULT_METHOD, METHODS, Scenario
 from .equilibrium import TrimResult, trim
 
 __all__ = ["SimulationResult", "SampledController", "simulate", "run_scenario",
            "scenario_model", "scenario_signals", "csv_text", "write_csv", "state_tolerances",
-           "STATUS", "METHODS"]
+           "STATUS", "METHODS", "DEFAULT_METHOD"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -163,7 +163,8 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
              duration: float, *, u0: NDArray | None = None,
              controller: SampledController | None = None, sample_rate: float = 1000.0,
              rtol: float = 1e-4, max_step: float = 0.01, omega_min: float = 1.0,
-             max_steps: int = 2_000_000, method: str = "ros2", progress: bool = False,
+             max_steps: int = 2_000_000, method: str = DEFAULT_METHOD,
+             progress: bool = False,
              name: str = "") -> SimulationResult:
     """Integrate `model` from `x0` over ``[0, duration]``, open loop or with a sampled
     controller in the loop.
@@ -193,10 +194,10 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
         Stop when omega_p falls to this [rad/s].
     max_steps : int
         Give up (incomplete result) after this many integration steps.
-    method : {"ros2", "rodas5p", "rodas4"}
-        The integrator (`METHODS`): the order-2 Rosenbrock method (ode23s), or Rodas5P
-        (order 5, dense output of order 4) or Rodas4 (order 4); the same tolerances, stops and
-        outputs (see ``bench/RESULTS.md`` for which is faster where).
+    method : {"rodas4", "rodas5p", "ros2"}
+        The integrator (`METHODS`): Rodas4 (order 4, the default), Rodas5P (order 5, dense
+        output of order 4) or the order-2 Rosenbrock method (ode23s); the same tolerances,
+        stops and outputs (``bench/RESULTS.md``: which is faster where, at equal accuracy).
     progress : bool
         A progress bar on stderr (`empact._progress`).
 
