@@ -63,7 +63,7 @@ REPEATS = 1 if QUICK else 7
 TARGETS = (1e-4, 1e-6)
 GRID = [10 ** (-k / 8) for k in range(24, 65, 8 if QUICK else 1)]  # 1e-3 ... 1e-8
 OURS = ("ros2", "rodas5p", "rodas4")
-NEW = "rodas5p"
+NEW = ("rodas4", "rodas5p")  # the default first
 
 
 def workloads(params):
@@ -198,7 +198,9 @@ def breakdown(params, picks):
     per = {"ros2": ({"J": 1, "f": 3, "df/du": 1, "LU": 1, "solve": 3},
                     {"f": 2, "LU": 1, "solve": 3}),
            "rodas5p": ({"J": 1, "f": 8, "df/du": 1, "LU": 1, "solve": 8},
-                       {"f": 7, "LU": 1, "solve": 8})}
+                       {"f": 7, "LU": 1, "solve": 8}),
+           "rodas4": ({"J": 1, "f": 6, "df/du": 1, "LU": 1, "solve": 6},
+                      {"f": 5, "LU": 1, "solve": 6})}
     for target, routes in picks.items():
         for route, rtol in routes.items():
             if route == "odeint":
@@ -245,7 +247,7 @@ def cold_start():
     """Fresh processes: (imports, first run, second run) [s] with an empty numba cache (every
     compiled function compiled: kernel, trim, integrator) and with the cache present."""
     rows = []
-    for method in ("ros2", NEW):
+    for method in ("ros2",) + NEW:
         with tempfile.TemporaryDirectory() as cache:
             env = dict(os.environ, NUMBA_CACHE_DIR=cache)
             empty = subprocess.run([sys.executable, "-c", COLD, method], env=env,
@@ -353,13 +355,14 @@ def main() -> None:
             print(f"| {name} | {rtol:.0e} | {row} |")
 
     print("\nEqual accuracy: odeint at rtol 1e-4 / 1e-6 against each route's cheapest run at "
-          "least as accurate (its rtol, error, time [ms]); speed-ups = time of the other / "
-          f"time of {NEW}")
+          "least as accurate (its rtol, error, time [ms]); speed-ups = time of the other route "
+          "/ time of the new method")
     cols = [r for r in routes if r not in ("odeint", "cvode5", "cvode3")] + \
         (["cvode"] if CV.available() else [])
-    print("| workload | odeint rtol (error, time) | " + " | ".join(cols) +
-          f" | odeint / {NEW} | cvode / {NEW} | ros2 / {NEW} |")
-    print("|---|---|" + "---|" * (len(cols) + 3))
+    ratio_cols = [(b, n) for n in NEW for b in ("odeint", "cvode", "ros2")]
+    print("| workload | odeint rtol (error, time) | " + " | ".join(cols) + " | "
+          + " | ".join(f"{b} / {n}" for b, n in ratio_cols) + " |")
+    print("|---|---|" + "---|" * (len(cols) + len(ratio_cols)))
     for name, target, best in equal:
         base = best["odeint"]
         cells = []
@@ -370,16 +373,14 @@ def main() -> None:
             rt, e, tr = best[r][:3]
             tag = f" [{best[r][3]}]" if r == "cvode" else ""
             cells.append(f"{rt:.1e}{tag}: {e:.1e}, {1e3 * tr:.2f}")
-        new = best.get(NEW)
-
-        def ratio(k):
-            return f"{best[k][2] / new[2]:.2f}" if k in best and new else "-"
+        def ratio(k, n):
+            return f"{best[k][2] / best[n][2]:.2f}" if k in best and n in best else "-"
 
         print(f"| {name} | {target:.0e} ({base[1]:.1e}, {1e3 * base[2]:.2f}) | "
-              + " | ".join(cells) + f" | {ratio('odeint')} | {ratio('cvode')} | "
-              f"{ratio('ros2')} |")
+              + " | ".join(cells) + " | "
+              + " | ".join(ratio(b, n) for b, n in ratio_cols) + " |")
 
-    picks = {tg: {"odeint": tg, **{r: b[0] for r, b in best.items() if r in ("ros2", NEW)}}
+    picks = {tg: {"odeint": tg, **{r: b[0] for r, b in best.items() if r in OURS}}
              for name, tg, best in equal if name == "shift-and-load-step"}
     breakdown(params, picks)
     if QUICK:
