@@ -3,8 +3,8 @@ CVODE (variable-order BDF, dense direct linear solver) through scikit-sundae, dr
 SAME compiled right-hand side and exact complex-step Jacobian as `empact.nonlinear.simulation`
 (the numba wrappers of `_odeint_baseline.py`).
 
-An optional benchmark dependency (``pip install scikit-sundae``): `available()` says whether
-it imports.  As the odeint route: the run is split at the input steps (a fresh CVODE start
+An optional benchmark dependency (``pip install -e '.[bench]'``, i.e. scikit-sundae; `make
+bench` tries to install it): `available()` says whether it imports.  As the odeint route: the run is split at the input steps (a fresh CVODE start
 each), the other breakpoints are critical times (``tstop``: CVODE does not step across them,
 no restart), outputs are evaluated at the output samples from CVODE's interpolated state
 (one ``step(t_sample, tstop=...)`` call per sample).  CVODE takes one relative tolerance for
