@@ -46,7 +46,7 @@ def old_integrator():
     mod = types.ModuleType("old_rosenbrock")
     exec(compile(src, "old_rosenbrock", "exec"), mod.__dict__)
     integrate = mod.integrate
-    return lambda *a: integrate(*a[:-1])  # the old signature has no `cols`
+    return lambda *a: integrate(*a[:19])  # the old signature has no `cols`, `J`, `full`
 
 
 def run(duration, params, integrate=None):
