@@ -28,6 +28,7 @@ test: $(STAMP) chromium
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
 bench: $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[bench]' || echo "scikit-sundae not installed: bench_integrators skips CVODE"
 	for f in bench/bench_*.py; do MPLBACKEND=Agg $(BIN)/python $$f || exit 1; done
 
 clean:

@@ -15,6 +15,9 @@ from scipy.integrate import odeint
 from empact.nonlinear import _kernel as K
 from empact.nonlinear.simulation import state_tolerances
 
+#: LSODA's counters of the last `simulate_odeint` run: steps, f and Jacobian evaluations
+COUNTS = {"nst": 0, "nfe": 0, "nje": 0}
+
 
 @njit(cache=True)
 def _inputs(t, t_a, t_b, sig_t, sig_v, sig_n, u):
@@ -64,12 +67,10 @@ def _outputs(X, T, p, ix, sig_t, sig_v, sig_n, t_a, t_b):
     return Y
 
 
-def simulate_odeint(model, x0, signals, duration, *, u0, sample_rate=1000.0, rtol=1e-4,
-                    max_step=0.01, atol_rtol=None):
-    """Outputs (n_t, NY) at the samples and the number of LSODA steps.
-
-    Tolerances as the simulator's (`state_tolerances`); `atol_rtol` sets the absolute ones
-    from another rtol (a reference run: LSODA refuses absolute tolerances near rounding)."""
+def signal_pieces(model, signals, duration, u0, sample_rate):
+    """The inputs as compiled tables (``sig_t, sig_v, sig_n``), the input steps in
+    (0, duration) (where a route restarts), the other breakpoints (kinks, passed as critical
+    times) and the output sample times."""
     kmax = max([2] + [len(v) for v in signals.values()])
     sig_t, sig_v = np.zeros((4, kmax)), np.zeros((4, kmax))
     sig_n = np.ones(4, dtype=np.int64)
@@ -86,6 +87,17 @@ def simulate_odeint(model, x0, signals, duration, *, u0, sample_rate=1000.0, rto
     steps = sorted(s for s in steps if 0 < s < duration)
     kinks = np.array(sorted(k for k in kinks if 0 < k < duration and k not in steps))
     samples = np.arange(int(np.floor(duration * sample_rate + 1e-9)) + 1) / sample_rate
+    return sig_t, sig_v, sig_n, steps, kinks, samples
+
+
+def simulate_odeint(model, x0, signals, duration, *, u0, sample_rate=1000.0, rtol=1e-4,
+                    max_step=0.01, atol_rtol=None):
+    """Outputs (n_t, NY) at the samples and the number of LSODA steps.
+
+    Tolerances as the simulator's (`state_tolerances`); `atol_rtol` sets the absolute ones
+    from another rtol (a reference run: LSODA refuses absolute tolerances near rounding)."""
+    sig_t, sig_v, sig_n, steps, kinks, samples = signal_pieces(model, signals, duration, u0,
+                                                               sample_rate)
     rel, atol = state_tolerances(model, rtol)
     if atol_rtol is not None:
         atol = state_tolerances(model, atol_rtol)[1]
@@ -93,6 +105,7 @@ def simulate_odeint(model, x0, signals, duration, *, u0, sample_rate=1000.0, rto
     Y[:1] = _outputs(np.asarray(x0, float)[None], samples[:1], model.p, model.ix, sig_t, sig_v,
                      sig_n, 0.0, duration)
     x, filled, n_steps = np.asarray(x0, float), 1, 0
+    COUNTS.update(nst=0, nfe=0, nje=0)
     for a, b in zip([0.0] + steps, steps + [duration]):
         piece = samples[(samples > a + 1e-12) & (samples <= b + 1e-12)]
         grid = np.union1d(np.concatenate([[a], piece]), [b])
@@ -101,6 +114,8 @@ def simulate_odeint(model, x0, signals, duration, *, u0, sample_rate=1000.0, rto
         sol, info = odeint(_rhs, x, grid, args=args, Dfun=_jac, rtol=rel, atol=atol,
                            tcrit=crit, hmax=max_step, mxstep=10**6, full_output=True)
         n_steps += int(info["nst"][-1])
+        for k in COUNTS:
+            COUNTS[k] += int(info[k][-1])
         keep = np.isin(grid, piece)
         Y[filled:filled + keep.sum()] = _outputs(sol[keep], grid[keep], *args)
         filled += int(keep.sum())

@@ -46,11 +46,14 @@ def old_integrator():
     mod = types.ModuleType("old_rosenbrock")
     exec(compile(src, "old_rosenbrock", "exec"), mod.__dict__)
     integrate = mod.integrate
-    return lambda *a: integrate(*a[:-1])  # the old signature has no `cols`
+    return lambda *a: integrate(*a[:19])  # the old signature has no `cols`, `J`, `full`
 
 
 def run(duration, params, integrate=None):
-    s = RigSettings(duration=duration, settle=0.0, period=min(2048, int(duration * 1000)))
+    # the order-2 integrator: this benchmark compares its versions (the rig's default is now
+    # Rodas5P, see bench_integrators.py)
+    s = RigSettings(duration=duration, settle=0.0, period=min(2048, int(duration * 1000)),
+                    method="ros2")
     orig = S.integrate
     if integrate is not None:
         S.integrate = integrate

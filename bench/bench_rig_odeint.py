@@ -2,7 +2,8 @@
 
 The rig's records (`empact.experiments.rig`, multisine on T_mp sampled at 1 kHz: an input
 breakpoint every millisecond; r_g = 0.5, spindle Coulomb friction, the creep law), simulated
-by empact's compiled Rosenbrock method and by `scipy.integrate.odeint` (LSODA) with the SAME
+by empact's compiled order-2 Rosenbrock method (``method="ros2"``; the higher-order methods
+are in `bench_integrators.py`) and by `scipy.integrate.odeint` (LSODA) with the SAME
 compiled right-hand side and exact Jacobian (`_odeint_baseline.py`), warm, one core.  Errors:
 largest deviation of theta_mp, theta_ms and nu from odeint at rtol 1e-9, normalised by each
 signal's range.
@@ -63,7 +64,8 @@ def main() -> None:
 
         rows = []
         for rtol in (1e-4, 1e-5, 1e-6):
-            te, res = warm(lambda r=rtol: simulate(model, op.x, sig, end, rtol=r, **kw))
+            te, res = warm(lambda r=rtol: simulate(model, op.x, sig, end, rtol=r,
+                                                   method="ros2", **kw))
             to, (Y, _) = warm(lambda r=rtol: simulate_odeint(model, op.x, sig, end, rtol=r,
                                                               **kw))
             rows.append((rtol, te, err(res.y), to, err(Y)))

@@ -27,7 +27,7 @@ from .._validate import check_choice, check_int, check_number
 from ..errors import ParameterError
 from ..identification.frf_estimation import FRFEstimate, estimate_frf
 from ..nonlinear.model import nonlinear_model
-from ..nonlinear.simulation import simulate
+from ..nonlinear.simulation import METHODS, simulate
 from ..nonlinear.equilibrium import trim
 from ..params import OperatingPoint
 
@@ -102,6 +102,10 @@ class RigSettings:
         nu [-]); the slip default 1e-7 is optimistic for a rig: the slip response at nu0 = 0 is
         about 1e-5 per N m, so a realistic resolution of 1e-5 hides it (as in the paper)
     seed : seed of the excitation and the noise
+    method : the simulator's integrator (`empact.nonlinear.simulation.METHODS`); Rodas5P by
+        default: the records' input kink every sample caps every method's steps at the sample
+        period, where the order-5 method is both faster and far more accurate than the
+        order-2 one (``bench/RESULTS.md``, the integrators)
     """
 
     r_g: float = 0.5
@@ -121,12 +125,14 @@ class RigSettings:
         "theta_mp": 1e-4, "theta_ms": 1e-4, "nu": 1e-7})
     seed: int = 1
     band: InitVar[tuple[float, float] | None] = None
+    method: str = "rodas5p"
 
     def __post_init__(self, band: tuple[float, float] | None = None) -> None:
         if band is not None:
             warnings.warn("RigSettings.band is deprecated; use band_hz [Hz]", DeprecationWarning,
                           stacklevel=3)
             object.__setattr__(self, "band_hz", tuple(band))
+        check_choice("method", self.method, METHODS)
         check_choice("excite", self.excite, ("T_mp", "T_ms"))
         check_choice("excitation", self.excitation, EXCITATIONS)
         check_number("duration", self.duration, 0.0, lo_open=True, unit="s")
@@ -185,7 +191,7 @@ def run_rig(params, settings: RigSettings | None = None, *, progress: bool = Fal
                           period=s.period)
     j = model.inputs.index(s.excite)
     res = simulate(model, op.x, {s.excite: np.column_stack([t, op.u[j] + x])}, t[-1],
-                   u0=op.u, sample_rate=s.sample_rate, progress=progress,
+                   u0=op.u, sample_rate=s.sample_rate, method=s.method, progress=progress,
                    name=f"rig {s.excite}")
     k = len(res.t)
     rng = np.random.default_rng(s.seed + 1000)

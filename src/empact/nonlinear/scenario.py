@@ -44,6 +44,7 @@ and, optionally, a controller and its references::
     max_step = 0.01           # [s]
     omega_min = 1.0           # stop when omega_p falls to this [rad/s]
     max_steps = 2000000
+    method = "rodas4"         # the integrator: "rodas4" (default), "rodas5p" or "ros2"
 
 Input names are the model's (``T_mp`` or ``r_g_ref``, ``T_ms``, ``T_d`` or ``omega_d_ref``,
 ``T_l`` or ``omega_l_ref``); ``F_s_ref`` [N] may replace ``T_ms`` and is mapped to the static
@@ -80,11 +81,21 @@ from .model import ModelOptions
 
 __all__ = ["Scenario", "ControllerSpec", "load_scenario", "scenario_from_dict", "list_examples",
            "example_path", "input_names", "signal", "check_tables", "model_options",
-           "CLAMPING"]
+           "CLAMPING", "METHODS", "DEFAULT_METHOD"]
 
 #: clamping strategies of a closed-loop scenario: the slip loop, or a production CVT's
 #: open-loop safety factor
 CLAMPING = ("feedback", "safety-factor")
+
+#: integration methods (``[solver] method``, `empact.nonlinear.simulation.simulate`'s
+#: ``method``): the compiled order-2 Rosenbrock method (ode23s) and the stiffly accurate
+#: Rodas5P (order 5) and Rodas4 (order 4, the default: `DEFAULT_METHOD`)
+METHODS = ("ros2", "rodas5p", "rodas4")
+
+#: the integrator when none is named: Rodas4, at least as fast as odeint (LSODA) at equal
+#: accuracy on every shipped scenario at rtol 1e-4 and 1e-6, and faster than the order-2
+#: method ("ros2", the default up to 0.1) everywhere at equal accuracy (``bench/RESULTS.md``)
+DEFAULT_METHOD = "rodas4"
 
 #: the signals a controller's references may name
 REFERENCES = ("r_g", "nu", "nu_r")
@@ -95,7 +106,7 @@ _SCENARIO_KEYS = {"scenario": {"name", "description", "duration", "sample_rate",
                   "inputs": None, "offsets": None,
                   "controller": {"file", "rate", "feedforward", "clamping", "safety_factor"},
                   "references": set(REFERENCES),
-                  "solver": {"rtol", "max_step", "omega_min", "max_steps"}}
+                  "solver": {"rtol", "max_step", "omega_min", "max_steps", "method"}}
 
 #: keys of the 0.1 closed-loop layout -> where they live now
 _MOVED = {"controller": "[controller] file", "controller_rate": "[controller] rate",
@@ -166,6 +177,8 @@ class Scenario:
         Stop when omega_p falls to this [rad/s].
     max_steps : int
         Give up (incomplete result) after this many integration steps.
+    method : str
+        The integrator (`empact.nonlinear.simulation.METHODS`).
     source : str
         The file it was read from ('' when built from a mapping).
     """
@@ -186,6 +199,7 @@ class Scenario:
     max_step: float = 0.01
     omega_min: float = 1.0
     max_steps: int = 2_000_000
+    method: str = DEFAULT_METHOD
     source: str = ""
 
     @property
@@ -348,6 +362,8 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
                              lo_open=True, unit="rad/s", where=src)
     max_steps = int(check_number("solver.max_steps", solver.get("max_steps", 2_000_000), 0.0,
                                  1e9, lo_open=True, where=src))
+    method = check_choice("solver.method", solver.get("method", DEFAULT_METHOD), METHODS,
+                          where=src)
     return Scenario(name=str(head.get("name", Path(src).stem)),
                     description=str(head.get("description", "")), duration=duration,
                     sample_rate=rate, options=options, initial=initial, inputs=inputs,
@@ -355,7 +371,7 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
                     load_step_time=None if t_step is None else check_number(
                         "scenario.load_step_time", t_step, 0.0, duration, unit="s", where=src),
                     shift_window=window, rtol=rtol, max_step=max_step, omega_min=omega_min,
-                    max_steps=max_steps, source=src)
+                    max_steps=max_steps, method=method, source=src)
 
 
 def input_names(options: ModelOptions) -> tuple[str, ...]:

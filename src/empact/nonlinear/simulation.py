@@ -4,9 +4,11 @@
 piecewise-linear input signals; `run_scenario` trims a scenario's initial point
 (`empact.nonlinear.scenario`) and simulates it.
 
-The integrator is a compiled, L-stable Rosenbrock method with an exact Jacobian
-(`empact.nonlinear._rosenbrock`).  It stops - keeping everything computed so far, marked
-incomplete - when omega_p reaches ``omega_min`` (the slip of eq. 2 is undefined at a standing
+The integrator is a compiled, L-stable Rosenbrock method with an exact Jacobian: by
+default the order-4 Rodas4 of `empact.nonlinear._rodas` (``method="rodas4"``), or the
+order-5 Rodas5P (``"rodas5p"``) or the order-2 method of `empact.nonlinear._rosenbrock`
+(``"ros2"``, the default up to 0.1); see `METHODS`.  It stops - keeping everything computed
+so far, marked incomplete - when omega_p reaches ``omega_min`` (the slip of eq. 2 is undefined at a standing
 primary), the belt goes slack, a radius leaves the variator's range, or the solver fails.
 """
 from __future__ import annotations
@@ -24,18 +26,19 @@ from numpy.typing import NDArray
 
 from .._io import atomic_write_text
 from .._progress import progress as progress_bar
-from .._validate import check_number
+from .._validate import check_choice, check_number
 from ..errors import ParameterError
 from ..params import Params
 from . import _kernel as K
+from . import _rodas
 from ._rosenbrock import STATUS, integrate
 from .model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
-from .scenario import Scenario
+from .scenario import DEFAULT_METHOD, METHODS, Scenario
 from .equilibrium import TrimResult, trim
 
 __all__ = ["SimulationResult", "SampledController", "simulate", "run_scenario",
            "scenario_model", "scenario_signals", "csv_text", "write_csv", "state_tolerances",
-           "STATUS"]
+           "STATUS", "METHODS", "DEFAULT_METHOD"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,7 +163,8 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
              duration: float, *, u0: NDArray | None = None,
              controller: SampledController | None = None, sample_rate: float = 1000.0,
              rtol: float = 1e-4, max_step: float = 0.01, omega_min: float = 1.0,
-             max_steps: int = 2_000_000, progress: bool = False,
+             max_steps: int = 2_000_000, method: str = DEFAULT_METHOD,
+             progress: bool = False,
              name: str = "") -> SimulationResult:
     """Integrate `model` from `x0` over ``[0, duration]``, open loop or with a sampled
     controller in the loop.
@@ -190,6 +194,10 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
         Stop when omega_p falls to this [rad/s].
     max_steps : int
         Give up (incomplete result) after this many integration steps.
+    method : {"rodas4", "rodas5p", "ros2"}
+        The integrator (`METHODS`): Rodas4 (order 4, the default), Rodas5P (order 5, dense
+        output of order 4) or the order-2 Rosenbrock method (ode23s); the same tolerances,
+        stops and outputs (``bench/RESULTS.md``: which is faster where, at equal accuracy).
     progress : bool
         A progress bar on stderr (`empact._progress`).
 
@@ -198,6 +206,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     SimulationResult
         ``u`` holds the inputs as applied (commands with their hold).
     """
+    step = _integrator(method)
     x = np.array(x0, dtype=float)
     if x.shape != (model.n,):
         raise ValueError(f"x0 has shape {x.shape}: expected ({model.n},)")
@@ -219,24 +228,27 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     if controller is None:
         K._eval(x, _inputs_at(0.0, sig_t, sig_v, sig_n), model.p, model.ix, dx, y)
         Y[0] = y
-        chunks = np.linspace(0.0, duration, 101)[1:]
-        with progress_bar(total=len(chunks), desc=f"simulate {name}".strip(), unit="%",
+        # calls of the integrator (progress-bar ticks): every call ends on a step, so no
+        # shorter than 20 largest steps, at most 100; the same with and without a bar
+        n_chunks = int(min(100, max(1, np.ceil(duration / (20.0 * max_step) - 1e-9))))
+        chunks = np.linspace(0.0, duration, n_chunks + 1)[1:]
+        with progress_bar(total=100, desc=f"simulate {name}".strip(), unit="%",
                           enabled=progress) as bar:
             for k, t_chunk in enumerate(chunks):
-                status, t, h, filled, ns, nr = integrate(
+                status, t, h, filled, ns, nr = step(
                     x, t, float(t_chunk), h, samples, model.p, model.ix, sig_t, sig_v, sig_n,
                     brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps, X, Y,
                     cols, J, k == 0)
                 n_steps += ns
                 n_rej += nr
-                bar.update(1)
+                bar.update(100 * (k + 1) // n_chunks - 100 * k // n_chunks)
                 if status != 0:
                     break
         U = _inputs_at(samples[:max(filled, 1)], sig_t, sig_v, sig_n)
     else:
         status, t, filled, n_steps, n_rej, U = _run_sampled(
             model, controller, x, u0, duration, samples, sig_t, sig_v, sig_n, brk_arr, rel,
-            atol, max_step, omega_min, max_steps, X, Y, cols, J, progress, name)
+            atol, max_step, omega_min, max_steps, X, Y, cols, J, progress, name, step)
     wall = time.perf_counter() - wall
     complete = status == 0
     if complete:
@@ -249,7 +261,15 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
                             states=model.states, outputs=model.outputs, inputs=model.inputs,
                             complete=complete, message=message, scenario=name,
                             stats={"n_steps": n_steps, "n_rejected": n_rej, "wall_time": wall,
-                                   "t_end": t})
+                                   "t_end": t, "method": method})
+
+
+def _integrator(method: str):
+    """The compiled integrator of `method` (`METHODS`); a one-line error for another name."""
+    check_choice("method", method, METHODS)
+    if method == "ros2":
+        return integrate  # looked up here, so that a benchmark may swap the module's
+    return _rodas.METHODS[method]
 
 
 def _measurement(model: EmpactModel, names: tuple[str, ...]):
@@ -270,12 +290,14 @@ def _measurement(model: EmpactModel, names: tuple[str, ...]):
 
 
 def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_n, brk_arr,
-                 rel, atol, max_step, omega_min, max_steps, X, Y, cols, J, progress, name):
+                 rel, atol, max_step, omega_min, max_steps, X, Y, cols, J, progress, name,
+                 step=None):
     """The loop of `simulate` with a sampled controller: at every sample ``t_k = k dt`` the
     controller reads its signals (outputs and states at ``x(t_k)``, inputs at ``t_k``) and
     sets its commands, held by giving the integrator a constant signal for each commanded
     input up to ``t_(k+1)``.  The inputs the controller does not drive are evaluated on the
     sample grid once, before the loop."""
+    step = integrate if step is None else step
     dt = float(check_number("controller dt", controller.dt, 0.0, duration, lo_open=True,
                             unit="s"))
     cmd = [model.input_index(c) for c in controller.commands]
@@ -307,7 +329,7 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
             commands[k] = c
             u[cmd] = c
             sig_v[cmd, 0] = c
-            status, t, h, filled, ns, nr = integrate(
+            status, t, h, filled, ns, nr = step(
                 x, t, float(t_grid[k + 1]), h, samples, model.p, model.ix, sig_t, sig_v,
                 sig_n, brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps,
                 X, Y, cols, J, k == 0)
@@ -388,7 +410,7 @@ def run_scenario(scenario: Scenario, params: Params, *,
                     u0=op.u, controller=controller, sample_rate=scenario.sample_rate,
                     rtol=scenario.rtol, max_step=scenario.max_step,
                     omega_min=scenario.omega_min, max_steps=scenario.max_steps,
-                    progress=progress, name=scenario.name)
+                    method=scenario.method, progress=progress, name=scenario.name)
 
 
 def csv_text(result: SimulationResult, states: bool = False) -> str:
