@@ -4,9 +4,14 @@ errors, output paths checked before work, JSON with schema and units, common opt
 Exit status: 0 success; 2 bad input (one line ``error: ...`` on stderr, nothing written);
 1 a computation that ran but did not succeed (a simulation that stopped early, a calibration
 that misses its targets), with one line saying why.
+
+Output files are declared with the `OutputFile` type; before a command's body runs, one
+check (`check_outputs`) refuses any of them that exists (unless ``--force``), has the wrong
+suffix, or names the same file as another output of the command.
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import json
 import os
@@ -30,7 +35,8 @@ __all__ = ["sweep_options", "sweep_from_options",
            "InputError", "Failed", "ErrorGroup", "LazyGroup", "to_jsonable", "emit_json",
            "params_option", "json_options", "force_option", "get_params", "operating_point",
            "operating_values", "PLOT_SUFFIXES", "LINEAR_OPTIONS",
-           "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION"]
+           "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
+           "OutputFile", "check_outputs"]
 
 #: suffixes of ``--plot`` files (the figure's format)
 PLOT_SUFFIXES = ("png", "svg", "pdf")
@@ -63,8 +69,29 @@ class Failed(click.ClickException):
         click.echo(f"error: {_one_line(self.format_message())}", err=True)
 
 
+def _checked(cmd: click.Command | None) -> click.Command | None:
+    """`cmd` with `check_outputs` run before its body (installed once, on every command the
+    groups hand out, so that no command can forget it)."""
+    if cmd is None or cmd.callback is None or getattr(cmd.callback, "_outputs_checked", False):
+        return cmd
+    body = cmd.callback
+
+    @functools.wraps(body)
+    def run(*args: Any, **kwargs: Any) -> Any:
+        check_outputs(click.get_current_context())
+        return body(*args, **kwargs)
+
+    run._outputs_checked = True  # type: ignore[attr-defined]
+    cmd.callback = run
+    return cmd
+
+
 class ErrorGroup(click.Group):
-    """A group that turns the library's validation errors into `InputError`."""
+    """A group that turns the library's validation errors into `InputError`; every command it
+    hands out checks its output files first (`check_outputs`)."""
+
+    def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
+        return _checked(super().get_command(ctx, name))
 
     def invoke(self, ctx: click.Context) -> Any:
         try:
@@ -92,7 +119,7 @@ class LazyGroup(ErrorGroup):
         if name not in self.lazy:
             return super().get_command(ctx, name)
         module, attr = self.lazy[name][0].split(":")
-        return getattr(importlib.import_module(module), attr)
+        return _checked(getattr(importlib.import_module(module), attr))
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
         rows = [(name, self.lazy[name][1]) for name in sorted(self.lazy)]
@@ -193,10 +220,60 @@ force_option = click.option("--force", is_flag=True,
                                  "files).")
 
 
+class OutputFile(click.Path):
+    """The type of an option that names an output file: `check_outputs` checks it before the
+    command runs.
+
+    Parameters
+    ----------
+    suffixes : the allowed suffixes without the dot (None: any); the file's format follows
+        its suffix
+    format_param : the name of a ``--format`` parameter of the same command; when given, the
+        suffix must be that format's
+    """
+
+    def __init__(self, suffixes: tuple[str, ...] | None = None,
+                 format_param: str | None = None) -> None:
+        super().__init__(dir_okay=False)
+        self.suffixes = suffixes
+        self.format_param = format_param
+
+
+def check_outputs(ctx: click.Context) -> None:
+    """Check every `OutputFile` option given to the command of `ctx` (`output_file`: suffix,
+    folder, existence unless the command's ``--force``); refuse two options naming one file.
+    Runs before the command's body (the groups install it, `ErrorGroup`)."""
+    force = bool(ctx.params.get("force", False))
+    seen: dict[str, str] = {}
+    for param in ctx.command.params:
+        value = ctx.params.get(param.name or "")
+        if not isinstance(param.type, OutputFile) or value is None:
+            continue
+        option = max(param.opts, key=len)
+        suffixes = param.type.suffixes
+        fmt = ctx.params.get(param.type.format_param) if param.type.format_param else None
+        if fmt is not None:
+            suffix = Path(value).suffix.lstrip(".").lower()
+            if suffix != fmt:
+                shown = f".{suffix}" if suffix else "none"
+                raise InputError(f"{option} {value}: file suffix {shown!r} does not match "
+                                 f"--format {fmt} (name the file "
+                                 f"{Path(value).with_suffix('.' + fmt).name}, or drop --format: "
+                                 "the format follows the suffix)")
+        output_file(value, option, force=force, suffixes=suffixes)
+        key = os.path.realpath(value)
+        if key in seen:
+            raise InputError(f"{option} {value}: the same file as {seen[key]}; give each output "
+                             "its own file")
+        seen[key] = option
+
+
 def json_options(fn: Callable) -> Callable:
-    """``--json`` (print JSON on stdout) and ``--json-out FILE`` (write it atomically)."""
-    fn = click.option("--json-out", "json_out", type=click.Path(dir_okay=False), default=None,
-                      help="Write the JSON to FILE (atomically) instead of stdout.")(fn)
+    """``--json`` (print JSON on stdout) and ``--json-out FILE`` (write it atomically; a
+    ``.json`` file, new unless ``--force``)."""
+    fn = click.option("--json-out", "json_out", type=OutputFile(("json",)), default=None,
+                      help="Write the JSON to FILE.json (atomically) instead of stdout; an "
+                           "existing file only with --force.")(fn)
     return click.option("--json", "as_json", is_flag=True, help="Print JSON on stdout.")(fn)
 
 

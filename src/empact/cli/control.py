@@ -8,8 +8,8 @@ import click
 import numpy as np
 
 from .._validate import check_number
-from ._common import (ErrorGroup, Failed, InputError, emit_json, force_option, get_params,
-                      json_options, output_file, params_option, sweep_from_options,
+from ._common import (ErrorGroup, Failed, InputError, OutputFile, emit_json, force_option,
+                      get_params, json_options, params_option, sweep_from_options,
                       sweep_options)
 from .slip import parse_values
 
@@ -105,8 +105,9 @@ def _summary(fam) -> dict:
 
 @click.command("plants")
 @grid_options
-@click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
-              help="Write the family (.npz, .json or .mat).")
+@click.option("--out", "out", type=OutputFile(("npz", "json", "mat")), default=None,
+              help="Write the family (.npz, which `empact control check` reads; .json or .mat); "
+                   "an existing file only with --force.")
 @sweep_options
 @params_option
 @json_options
@@ -118,8 +119,6 @@ def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics,
     family: T_mp, T_ms and the load -> r_g, nu, nu_r), for control design and LPV models."""
     from ..control.family import save_family
 
-    output_file(out, "--out", force=force, suffixes=("npz", "json", "mat"))
-    output_file(json_out, "--json-out", force=True)
     sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
     params = get_params(params_file)
     t0 = time.perf_counter()
@@ -158,8 +157,8 @@ def control_group() -> None:
 @click.option("--nominal", default=None, metavar="I,J,...",
               help="Grid index of the nominal plant (default: the middle).")
 @grid_options
-@click.option("--out", "out", type=click.Path(dir_okay=False), required=True,
-              help="Controller file (.json or .mat).")
+@click.option("--out", "out", type=OutputFile(("json", "mat")), required=True,
+              help="Controller file (.json or .mat; an existing file only with --force).")
 @params_option
 @json_options
 @force_option
@@ -171,8 +170,6 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
     from ..control.hinf import design_hinf
     from ..control.pi import design_pi
 
-    output_file(out, "--out", force=force, suffixes=("json", "mat"))
-    output_file(json_out, "--json-out", force=True)
     bw_text = bandwidth or ("0.5,0.2" if method == "pi" else "0.1,0.05")
     try:
         bw = tuple(float(x) for x in bw_text.split(","))
@@ -224,13 +221,13 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
 @click.option("--mu", is_flag=True, help="Also the structured singular value bound "
               "(slycot ab13md) over a parametric spread covering the family.")
 @json_options
-def check_cmd(controller, family_file, mu, as_json, json_out) -> None:
+@force_option
+def check_cmd(controller, family_file, mu, as_json, json_out, force) -> None:
     """Closed-loop poles and disk margins of CONTROLLER against every plant of a family."""
     from ..control.controller import load_controller
     from ..control.family import load_family
     from ..control.robustness import mu_upper_bound, robustness_map
 
-    output_file(json_out, "--json-out", force=True)
     ctrl = load_controller(controller)
     fam = load_family(family_file)
     for name in ctrl.measured:
@@ -262,8 +259,8 @@ def check_cmd(controller, family_file, mu, as_json, json_out) -> None:
 @click.option("--list-examples", "list_ex", is_flag=True, help="List them.")
 @click.option("--controller", "controller", default=None, type=click.Path(dir_okay=False),
               help="Controller file replacing the scenario's.")
-@click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
-              help="Write the time histories (CSV).")
+@click.option("--out", "out", type=OutputFile(("csv",)), default=None,
+              help="Write the time histories (.csv; an existing file only with --force).")
 @params_option
 @json_options
 @force_option
@@ -281,8 +278,6 @@ def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_js
         return
     if (scenario is None) == (example is None):
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
-    output_file(out, "--out", force=force, suffixes=("csv",))
-    output_file(json_out, "--json-out", force=True)
     sc = load_scenario(control_example_path(example) if example else scenario)
     if not sc.closed_loop:
         raise InputError(f"{scenario}: no [controller] table (an open-loop scenario: run it "

@@ -10,8 +10,9 @@ from ..experiments.rig import EXCITATIONS
 from ..variator.geometry import check_ratio
 from ..identification import METHODS, estimate_frf
 from ..identification.records import load_records, sample_rate
-from ._common import (PLOT_SUFFIXES, InputError, emit_json, force_option, get_params, json_options,
-                      operating_point, output_file, output_folder, params_option, to_jsonable)
+from ._common import (InputError, OutputFile, emit_json, force_option, get_params,
+                      json_options, operating_point, output_folder, params_option,
+                      to_jsonable)
 from .linear import plot_option
 
 #: Most samples of a virtual rig record (duration x sample rate).
@@ -40,8 +41,6 @@ def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], f
         raise InputError("give exactly one of --fs HZ and --time COLUMN")
     if fs is not None:
         fs = check_number("--fs", fs, 0.0, 1e9, lo_open=True, unit="Hz")
-    output_file(plot, "--plot", force=force, suffixes=PLOT_SUFFIXES)
-    output_file(json_out, "--json-out", force=True)
     cols = list(dict.fromkeys(list(inputs) + list(outputs) + ([time_col] if time_col else [])))
     rec = load_records(data, cols)
     n = len(next(iter(rec.values())))
@@ -118,7 +117,6 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
         raise InputError("--step = 0: must be a non-zero torque step in [-1, 1] [N m]")
     r_list = _ratios(ratios)
     dest = None if out is None else output_folder(out, "--out", force=force)
-    output_file(json_out, "--json-out", force=True)
     params = get_params(params_file)
     base = operating_point(params, trim=True, slip=nu, clamp=F_s, speed=omega_p)
     check_ratio(r_list, params.variator, "--ratios")
@@ -176,8 +174,9 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
               help="Spindle Coulomb friction torque [N m] (both spindles).")
 @click.option("--seed", type=int, default=1, show_default=True)
 @params_option
-@click.option("--out", required=True, type=click.Path(dir_okay=False),
-              help="CSV records (time, T_mp, T_ms, theta_mp, theta_ms, nu).")
+@click.option("--out", required=True, type=OutputFile(("csv",)),
+              help="CSV records (time, T_mp, T_ms, theta_mp, theta_ms, nu; units in the "
+                   "header); an existing file only with --force.")
 @force_option
 @click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
 def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p: float,
@@ -206,7 +205,6 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
     rms = check_number("--rms", rms, 0.0, 100.0, lo_open=True, unit="N m")
     friction = check_number("--friction", friction, 0.0, 100.0, unit="N m")
     seed = check_int("--seed", seed, 0, 2**32 - 1)
-    output_file(out, "--out", force=force)
     params = get_params(params_file)
     op = operating_point(params, trim=True, ratio=r_g, slip=nu, clamp=F_s, speed=omega_p)
     settings = RigSettings(r_g=op.r_g, nu=op.nu, F_s=op.F_s, omega_p=op.omega_p, excite=excite,

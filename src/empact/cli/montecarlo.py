@@ -4,8 +4,7 @@ from __future__ import annotations
 import click
 
 from ._common import (InputError, emit_json, force_option, get_params, json_options,
-                      output_file, output_folder, params_option, sweep_from_options,
-                      sweep_options)
+                      output_folder, params_option, sweep_from_options, sweep_options)
 
 
 @click.command("montecarlo")
@@ -61,7 +60,6 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
                          "--example NAME")
     if out:
         output_folder(out, "--out", force=force)
-    output_file(json_out, "--json-out", force=True)
     sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
     params = get_params(params_file)
     spread = load_spread(spread_file, params)

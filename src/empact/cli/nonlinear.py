@@ -6,8 +6,8 @@ import numpy as np
 
 from .._validate import check_number
 from ..variator.geometry import check_ratio
-from ._common import (PLOT_SUFFIXES, Failed, InputError, emit_json, force_option, get_params,
-                      json_options, operating_point, output_file, output_folder, params_option)
+from ._common import (Failed, InputError, OutputFile, emit_json, force_option, get_params,
+                      json_options, operating_point, output_folder, params_option)
 from .linear import plot_option
 
 #: Most output samples (duration x sample rate) one simulation may write.
@@ -137,9 +137,11 @@ def _add(options):
 @click.option("--speed", "omega_p", type=float, default=None,
               help="Primary speed omega_p [rad/s].")
 @click.option("--format", "fmt", type=click.Choice(["json", "mat", "npz"]), default=None,
-              help="File format (default: from the --out suffix; JSON on stdout without --out).")
-@click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
-              help="Output file (.json, .mat or .npz).")
+              help="File format (default: from the --out suffix, which must match it; JSON on "
+                   "stdout without --out).")
+@click.option("--out", "out", type=OutputFile(("json", "mat", "npz"), format_param="fmt"),
+              default=None, help="Output file (.json, .mat or .npz; an existing file only with "
+                                 "--force).")
 @click.option("--all-io", is_flag=True, help="All inputs and outputs, not only the plant's.")
 @_add(model_options_for("speed"))
 @params_option
@@ -161,7 +163,6 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, dr
 
     if out is None and fmt not in (None, "json"):
         raise InputError(f"--format {fmt} needs --out FILE")
-    output_file(out, "--out", force=force, suffixes=("json", "mat", "npz"))
     params = get_params(params_file)
     point = operating_point(params, trim=True, ratio=r_g, slip=nu, tau=tau, clamp=F_s,
                             load_torque=T_l, speed=omega_p)
@@ -216,8 +217,6 @@ def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, dampin
     if not r or len(r) > 200:
         raise InputError(f"--ratios {ratios!r}: give 1 to 200 ratios")
     f_max = check_number("--fmax", f_max, 0.0, 1e5, lo_open=True, unit="Hz")
-    output_file(plot, "--plot", force=force, suffixes=PLOT_SUFFIXES)
-    output_file(json_out, "--json-out", force=True)
     params = get_params(params_file)
     base = operating_point(params, trim=True, slip=nu, tau=tau, clamp=F_s, load_torque=T_l,
                            speed=omega_p)
