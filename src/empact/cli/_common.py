@@ -3,7 +3,8 @@ errors, output paths checked before work, JSON with schema and units, common opt
 
 Exit status: 0 success; 2 bad input (one line ``error: ...`` on stderr, nothing written);
 1 a computation that ran but did not succeed (a simulation that stopped early, a calibration
-that misses its targets), with one line saying why.
+that misses its targets), with one line saying why; 130 interrupted (Ctrl-C: one line
+``error: interrupted``, nothing written).
 
 Output files are declared with the `OutputFile` type; before a command's body runs, one
 check (`check_outputs`) refuses any of them that exists (unless ``--force``), has the wrong
@@ -36,7 +37,7 @@ __all__ = ["sweep_options", "sweep_from_options",
            "params_option", "json_options", "force_option", "get_params", "operating_point",
            "operating_values", "PLOT_SUFFIXES", "LINEAR_OPTIONS",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
-           "OutputFile", "check_outputs"]
+           "OutputFile", "check_outputs", "Interrupted", "EXIT_INTERRUPTED", "parse_list"]
 
 #: suffixes of ``--plot`` files (the figure's format)
 PLOT_SUFFIXES = ("png", "svg", "pdf")
@@ -69,6 +70,23 @@ class Failed(click.ClickException):
         click.echo(f"error: {_one_line(self.format_message())}", err=True)
 
 
+#: exit status of an interrupted command (128 + SIGINT, as a shell reports it)
+EXIT_INTERRUPTED = 130
+
+
+class Interrupted(click.ClickException):
+    """Ctrl-C (SIGINT): one line on stderr, exit status 130; nothing was written (every
+    output is moved into place only when complete)."""
+
+    exit_code = EXIT_INTERRUPTED
+
+    def __init__(self) -> None:
+        super().__init__("interrupted")
+
+    def show(self, file: Any = None) -> None:
+        click.echo("error: interrupted", err=True)
+
+
 def _checked(cmd: click.Command | None) -> click.Command | None:
     """`cmd` with `check_outputs` run before its body (installed once, on every command the
     groups hand out, so that no command can forget it)."""
@@ -87,8 +105,9 @@ def _checked(cmd: click.Command | None) -> click.Command | None:
 
 
 class ErrorGroup(click.Group):
-    """A group that turns the library's validation errors into `InputError`; every command it
-    hands out checks its output files first (`check_outputs`)."""
+    """A group that turns the library's validation errors into `InputError` and Ctrl-C into
+    `Interrupted`; every command it hands out checks its output files first
+    (`check_outputs`)."""
 
     def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
         return _checked(super().get_command(ctx, name))
@@ -98,6 +117,8 @@ class ErrorGroup(click.Group):
             return super().invoke(ctx)
         except (ParameterError, ValueError) as exc:
             raise InputError(str(exc) or type(exc).__name__) from None
+        except KeyboardInterrupt:
+            raise Interrupted() from None
 
 
 class LazyGroup(ErrorGroup):
@@ -144,7 +165,10 @@ class LazyGroup(ErrorGroup):
         except click.ClickException as exc:
             exc.show()
             sys.exit(exc.exit_code)
-        except click.exceptions.Abort:
+        except click.exceptions.Abort as exc:
+            if isinstance(exc.__cause__, KeyboardInterrupt):  # Ctrl-C outside a command
+                Interrupted().show()
+                sys.exit(EXIT_INTERRUPTED)
             click.echo("error: aborted", err=True)
             sys.exit(1)
         sys.exit(rv if isinstance(rv, int) else 0)
@@ -302,6 +326,26 @@ def sweep_from_options(scheduler: str, workers: int | None, timeout: float):
     check_number("--scheduler-timeout", timeout, 0.1, 3600.0, unit="s")
     return SweepOptions(scheduler=scheduler, workers=workers, timeout=timeout,
                         progress=scheduler.strip() != "none" or sys.stderr.isatty())
+
+
+def parse_list(text: str, option: str, *, most: int, example: str = "0.5,1,2") -> list[float]:
+    """A comma-separated list of finite numbers (``--ratios 0.5,1,2``), as every command reads
+    one: an empty item, a non-number or more than `most` values is one line naming the
+    option."""
+    items = text.split(",")
+    if any(not x.strip() for x in items):
+        raise InputError(f"{option} {text!r}: an empty item; give comma-separated numbers, "
+                         f"e.g. {example}")
+    try:
+        values = [float(x) for x in items]
+    except ValueError:
+        raise InputError(f"{option} {text!r}: must be comma-separated numbers, e.g. "
+                         f"{example}") from None
+    if not all(np.isfinite(values)):
+        raise InputError(f"{option} {text!r}: values must be finite")
+    if len(values) > most:
+        raise InputError(f"{option} {text!r}: {len(values)} values; give 1 to {most}")
+    return values
 
 
 def get_params(path: str | None) -> Params:

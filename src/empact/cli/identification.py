@@ -11,7 +11,7 @@ from ..variator.geometry import check_ratio
 from ..identification import METHODS, estimate_frf
 from ..identification.records import load_records, sample_rate
 from ._common import (InputError, OutputFile, emit_json, force_option, get_params,
-                      json_options, operating_point, output_folder, params_option,
+                      json_options, operating_point, output_folder, params_option, parse_list,
                       to_jsonable)
 from .linear import plot_option
 
@@ -76,14 +76,7 @@ def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], f
 
 
 def _ratios(text: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise InputError(f"--ratios {text!r}: give comma-separated numbers, e.g. 0.5,1,2") \
-            from None
-    if not values or len(values) > 50:
-        raise InputError(f"--ratios {text!r}: give 1 to 50 ratios")
-    return values
+    return parse_list(text, "--ratios", most=50)
 
 
 @click.command("identify")

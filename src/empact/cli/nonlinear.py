@@ -7,7 +7,8 @@ import numpy as np
 from .._validate import check_number
 from ..variator.geometry import check_ratio
 from ._common import (Failed, InputError, OutputFile, emit_json, force_option, get_params,
-                      json_options, operating_point, output_folder, params_option)
+                      json_options, operating_point, output_folder, params_option,
+                      parse_list)
 from .linear import plot_option
 
 #: Most output samples (duration x sample rate) one simulation may write.
@@ -210,12 +211,7 @@ def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, dampin
     """Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio (Sec 2.3)."""
     from ..nonlinear.nmp import nmp_analysis
 
-    try:
-        r = [float(x) for x in ratios.split(",") if x.strip()]
-    except ValueError:
-        raise InputError(f"--ratios {ratios!r}: must be comma-separated numbers") from None
-    if not r or len(r) > 200:
-        raise InputError(f"--ratios {ratios!r}: give 1 to 200 ratios")
+    r = parse_list(ratios, "--ratios", most=200)
     f_max = check_number("--fmax", f_max, 0.0, 1e5, lo_open=True, unit="Hz")
     params = get_params(params_file)
     base = operating_point(params, trim=True, slip=nu, tau=tau, clamp=F_s, load_torque=T_l,
