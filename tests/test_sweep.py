@@ -345,6 +345,6 @@ def test_montecarlo_closed_loop_cli(tmp_path):
                                     "--analysis", "closed-loop", "--example",
                                     "slip-load-step-r1", "--json"])
     assert res.exit_code == 0, res.output
-    doc = json.loads(res.output)
+    doc = json.loads(res.stdout)  # (the progress bar is on stderr)
     assert doc["schema"]["name"] == "empact.montecarlo" and doc["runs"] == 2
     assert doc["outputs"]["ratio_error"]["n"] + doc["failures"] == 2

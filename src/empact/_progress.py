@@ -1,5 +1,7 @@
 """Progress bars on stderr: tqdm's redrawn bar on a terminal; on a pipe or a log file, whole
-lines (at most one every 10 s, and the final state) with no carriage returns or escapes."""
+lines (at most one every 10 s, and the final state) with no carriage returns or escapes.  A bar
+left by an exception (a Ctrl-C, an error) writes no final state: the error line is the last
+word."""
 from __future__ import annotations
 
 import sys
@@ -25,6 +27,21 @@ class _Lines:
         self.stream.flush()
 
 
+class _Bar(tqdm):
+    """tqdm that, left by an exception (as a context manager, or an iteration that an
+    exception ends), closes without writing its final state."""
+
+    def __exit__(self, exc_type: Any, exc_value: Any, traceback: Any) -> Any:
+        if exc_type is not None:
+            self.leave = False
+        return super().__exit__(exc_type, exc_value, traceback)
+
+    def close(self) -> None:
+        if sys.exc_info()[0] is not None:  # in a finally: an exception (or GeneratorExit)
+            self.leave = False
+        super().close()
+
+
 def progress(iterable: Iterable[Any] | None = None, *, total: int | None = None, desc: str,
              unit: str, enabled: bool = True) -> tqdm:
     """A progress bar on stderr (disabled unless `enabled`).
@@ -35,7 +52,7 @@ def progress(iterable: Iterable[Any] | None = None, *, total: int | None = None,
     """
     stream = sys.stderr
     if getattr(stream, "isatty", lambda: False)():
-        return tqdm(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
+        return _Bar(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
                     file=stream, leave=False)
-    return tqdm(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
+    return _Bar(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
                 file=_Lines(stream), leave=True, mininterval=10.0, ascii=True, ncols=80)

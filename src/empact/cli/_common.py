@@ -37,7 +37,8 @@ __all__ = ["sweep_options", "sweep_from_options",
            "params_option", "json_options", "force_option", "get_params", "operating_point",
            "operating_values", "PLOT_SUFFIXES", "LINEAR_OPTIONS",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
-           "OutputFile", "check_outputs", "Interrupted", "EXIT_INTERRUPTED", "parse_list"]
+           "OutputFile", "check_outputs", "quiet_option", "Interrupted",
+           "EXIT_INTERRUPTED", "parse_list"]
 
 #: suffixes of ``--plot`` files (the figure's format)
 PLOT_SUFFIXES = ("png", "svg", "pdf")
@@ -242,6 +243,7 @@ params_option = click.option("--params", "params_file", type=click.Path(dir_okay
 force_option = click.option("--force", is_flag=True,
                             help="Replace existing output (in a folder: only empact's own "
                                  "files).")
+quiet_option = click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
 
 
 class OutputFile(click.Path):
@@ -316,16 +318,20 @@ def sweep_options(fn: Callable) -> Callable:
     return fn
 
 
-def sweep_from_options(scheduler: str, workers: int | None, timeout: float):
+def sweep_from_options(scheduler: str, workers: int | None, timeout: float,
+                       progress: bool | None = None):
     """The `empact.sweep.SweepOptions` of the sweep options (each checked under its name);
-    a progress bar on stderr for a Dask scheduler or an interactive terminal."""
+    a progress bar on stderr if `progress`, by default for a Dask scheduler or an interactive
+    terminal."""
     from ..sweep import SweepOptions
 
     if workers is not None:
         check_int("--workers", workers, 1, 256)
     check_number("--scheduler-timeout", timeout, 0.1, 3600.0, unit="s")
+    if progress is None:
+        progress = scheduler.strip() != "none" or sys.stderr.isatty()
     return SweepOptions(scheduler=scheduler, workers=workers, timeout=timeout,
-                        progress=scheduler.strip() != "none" or sys.stderr.isatty())
+                        progress=progress)
 
 
 def parse_list(text: str, option: str, *, most: int, example: str = "0.5,1,2") -> list[float]:

@@ -4,7 +4,8 @@ from __future__ import annotations
 import click
 
 from ._common import (InputError, emit_json, force_option, get_params, json_options,
-                      output_folder, params_option, sweep_from_options, sweep_options)
+                      output_folder, params_option, quiet_option, sweep_from_options,
+                      sweep_options)
 
 
 @click.command("montecarlo")
@@ -32,9 +33,10 @@ from ._common import (InputError, emit_json, force_option, get_params, json_opti
 @params_option
 @json_options
 @force_option
+@quiet_option
 def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, example, controller,
                    seed, out, scheduler, workers, scheduler_timeout, params_file, as_json,
-                   json_out, force) -> None:
+                   json_out, force, quiet) -> None:
     """Monte Carlo over parameter spread: each run draws the spread's parameters, evaluates
     the analysis and is recorded (a failed run with its reason); prints the summary
     (quantiles, failure count)."""
@@ -60,7 +62,7 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
                          "--example NAME")
     if out:
         output_folder(out, "--out", force=force)
-    sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
+    sweep = sweep_from_options(scheduler, workers, scheduler_timeout, progress=not quiet)
     params = get_params(params_file)
     spread = load_spread(spread_file, params)
     sc = ctrl = None

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import html
 import json
-import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Sequence
 
 from .._io import atomic_folder
+from .._parallel import run_forked
 from .._progress import progress as progress_bar
 from .._validate import check_int
 from ..params import Params, dumps_params
@@ -89,23 +88,21 @@ def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool 
     n_workers = min(len(todo), os.cpu_count() or 1) if workers is None else \
         check_int("workers", workers, 1, 64)
     fmts = tuple(formats)
-    with atomic_folder(out) as tmp:
-        bar = progress_bar(total=len(todo), desc="report", unit="section", enabled=progress)
+    with atomic_folder(out) as tmp, progress_bar(total=len(todo), desc="report",
+                                                 unit="section", enabled=progress) as bar:
         built: dict[str, tuple[str, tuple[Claim, ...]]] = {}
         if n_workers <= 1:
             for sec in todo:
                 built[sec.anchor] = _build_section(sec, params, tmp, fmts)
                 bar.update(1)
         else:
-            # fork: the children start with everything imported (no second start-up)
-            ctx = multiprocessing.get_context("fork")
-            with ProcessPoolExecutor(n_workers, mp_context=ctx) as pool:
-                futures = {pool.submit(_build_section, sec, params, tmp, fmts): sec
-                           for sec in sorted(todo, key=lambda s: -s.cost)}
-                for fut in as_completed(futures):
-                    built[futures[fut].anchor] = fut.result()
-                    bar.update(1)
-        bar.close()
+            # fork: the children start with everything imported (no second start-up); a
+            # Ctrl-C terminates them at once (`run_forked`)
+            order = sorted(todo, key=lambda s: -s.cost)
+            for sec, result in zip(order, run_forked(
+                    _build_section, [(sec, params, tmp, fmts) for sec in order], n_workers,
+                    done=lambda k, r: bar.update(1))):
+                built[sec.anchor] = result
         done = [(sec, built[sec.anchor][1]) for sec in todo]
         parts = [built[sec.anchor][0] for sec in todo]
         toc = "".join(f'<li><a href="#{s.anchor}">{html.escape(s.title)}</a></li>'

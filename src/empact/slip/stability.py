@@ -171,8 +171,11 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
             for b in bounds:
                 work(b)
         else:
-            with ThreadPoolExecutor(workers) as pool:
+            pool = ThreadPoolExecutor(workers)
+            try:
                 list(pool.map(work, bounds))
+            finally:  # a Ctrl-C or an error: the chunks not started are dropped
+                pool.shutdown(wait=True, cancel_futures=True)
     shape = (yv.size, nx)
     return StabilityMap(x_name=x_name, y_name=y_name, x=xv, y=yv, base=base,
                         max_real=max_real.reshape(shape), min_damping=min_damp.reshape(shape),
