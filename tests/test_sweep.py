@@ -159,12 +159,12 @@ def test_failed_runs_are_recorded_with_their_reason():
     # a run fails exactly when its k_w is outside the allowed range (0.001, 1e8] N m/rad
     np.testing.assert_array_equal(res.ok, k_w > 1e-3)
     for i in np.flatnonzero(~res.ok):
-        assert res.reasons[i].startswith("ParameterError: parameters: actuation.k_w = ")
+        assert res.reasons[i].startswith("parameters: parameters: actuation.k_w = ")
         assert np.isnan(res.values[i]).all()
     assert np.isfinite(res.values[res.ok]).all()
     s = res.summary()
     assert s["failures"] == res.failures and s["succeeded"] + s["failures"] == 40
-    assert s["failure_reasons"]["ParameterError"]["count"] == res.failures
+    assert s["failure_reasons"]["parameters"]["count"] == res.failures
     assert s["outputs"]["max_real"]["n"] == 40 - res.failures
 
 

@@ -37,7 +37,7 @@ __all__ = ["sweep_options", "sweep_from_options",
            "params_option", "json_options", "force_option", "get_params", "operating_point",
            "operating_values", "PLOT_SUFFIXES", "LINEAR_OPTIONS",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
-           "OutputFile", "check_outputs", "quiet_option", "Interrupted",
+           "OutputFile", "check_outputs", "check_references", "quiet_option", "Interrupted",
            "EXIT_INTERRUPTED", "parse_list"]
 
 #: suffixes of ``--plot`` files (the figure's format)
@@ -352,6 +352,25 @@ def parse_list(text: str, option: str, *, most: int, example: str = "0.5,1,2") -
     if len(values) > most:
         raise InputError(f"{option} {text!r}: {len(values)} values; give 1 to {most}")
     return values
+
+
+def check_references(scenario: Any, params: Params) -> None:
+    """A closed-loop scenario's ``[references]`` within what the machine can follow, checked
+    before the run (not found out when the simulation stops): a slip (``nu``, ``nu_r``, a
+    fraction) within the traction curve's valid range, a ratio within the variator's."""
+    lo, hi = traction_from_params(params).nu_range
+    src = getattr(scenario, "source", "") or getattr(scenario, "name", "scenario")
+    for name, points in scenario.references.items():
+        values = np.asarray(points, float)[:, 1]
+        key = f"references.{name}"
+        if name in ("nu", "nu_r"):
+            check_values(key, values, lo, hi, where=src,
+                         note="a slip fraction: 0.01 is 1 %; the traction curve's valid range")
+        elif name == "r_g":
+            try:
+                check_ratio(values, params.variator, key)
+            except ParameterError as exc:
+                raise InputError(f"{src}: {exc}") from None
 
 
 def get_params(path: str | None) -> Params:

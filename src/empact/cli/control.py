@@ -8,9 +8,9 @@ import click
 import numpy as np
 
 from .._validate import check_number
-from ._common import (ErrorGroup, Failed, InputError, OutputFile, emit_json, force_option,
-                      get_params, json_options, params_option, sweep_from_options,
-                      sweep_options)
+from ._common import (ErrorGroup, Failed, InputError, OutputFile, check_references, emit_json,
+                      force_option, get_params, json_options, operating_values, params_option,
+                      sweep_from_options, sweep_options)
 from .slip import parse_values
 
 #: the grid options of `plants` and `control design`: option -> (variable, unit, help)
@@ -81,6 +81,8 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
         for x in v:
             check_number(f"--{opt}", x, lo, hi, lo_open=var in ("r_g", "F_s", "omega_p"),
                          unit=unit)
+        if var == "nu":
+            operating_values(params, "slip", v)  # within the traction curve's valid range
         if var == "r_g":
             check_ratio(v, params.variator, "--ratio")
         values[var] = v if v.size > 1 else float(v[0])
@@ -179,6 +181,9 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
         raise InputError(f"--bandwidth {bw_text!r}: two numbers RATIO,SLIP [Hz]")
     for b in bw:
         check_number("--bandwidth", b, 0.0, 50.0, lo_open=True, unit="Hz")
+    if method == "pi":
+        check_number("--alpha-min", alpha_min, 0.05, 1.9,
+                     note="the multiloop disk margin each plant must keep")
     params = get_params(params_file)
     raw = {"ratio": ratio or "0.5:2:7",
            "slip": slip or (None if tau else "0.006,0.008,0.01,0.012"), "tau": tau,
@@ -285,6 +290,7 @@ def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_js
     if controller:
         sc = sc.with_controller(controller)
     params = get_params(params_file)
+    check_references(sc, params)
     run = run_closed_loop(sc, params)
     if out:
         write_csv(run.result, out)

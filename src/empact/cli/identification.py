@@ -41,6 +41,14 @@ def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], f
         raise InputError("give exactly one of --fs HZ and --time COLUMN")
     if fs is not None:
         fs = check_number("--fs", fs, 0.0, 1e9, lo_open=True, unit="Hz")
+    named = [("--input", c) for c in inputs] + [("--output", c) for c in outputs] \
+        + ([("--time", time_col)] if time_col else [])
+    for k, (opt, col) in enumerate(named):
+        first = next(o for o, c in named if c == col)
+        if [c for _, c in named].index(col) < k:
+            raise InputError(f"{opt} {col}: " + ("given twice" if first == opt else
+                             f"the column is already the {first.lstrip('-')}") + "; each "
+                             "column is one signal (an input, an output or the time)")
     cols = list(dict.fromkeys(list(inputs) + list(outputs) + ([time_col] if time_col else [])))
     rec = load_records(data, cols)
     n = len(next(iter(rec.values())))
@@ -191,6 +199,9 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
     if duration * fs > MAX_RIG_SAMPLES:
         raise InputError(f"--duration x --fs = {duration:g} s x {fs:g} Hz = "
                          f"{duration * fs:.3g} samples; at most {MAX_RIG_SAMPLES}")
+    if duration * fs < 64:
+        raise InputError(f"--duration x --fs = {duration:g} s x {fs:g} Hz = "
+                         f"{duration * fs:.3g} samples; at least 64 (an FRF needs records)")
     lo = check_number("--band (low end)", lo, 0.0, fs / 2, lo_open=True, hi_open=True,
                       unit="Hz", note="below half the sample rate")
     hi = check_number("--band (high end)", hi, lo, fs / 2, lo_open=True, hi_open=True,

@@ -120,6 +120,10 @@ def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: 
         r_g: float, fmin: float, fmax: float, n: int, params_file: str | None, as_json: bool,
         json_out: str | None, plot: str | None, force: bool) -> None:
     """Damped frequency response of MODEL, computed directly from M, C and K."""
+    for opt, names in (("--input", inputs), ("--output", outputs)):
+        twice = sorted({x for x in names if names.count(x) > 1})
+        if twice:
+            raise InputError(f"{opt} {twice[0]}: given twice; name each signal once")
     params = get_params(params_file)
     f = frequency_grid(fmin, fmax, n)
     r_g = float(check_ratio(check_number("--ratio", r_g), params.variator, "--ratio"))

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import click
 
-from ._common import (InputError, emit_json, force_option, get_params, json_options,
-                      output_folder, params_option, quiet_option, sweep_from_options,
-                      sweep_options)
+from ._common import (Failed, InputError, check_references, emit_json, force_option,
+                      get_params, json_options, output_folder, params_option, quiet_option,
+                      sweep_from_options, sweep_options)
 
 
 @click.command("montecarlo")
@@ -39,7 +39,10 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
                    json_out, force, quiet) -> None:
     """Monte Carlo over parameter spread: each run draws the spread's parameters, evaluates
     the analysis and is recorded (a failed run with its reason); prints the summary
-    (quantiles, failure count)."""
+    (quantiles, failure count).
+
+    Exit status: 0 when at least one run succeeded; 1 when every run failed (nothing
+    written); 2 bad input (a spread none of whose values a parameter may take, ...)."""
     from importlib import resources
 
     from .._validate import check_int
@@ -74,9 +77,14 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
         if not sc.closed_loop:
             raise InputError(f"--scenario {scenario}: no [controller] table (the closed-loop "
                              "analysis needs a closed-loop scenario)")
+        check_references(sc, params)
         ctrl = resolve_controller(controller or sc.controller.file)
     result = monte_carlo(params, spread, runs, analysis, seed=seed, scenario=sc,
                          controller=ctrl, sweep=sweep)
+    if result.failures == result.runs:
+        kind, f = next(iter(result.summary()["failure_reasons"].items()))
+        raise Failed(f"every one of the {result.runs} runs failed ({f['count']} x {kind}, "
+                     f"e.g. {f['example'].partition(': ')[2]}); nothing written")
     if out:
         save_montecarlo(result, out)
     summary = result.summary()

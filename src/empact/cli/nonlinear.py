@@ -6,9 +6,9 @@ import numpy as np
 
 from .._validate import check_number
 from ..variator.geometry import check_ratio
-from ._common import (Failed, InputError, OutputFile, emit_json, force_option, get_params,
-                      json_options, operating_point, output_folder, params_option,
-                      parse_list)
+from ._common import (Failed, InputError, OutputFile, check_references, emit_json,
+                      force_option, get_params, json_options, operating_point, output_folder,
+                      params_option, parse_list)
 from .linear import plot_option
 
 #: Most output samples (duration x sample rate) one simulation may write.
@@ -61,6 +61,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     dest = output_folder(out or f"sim-{sc.name}", "--out", force=force)
     params = get_params(params_file)
     if sc.closed_loop:
+        check_references(sc, params)
         res = run_closed_loop(sc, params, progress=not quiet).result
     else:
         res = run_scenario(sc, params, progress=not quiet)

@@ -28,10 +28,12 @@ from ..control.closed_loop import resolve_controller
 from ..export import jsonable
 from ..params import Params
 from ..sweep import SweepOptions, plan_chunks, run_chunks
-from .analyses import OUTPUTS, SECONDS_PER_RUN, AnalysisContext, evaluate
+from ..errors import ParameterError, TrimError
+from .analyses import OUTPUTS, SECONDS_PER_RUN, AnalysisContext, RunFailed, evaluate
 from .spread import Spread
 
-__all__ = ["MonteCarloResult", "monte_carlo", "save_montecarlo", "QUANTILES", "MAX_RUNS"]
+__all__ = ["MonteCarloResult", "monte_carlo", "save_montecarlo", "failure_kind", "QUANTILES",
+           "MAX_RUNS"]
 
 #: quantiles of the summary
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
@@ -58,7 +60,8 @@ class MonteCarloResult:
     values : outputs, shape (runs, n_outputs); NaN for a failed run (and where an output does
         not exist, e.g. no right-half-plane zero)
     ok : run succeeded, shape (runs,)
-    reasons : why each run failed ("" for a run that succeeded)
+    reasons : why each run failed ("" for a run that succeeded): ``kind: message`` with the
+        kind of `failure_kind`
     """
 
     analysis: str
@@ -82,9 +85,9 @@ class MonteCarloResult:
         return int(np.count_nonzero(~self.ok))
 
     def summary(self, quantiles: Sequence[float] = QUANTILES) -> dict[str, Any]:
-        """Failure count (by exception type, with the first run's reason) and, per output,
-        the statistics of the successful runs where it is finite: ``n``, ``mean``, ``std``,
-        ``min``, quantiles ``q05`` ..., ``max``."""
+        """Failure count (by kind, `failure_kind`, with the first run's reason) and, per
+        output, the statistics of the successful runs where it is finite: ``n``, ``mean``,
+        ``std``, ``min``, quantiles ``q05`` ..., ``max``."""
         stats: dict[str, Any] = {}
         for j, name in enumerate(self.outputs):
             v = self.values[self.ok, j]
@@ -153,8 +156,21 @@ def _run_chunk(task) -> tuple[NDArray, NDArray, NDArray, list[str]]:
             ok[k] = True
         except Exception as exc:  # noqa: BLE001 - recorded with its reason, never dropped
             text = " ".join(str(exc).split()) or "no message"
-            reasons[k] = f"{type(exc).__name__}: {text}"[:500]
+            reasons[k] = f"{failure_kind(exc)}: {text}"[:500]
     return samples, values, ok, reasons
+
+
+def failure_kind(exc: BaseException) -> str:
+    """What kind of failure an exception of a run is (the reasons' first word, by which the
+    summary counts them): ``parameters`` (a value out of its range), ``trim`` (no steady
+    point), ``stopped`` (the simulation stopped early), ``error`` (anything else)."""
+    if isinstance(exc, TrimError):
+        return "trim"
+    if isinstance(exc, ParameterError):
+        return "parameters"
+    if isinstance(exc, RunFailed):
+        return "stopped"
+    return "error"
 
 
 def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plant", *,
