@@ -378,6 +378,7 @@ def files(tmp_path, monkeypatch):
     w("sp_nu.toml", '[spread."operating.nu"]\ndistribution = "uniform"\nlower = 0.3\n'
                     'upper = 0.4\n')
     w("t_nofree.toml", '[[target]]\nmodel = "driveline"\n')
+    w("op_load.toml", "[operating]\nT_l = 1e5\nF_s = 1e4\n")
     w("out.json", "mine")
     w("out.png", "mine")
     w("out.csv", "mine")
@@ -701,6 +702,9 @@ BAD_INPUT = [
     (["rig", "--out", "r.csv", "--band", "1:2:3"], "--band '1:2:3': give LO:HI in Hz"),
     (["rig", "--out", "r.csv", "--friction", "-1"], "--friction = -1: allowed range"),
     (["montecarlo", "--spread", "sp_ok.toml", "--runs", "1e3"], "'1e3' is not a valid integer"),
+    (["params", "validate", "op_load.toml"],
+     "op_load.toml: [operating] operating point: T_l = 100000 needs mu = 88.11, above the "
+     "traction peak"),
     (["calibrate", "t_nofree.toml", "--out", "c.toml"],
      "t_nofree.toml: missing free (the list of parameters to fit"),
     (["simulate", "--example", "servo-torque-steps", "--duration", "nan"], "--duration = nan"),

@@ -49,8 +49,11 @@ def check_plausible(params: Params, source: str = "parameters") -> Params:
     source : the file it came from (named in the message)
     """
     where = f"{source}: "
-    op = params.operating
     tr = traction_from_params(params)
+    try:  # a point given by a torque ratio or a load: its slip and clamping force solved
+        op = params.operating.resolve(params, tr)
+    except ParameterError as exc:
+        raise ParameterError(f"{where}[operating] {exc}") from None
     lo, hi = tr.nu_range
     if not lo <= op.nu <= hi:
         raise ParameterError(f"{where}operating.nu = {op.nu:g}: outside the valid slip range "

@@ -161,8 +161,9 @@ def linearisation_terms(params: Params, r_g: ArrayLike, nu: ArrayLike, F_s: Arra
 
 def linearize_belt(params: Params, op: OperatingPoint | None = None,
                    traction: TractionModel | None = None) -> BeltLinearisation:
-    """Eq. 3 at `op` (default: the ``[operating]`` point of `params`)."""
-    op = OperatingPoint.from_params(params) if op is None else op
+    """Eq. 3 at `op` (default: the ``[operating]`` point of `params`; a point given by a torque
+    ratio or a load is resolved first)."""
+    op = (OperatingPoint.from_params(params) if op is None else op).resolve(params, traction)
     t = linearisation_terms(params, op.r_g, op.nu, op.F_s, op.omega_p, traction)
     return BeltLinearisation(op=op, **{k: float(t[k]) for k in
                                        ("R_p", "R_s", "mu", "dmu", "c_b", "c_s", "g_F", "rho")})

@@ -259,10 +259,11 @@ def slip_model(params: Params, op: OperatingPoint | None = None,
     Parameters
     ----------
     params : parameter set (variator, driveline, traction)
-    op : operating point (r_g, nu, F_s, omega_p)
+    op : operating point (r_g, nu, F_s, omega_p; one given by a torque ratio or a load is
+        resolved, `OperatingPoint.resolve`)
     traction : traction model (default `traction_from_params(params)`)
     """
-    op = OperatingPoint.from_params(params) if op is None else op
+    op = (OperatingPoint.from_params(params) if op is None else op).resolve(params, traction)
     belt = linearize_belt(params, op, traction)
     A, B, C, D = (m[0] for m in state_matrices(params, [op.r_g], [op.nu], [op.F_s],
                                                [op.omega_p], traction))
