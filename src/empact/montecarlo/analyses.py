@@ -109,7 +109,7 @@ def _plant(params: Params, context: AnalysisContext) -> dict[str, float]:
 
 
 def _slip(params: Params, context: AnalysisContext) -> dict[str, float]:
-    op: OperatingPoint = params.operating
+    op: OperatingPoint = params.operating.resolve(params)  # (a point given by tau or T_l)
     sm = stability_map(params, "nu", [op.nu], "r_g", [op.r_g], base=op, workers=1)
     belt = linearize_belt(params, op)
     return {"max_real": float(sm.max_real[0, 0]), "min_damping": float(sm.min_damping[0, 0]),
