@@ -227,6 +227,8 @@ def test_reproduce_writes_complete_report(full_report):
     # text is escaped: every "<" opens a tag or a comment (a bare "< 0.2" in a caption did not)
     stray = re.findall(r".{20}<(?![A-Za-z/!]).{20}", html)
     assert stray == []
+    ids = re.findall(r"""\bid=["']([^"']+)["']""", html)
+    assert len(ids) > 100 and sorted({i for i in ids if ids.count(i) > 1}) == []  # unique
 
 
 

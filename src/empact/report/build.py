@@ -27,12 +27,15 @@ nav ol{columns:2}.summary td{text-align:left}.summary td.v{white-space:nowrap}
 ul.claims li{margin:2px 0}.why{color:#555;font-size:90%}section{margin-top:2em}"""
 
 
-#: Marks the page once loaded: ``data-images`` (count) and ``data-broken-images`` (images that
-#: did not load), for a reader's browser console and the test that renders the page.
+#: Marks the page once loaded: ``data-images`` (count), ``data-broken-images`` (images that
+#: did not load) and ``data-duplicate-ids`` (elements whose id an earlier one has), for a
+#: reader's browser console and the test that renders the page.
 IMAGE_CHECK = ("<script>window.addEventListener('load',function(){var i=document.images,b=0;"
                "for(var k=0;k<i.length;k++){if(!i[k].complete||i[k].naturalWidth===0){b++;"
                "i[k].classList.add('broken');}}document.body.dataset.images=i.length;"
-               "document.body.dataset.brokenImages=b;});</script>")
+               "document.body.dataset.brokenImages=b;var e=document.querySelectorAll('[id]'),"
+               "s={},d=0;for(var k=0;k<e.length;k++){if(s[e[k].id]){d++;}s[e[k].id]=1;}"
+               "document.body.dataset.duplicateIds=d;});</script>")
 
 
 def _summary(done: Sequence[tuple[Section, Sequence[Claim]]]) -> str:

@@ -30,7 +30,9 @@ class Section:
     Attributes
     ----------
     title : heading
-    anchor : HTML id (also the table-of-contents link)
+    anchor : HTML id (also the table-of-contents link); the ids of the page are unique:
+        sections by their anchor, figures ``fig-<stem>``, tables ``tab-<stem>``, claims
+        ``claim-<key>``
     compute : ``params -> result`` with a ``claims`` attribute (`empact.reproduction`)
     render : ``(Context, result) -> html``
     cost : rough build time [s] on one core; the parallel build starts the costly sections
@@ -69,7 +71,7 @@ class Context:
         shown = "png" if "png" in self.formats else self.formats[0]
         others = " ".join(f'<a href="{stem}.{fmt}">{fmt.upper()}</a>' for fmt in self.formats
                           if fmt != shown)
-        return (f'<figure id="{stem}"><img src="{stem}.{shown}" alt="{html.escape(stem)}">'
+        return (f'<figure id="fig-{stem}"><img src="{stem}.{shown}" alt="{html.escape(stem)}">'
                 f'<figcaption>{caption}{f" ({others})" if others else ""}</figcaption>'
                 f"</figure>\n")
 
@@ -84,7 +86,7 @@ class Context:
         head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
         body = "".join("<tr>" + "".join(f"<td>{fmt_cell(c)}</td>" for c in row) + "</tr>\n"
                        for row in rows)
-        return (f'<table id="{stem}"><caption>{caption} (<a href="{stem}.csv">CSV</a>)'
+        return (f'<table id="tab-{stem}"><caption>{caption} (<a href="{stem}.csv">CSV</a>)'
                 f"</caption><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>\n")
 
     @staticmethod
