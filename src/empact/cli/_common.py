@@ -38,7 +38,7 @@ __all__ = ["sweep_options", "sweep_from_options",
            "operating_values", "PLOT_SUFFIXES", "LINEAR_OPTIONS",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
            "OutputFile", "check_outputs", "check_references", "quiet_option", "Interrupted",
-           "EXIT_INTERRUPTED", "parse_list"]
+           "EXIT_INTERRUPTED", "parse_list", "schema_version", "fraction_metrics"]
 
 #: suffixes of ``--plot`` files (the figure's format)
 PLOT_SUFFIXES = ("png", "svg", "pdf")
@@ -175,8 +175,29 @@ class LazyGroup(ErrorGroup):
         sys.exit(rv if isinstance(rv, int) else 0)
 
 
-#: Version of every JSON document the commands print (``schema.version``).
+#: Version of the JSON documents the commands print (``schema.version``), unless
+#: `SCHEMA_VERSIONS` names another for a schema.
 JSON_VERSION = 1
+
+#: Schemas whose keys or units changed since version 1 (the README's interchange section says
+#: what changed): ``control.simulate`` and ``montecarlo`` 2, slips as fractions
+#: (``slip_error``, ``peak_slip``, ``slip_setpoint`` [-] in place of ``slip_error_pp``
+#: [percentage points], ``peak_slip_pp``, ``slip_setpoint_pp`` [%]).
+SCHEMA_VERSIONS = {"control.simulate": 2, "montecarlo": 2}
+
+
+def schema_version(schema: str) -> int:
+    """The version of JSON schema ``empact.<schema>``."""
+    return SCHEMA_VERSIONS.get(schema, JSON_VERSION)
+
+
+def fraction_metrics(metrics: Mapping[str, Any]) -> dict[str, Any]:
+    """Closed-loop metrics for machine-readable output: a slip in percent or percentage points
+    (a key ending ``_pp``) becomes a fraction under the key without it (``slip_error_pp``
+    0.05 -> ``slip_error`` 0.0005 [-]); percent is for people (`empact.control.closed_loop.
+    metrics` keeps it for the report)."""
+    return {(k[:-3] if k.endswith("_pp") else k): (v / 100 if k.endswith("_pp") else v)
+            for k, v in metrics.items()}
 
 #: Units of every quantity key that appears in the commands' JSON (SI; complex numbers are
 #: ``[re, im]`` pairs; arrays keep the unit of their elements).
@@ -190,7 +211,9 @@ UNITS = {
     "poles": "rad/s, complex as [re, im]", "zeros": "rad/s, complex as [re, im]",
     "rhp_zeros": "rad/s, complex as [re, im]", "start": "rad/s, complex as [re, im]",
     "end": "rad/s, complex as [re, im]", "branches": "rad/s, complex as [re, im]",
-    "max_real": "1/s", "min_damping": "-", "unstable_fraction": "-", "energy_fraction": "-",
+    "max_real": "1/s", "min_damping": "-", "unstable_fraction": "-",
+    "energy_fraction": "- (signed: the sign of the spring's elongation in the mode shape; the "
+                       "magnitudes of a mode sum to 1)",
     "shapes": "SI of each coordinate (mass-normalised)", "normalised_shapes": "-",
     "mass_matrix": "kg, kg m^2", "stiffness_matrix": "N/m, N m/rad", "coherence": "-",
     "multiple_coherence": "-", "fit_percent": "%", "singular_values": "-",
@@ -205,8 +228,8 @@ UNITS = {
     "ki": "N m/s per unit error", "wi_rad_s": "rad/s", "crossover_hz": "Hz", "roll_off_hz": "Hz",
     "kappa": "-", "bandwidth_scale": "-", "alpha_min": "-", "gamma": "-", "gamma_opt": "-",
     "bandwidth_hz": "Hz", "f_keep_hz": "Hz", "omega_peak": "rad/s",
-    "captured": "-", "slip_error_pp": "percentage points", "peak_slip_pp": "%",
-    "slip_setpoint_pp": "%", "ratio_error": "-", "ratio_rate": "1/s", "ratio_span": "-",
+    "captured": "-", "slip_error": "-", "peak_slip": "-", "slip_setpoint": "-",
+    "ratio_error": "-", "ratio_rate": "1/s", "ratio_span": "-",
     "mean_clamping_force": "N", "mean_slip_power": "W", "mean_actuation_power": "W",
     "mean_losses": "W", "shape": "-", "points": "-", "trimmed": "-",
     "f_slow_hz": "Hz", "zeta_slow": "-", "n_rhp_zeros": "-", "rhp_zero_hz": "Hz", "runs": "-",
@@ -229,7 +252,7 @@ def emit_json(data: Mapping[str, Any], schema: str, json_out: str | None = None)
                 collect(v)
 
     collect(data)
-    doc = {"schema": {"name": f"empact.{schema}", "version": JSON_VERSION},
+    doc = {"schema": {"name": f"empact.{schema}", "version": schema_version(schema)},
            "units": {k: UNITS[k] for k in sorted(keys) if k in UNITS}, **data}
     text = json.dumps(to_jsonable(doc), indent=1)
     if json_out is None:

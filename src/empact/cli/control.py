@@ -8,9 +8,9 @@ import click
 import numpy as np
 
 from .._validate import check_number
-from ._common import (ErrorGroup, Failed, InputError, OutputFile, check_references, emit_json,
-                      force_option, get_params, json_options, operating_values, params_option,
-                      sweep_from_options, sweep_options)
+from ._common import (UNITS, ErrorGroup, Failed, InputError, OutputFile, check_references,
+                      emit_json, force_option, fraction_metrics, get_params, json_options,
+                      operating_values, params_option, sweep_from_options, sweep_options)
 from .slip import parse_values
 
 #: the grid options of `plants` and `control design`: option -> (variable, unit, help)
@@ -295,10 +295,14 @@ def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_js
     if out:
         write_csv(run.result, out)
     m = run.metrics
-    if as_json or json_out:
-        emit_json({"scenario": sc.name, "metrics": m}, "control.simulate", json_out)
-    else:
+    if as_json or json_out:  # slips as fractions (schema version 2)
+        emit_json({"scenario": sc.name, "metrics": fraction_metrics(m)}, "control.simulate",
+                  json_out)
+    else:  # for people: slips in % and percentage points
         for k, v in m.items():
-            click.echo(f"{k:22s} {v}")
+            name, unit = (k[:-3], "percentage points" if "error" in k else "%") \
+                if k.endswith("_pp") else (k, UNITS.get(k, ""))
+            shown = f"{v:.6g}" if isinstance(v, float) else str(v)
+            click.echo(f"{name:22s} {shown} {unit if unit != '-' else ''}".rstrip())
     if not run.result.complete:
         raise Failed(f"closed loop stopped early: {run.result.message}")

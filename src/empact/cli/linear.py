@@ -67,8 +67,9 @@ def modes(model: str, r_g: float, kinematics: str, params_file: str | None, as_j
         emit_json(data, "modes", json_out)
         return
     click.echo(f"{lm.name}")
-    click.echo(f"{'mode':>4s} {'f [Hz]':>10s}  energy fraction per spring "
-               f"({', '.join(m.springs)})")
+    click.echo(f"{'mode':>4s} {'f [Hz]':>10s}  signed energy fraction per spring "
+               f"({', '.join(m.springs)}): sign of the spring's elongation in the mode, "
+               "magnitudes sum to 1")
     for j, f in enumerate(m.frequencies_hz):
         e = " ".join(f"{x:+6.3f}" for x in m.energy_fraction[j])
         click.echo(f"{j + 1:4d} {f:10.3f}  {e}")

@@ -22,7 +22,13 @@ import numpy as np
 
 from ..errors import DataError
 
-__all__ = ["load_records", "sample_rate", "column_name"]
+__all__ = ["load_records", "sample_rate", "column_name", "header_cell"]
+
+
+def header_cell(name: str, unit: str) -> str:
+    """The one style of a CSV header cell that empact writes: ``"theta_mp [rad]"``
+    (``"nu [-]"`` for a dimensionless quantity; `column_name` reads it back)."""
+    return f"{name} [{unit}]"
 
 
 def column_name(header: str) -> str:

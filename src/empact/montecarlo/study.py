@@ -41,6 +41,9 @@ QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 #: most runs of one study
 MAX_RUNS = 1_000_000
 
+#: version of the saved study's JSON (2: closed-loop slips as fractions, failure kinds)
+SCHEMA_VERSION = 2
+
 #: files of a saved study (the folder's own files, replaced by ``--force``)
 FILES = ("runs.csv", "runs.json", "summary.json")
 
@@ -217,10 +220,12 @@ def save_montecarlo(result: MonteCarloResult, folder: str | os.PathLike[str]) ->
     `folder`, all or nothing (a temporary folder moved into place)."""
     with atomic_folder(folder) as tmp:
         (tmp / "runs.csv").write_text(result.to_csv())
-        doc = {"analysis": result.analysis, "seed": result.seed, "units": result.units,
+        doc = {"schema": {"name": "empact.montecarlo.runs", "version": SCHEMA_VERSION},
+               "analysis": result.analysis, "seed": result.seed, "units": result.units,
                "parameters": list(result.spread.names), "outputs": list(result.outputs),
                "runs": result.table()}
         (tmp / "runs.json").write_text(json.dumps(jsonable(doc), indent=1) + "\n")
-        (tmp / "summary.json").write_text(json.dumps(jsonable(result.summary()), indent=1)
-                                          + "\n")
+        summary = {"schema": {"name": "empact.montecarlo", "version": SCHEMA_VERSION},
+                   **result.summary()}
+        (tmp / "summary.json").write_text(json.dumps(jsonable(summary), indent=1) + "\n")
     return Path(folder)
