@@ -45,7 +45,8 @@ OUTPUTS: dict[str, dict[str, str]] = {
               "f_slow_hz": "Hz", "zeta_slow": "-", "n_rhp_zeros": "-",
               "rhp_zero_hz": "Hz"},
     "slip": {"max_real": "1/s", "min_damping": "-", "c_b": "N m s/rad", "mu": "-"},
-    "closed-loop": {"slip_error": "-", "peak_slip": "-", "ratio_error": "-", "mean_clamping_force": "N", "mean_slip_power": "W",
+    "closed-loop": {"slip_error": "-", "peak_slip": "-", "ratio_error": "-",
+                    "mean_clamping_force": "N", "mean_slip_power": "W",
                     "mean_actuation_power": "W", "mean_losses": "W"},
 }
 
