@@ -3,10 +3,11 @@ interrupted``, exit status 130, no traceback (from the command or its workers) a
 output; with and without a local Dask cluster.
 
 Each command runs in its own session and gets the SIGINT as a terminal's Ctrl-C delivers it:
-to its whole process group, workers included (the workers ignore it; the command stops them).  The signal is sent as soon as the command's progress line shows that the work
-has started.  Every command here would run for at least 10 s more; the test bounds its exit to
-10 s after the signal (a hang or a pool that waits for its work fails) and prints the measured
-time (`-s`): the requirement is 2 s.
+to its whole process group, workers included (the workers ignore it; the command stops them).
+The signal is sent as soon as the command's progress line shows that the work has started (a
+bar writes its first line after a second of work).  Every command here would run for at
+least 10 s more; the test bounds its exit to 10 s after the signal (a hang, or a pool that
+waits for its work, fails) and prints the measured time (`-s`): the requirement is 2 s.
 """
 import os
 import select
@@ -29,8 +30,8 @@ CASES = {
         ["montecarlo", "--spread", "spread.toml", "--runs", "2000", "--analysis",
          "closed-loop", "--example", "slip-load-step-r1", "--out", "mc", "--scheduler",
          "local", "--workers", "2"], "monte carlo", True),
-    "simulate": (["simulate", "--example", "servo-torque-steps", "--duration", "600", "--out",
-                  "sim"], "simulate servo-torque-steps", True),
+    "simulate": (["simulate", "--example", "servo-torque-steps", "--duration", "2400",
+                  "--out", "sim"], "simulate servo-torque-steps", True),
 }
 
 

@@ -55,7 +55,7 @@ def test_progress_off_a_terminal_writes_plain_lines(capsys):
     """Captured or redirected stderr gets whole lines (first and final state), no carriage
     returns or escapes; disabled, nothing."""
     from empact._progress import progress
-    assert list(progress(range(7), desc="work", unit="step")) == list(range(7))
+    assert list(progress(range(7), desc="work", unit="step", delay=0)) == list(range(7))
     err = capsys.readouterr().err
     assert "\r" not in err and "\x1b" not in err
     lines = err.splitlines()
@@ -64,3 +64,19 @@ def test_progress_off_a_terminal_writes_plain_lines(capsys):
     with progress(total=3, desc="quiet", unit="step", enabled=False) as bar:
         bar.update(3)
     assert capsys.readouterr().err == ""
+
+
+def test_progress_lines_wait_for_a_second(capsys):
+    """Off a terminal a bar writes nothing when its work ends within `delay` (a quick run, bad
+    input found at once: its one error line stays alone); a bar still running when the delay's
+    timer fires writes its state then, and its final state."""
+    from empact._progress import progress
+    with progress(total=3, desc="quick", unit="step") as bar:
+        bar.update(3)
+    assert capsys.readouterr().err == ""
+    with progress(total=3, desc="long", unit="step", delay=60.0) as bar:
+        bar.update(1)
+        bar.show()  # what the timer does after 60 s
+        bar.update(2)
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 2 and "1/3" in lines[0] and "3/3" in lines[1], lines

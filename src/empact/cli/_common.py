@@ -38,7 +38,8 @@ __all__ = ["sweep_options", "sweep_from_options",
            "operating_values", "PLOT_SUFFIXES", "LINEAR_OPTIONS",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
            "OutputFile", "check_outputs", "check_references", "quiet_option", "Interrupted",
-           "EXIT_INTERRUPTED", "parse_list", "schema_version", "fraction_metrics"]
+           "EXIT_INTERRUPTED", "parse_list", "schema_version", "fraction_metrics",
+           "announce_compilation", "COMPILING"]
 
 #: suffixes of ``--plot`` files (the figure's format)
 PLOT_SUFFIXES = ("png", "svg", "pdf")
@@ -88,16 +89,59 @@ class Interrupted(click.ClickException):
         click.echo("error: interrupted", err=True)
 
 
+#: the line a first run prints when numba compiles the model (its cache is cold)
+COMPILING = ("compiling the model (a first run: numba compiles it once, 10 to 30 s; later runs "
+             "load it from the cache)")
+
+#: the commands that run the compiled nonlinear model (by their last name)
+MODEL_COMMANDS = {"simulate", "linearize", "nmp", "identify", "rig", "reproduce", "plants",
+                  "montecarlo", "design"}
+
+_announced: Any = None  # a flag shared with forked workers (they compile too)
+
+
+def announce_compilation() -> None:
+    """Print `COMPILING` on stderr, once (in this process and the processes it forks), when
+    numba starts compiling a function of empact: numba compiles only on a cache miss (its
+    ``numba:compile`` event), i.e. on a first run or after the code changed, and a progress
+    bar's estimate means nothing meanwhile."""
+    global _announced
+    if _announced is not None:
+        return
+    import multiprocessing
+
+    from numba.core import event
+    from tqdm import tqdm
+
+    _announced = multiprocessing.RawValue("b", 0)
+
+    class _Notice(event.Listener):
+        def on_start(self, ev: Any) -> None:
+            fn = getattr(ev.data.get("dispatcher"), "py_func", None)
+            if getattr(fn, "__module__", "").startswith("empact.") and not _announced.value:
+                _announced.value = 1
+                tqdm.write(COMPILING, file=sys.stderr)  # (a bar on a terminal is redrawn)
+
+        def on_end(self, ev: Any) -> None:
+            pass
+
+    event.register("numba:compile", _Notice())
+
+
 def _checked(cmd: click.Command | None) -> click.Command | None:
-    """`cmd` with `check_outputs` run before its body (installed once, on every command the
-    groups hand out, so that no command can forget it)."""
+    """`cmd` with `check_outputs` run before its body, and for a command of the model
+    `announce_compilation` (installed once, on every command the groups hand out, so that
+    no command can forget it)."""
     if cmd is None or cmd.callback is None or getattr(cmd.callback, "_outputs_checked", False):
         return cmd
     body = cmd.callback
 
     @functools.wraps(body)
     def run(*args: Any, **kwargs: Any) -> Any:
-        check_outputs(click.get_current_context())
+        ctx = click.get_current_context()
+        check_outputs(ctx)
+        if ctx.command.name in MODEL_COMMANDS and not ctx.params.get("quiet"):
+            announce_compilation()
         return body(*args, **kwargs)
 
     run._outputs_checked = True  # type: ignore[attr-defined]
@@ -344,15 +388,15 @@ def sweep_options(fn: Callable) -> Callable:
 def sweep_from_options(scheduler: str, workers: int | None, timeout: float,
                        progress: bool | None = None):
     """The `empact.sweep.SweepOptions` of the sweep options (each checked under its name);
-    a progress bar on stderr if `progress`, by default for a Dask scheduler or an interactive
-    terminal."""
+    a progress bar on stderr unless `progress` is false (off a terminal the bar writes lines
+    only once the sweep has run a second: `empact._progress`)."""
     from ..sweep import SweepOptions
 
     if workers is not None:
         check_int("--workers", workers, 1, 256)
     check_number("--scheduler-timeout", timeout, 0.1, 3600.0, unit="s")
     if progress is None:
-        progress = scheduler.strip() != "none" or sys.stderr.isatty()
+        progress = True
     return SweepOptions(scheduler=scheduler, workers=workers, timeout=timeout,
                         progress=progress)
 

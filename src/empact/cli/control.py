@@ -7,10 +7,12 @@ import time
 import click
 import numpy as np
 
+from .._progress import progress as progress_bar
 from .._validate import check_number
 from ._common import (UNITS, ErrorGroup, Failed, InputError, OutputFile, check_references,
                       emit_json, force_option, fraction_metrics, get_params, json_options,
-                      operating_values, params_option, sweep_from_options, sweep_options)
+                      operating_values, params_option, quiet_option, sweep_from_options,
+                      sweep_options)
 from .slip import parse_values
 
 #: the grid options of `plants` and `control design`: option -> (variable, unit, help)
@@ -108,20 +110,21 @@ def _summary(fam) -> dict:
 @click.command("plants")
 @grid_options
 @click.option("--out", "out", type=OutputFile(("npz", "json", "mat")), default=None,
-              help="Write the family (.npz, which `empact control check` reads; .json or .mat); "
-                   "an existing file only with --force.")
+              help="Write the family (.npz, which `empact control check` reads; .json or "
+                   ".mat); an existing file only with --force.")
 @sweep_options
 @params_option
 @json_options
 @force_option
+@quiet_option
 def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics, shift_law,
                drive, load_mode, out, scheduler, workers, scheduler_timeout, params_file,
-               as_json, json_out, force) -> None:
+               as_json, json_out, force, quiet) -> None:
     """Trim and exactly linearise the machine over a grid of operating points (a plant
     family: T_mp, T_ms and the load -> r_g, nu, nu_r), for control design and LPV models."""
     from ..control.family import save_family
 
-    sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
+    sweep = sweep_from_options(scheduler, workers, scheduler_timeout, progress=not quiet)
     params = get_params(params_file)
     t0 = time.perf_counter()
     fam = family_from_options(params, {"ratio": ratio, "slip": slip, "tau": tau,
@@ -164,9 +167,10 @@ def control_group() -> None:
 @params_option
 @json_options
 @force_option
+@quiet_option
 def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, tau, clamp,
                speed, load_torque, damping, kinematics, shift_law, drive, load_mode, out,
-               params_file, as_json, json_out, force) -> None:
+               params_file, as_json, json_out, force, quiet) -> None:
     """Design a controller (T_mp, T_ms) from the errors of (r_g, slip) on a plant family
     (default family: r_g 0.5..2 (7, geometric), slip 0.6..1.2 % (4) at [operating])."""
     from ..control.hinf import design_hinf
@@ -190,23 +194,29 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
            "clamp": clamp, "speed": speed, "load-torque": load_torque}
     if raw["ratio"] == "0.5:2:7":
         raw["ratio"] = ",".join(f"{x:.6g}" for x in np.geomspace(0.5, 2, 7))
-    fam = family_from_options(params, raw, damping, kinematics, shift_law, drive, load_mode)
-    if not fam.ok.all():
-        raise InputError(f"{int((~fam.ok).sum())} grid points do not trim ("
-                         f"{sorted({str(r) for r in fam.reason.ravel() if r})[0]}); narrow "
-                         "the grid")
     nom = None
     if nominal:
         try:
             nom = tuple(int(x) for x in nominal.split(","))
         except ValueError:
             raise InputError(f"--nominal {nominal!r}: grid indices I,J,...") from None
-        if len(nom) != len(fam.shape) or any(not 0 <= i < s for i, s in zip(nom, fam.shape)):
+    with progress_bar(total=2, desc=f"control design ({method}): family, design",
+                      unit="step", enabled=not quiet) as bar:
+        fam = family_from_options(params, raw, damping, kinematics, shift_law, drive,
+                                  load_mode)
+        bar.update(1)
+        if not fam.ok.all():
+            raise InputError(f"{int((~fam.ok).sum())} grid points do not trim ("
+                             f"{sorted({str(r) for r in fam.reason.ravel() if r})[0]}); "
+                             "narrow the grid")
+        if nom is not None and (len(nom) != len(fam.shape)
+                                or any(not 0 <= i < s for i, s in zip(nom, fam.shape))):
             raise InputError(f"--nominal {nominal!r}: indices in a grid of shape {fam.shape}")
-    if method == "pi":
-        ctrl = design_pi(fam, bw, alpha_min=alpha_min, slip=slip_signal, nominal=nom)
-    else:
-        ctrl = design_hinf(fam, bw, slip=slip_signal, nominal=nom)
+        if method == "pi":
+            ctrl = design_pi(fam, bw, alpha_min=alpha_min, slip=slip_signal, nominal=nom)
+        else:
+            ctrl = design_hinf(fam, bw, slip=slip_signal, nominal=nom)
+        bar.update(1)
     ctrl.save(out)
     if as_json or json_out:
         emit_json({"method": method, "n_states": ctrl.n, "design": dict(ctrl.design),
@@ -227,7 +237,8 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
               "(slycot ab13md) over a parametric spread covering the family.")
 @json_options
 @force_option
-def check_cmd(controller, family_file, mu, as_json, json_out, force) -> None:
+@quiet_option
+def check_cmd(controller, family_file, mu, as_json, json_out, force, quiet) -> None:
     """Closed-loop poles and disk margins of CONTROLLER against every plant of a family."""
     from ..control.controller import load_controller
     from ..control.family import load_family
@@ -240,11 +251,16 @@ def check_cmd(controller, family_file, mu, as_json, json_out, force) -> None:
         if base not in fam.outputs:
             raise InputError(f"{controller}: measures {name!r}, the family has "
                              f"{', '.join(fam.outputs)}")
-    rm = robustness_map(fam, ctrl)
-    data = {"worst": rm.worst(), "max_real_pole": rm.max_real_pole,
-            "disk_margin": rm.disk_margin, "axes": {k: v for k, v in fam.axes.items()}}
-    if mu:
-        data["mu"] = mu_upper_bound(fam, ctrl, tuple(s // 2 for s in fam.shape))
+    with progress_bar(total=2 if mu else 1, desc="control check: margins" + (", mu" if mu
+                                                                           else ""),
+                      unit="step", enabled=not quiet) as bar:
+        rm = robustness_map(fam, ctrl)
+        bar.update(1)
+        data = {"worst": rm.worst(), "max_real_pole": rm.max_real_pole,
+                "disk_margin": rm.disk_margin, "axes": {k: v for k, v in fam.axes.items()}}
+        if mu:
+            data["mu"] = mu_upper_bound(fam, ctrl, tuple(s // 2 for s in fam.shape))
+            bar.update(1)
     if as_json or json_out:
         emit_json(data, "control.check", json_out)
         return
@@ -269,8 +285,9 @@ def check_cmd(controller, family_file, mu, as_json, json_out, force) -> None:
 @params_option
 @json_options
 @force_option
+@quiet_option
 def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_json, json_out,
-                 force) -> None:
+                 force, quiet) -> None:
     """Closed loop on the nonlinear machine: print the scenario's metrics against its
     targets (exit 1 when the run stops early)."""
     from ..control.closed_loop import control_example_path, control_examples, run_closed_loop
@@ -291,7 +308,7 @@ def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_js
         sc = sc.with_controller(controller)
     params = get_params(params_file)
     check_references(sc, params)
-    run = run_closed_loop(sc, params)
+    run = run_closed_loop(sc, params, progress=not quiet)
     if out:
         write_csv(run.result, out)
     m = run.metrics

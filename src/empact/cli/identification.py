@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 import numpy as np
 
+from .._progress import progress as progress_bar
 from .._validate import check_int, check_number
 from ..experiments.rig import EXCITATIONS
 from ..variator.geometry import check_ratio
@@ -12,7 +13,7 @@ from ..identification import METHODS, estimate_frf
 from ..identification.records import load_records, sample_rate
 from ._common import (InputError, OutputFile, emit_json, force_option, get_params,
                       json_options, operating_point, output_folder, params_option, parse_list,
-                      to_jsonable)
+                      quiet_option, to_jsonable)
 from .linear import plot_option
 
 #: Most samples of a virtual rig record (duration x sample rate).
@@ -104,9 +105,10 @@ def _ratios(text: str) -> list[float]:
               help="Folder for the step responses (CSV), models (JSON) and the Fig. 2 plot; "
                    "new or empty unless --force.")
 @force_option
+@quiet_option
 def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | None,
              order: int | None, step: float, params_file: str | None, as_json: bool,
-             json_out: str | None, out: str | None, force: bool) -> None:
+             json_out: str | None, out: str | None, force: bool, quiet: bool) -> None:
     """Identify (T_mp, T_ms) -> (r_g, nu) from step responses of the nonlinear model (Fig 2)."""
     from .._io import atomic_folder
     from ..experiments.plant_id import identify_plant
@@ -122,7 +124,7 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
     base = operating_point(params, trim=True, slip=nu, clamp=F_s, speed=omega_p)
     check_ratio(r_list, params.variator, "--ratios")
     results = [identify_plant(params, base.replace(r_g=r), order=order, amplitudes=(step, step))
-               for r in r_list]
+               for r in progress_bar(r_list, desc="identify", unit="ratio", enabled=not quiet)]
     models = [{"r_g": res.r_g, "operating_point": res.experiment.op.to_dict(),
                "order": res.realization.order, "fit_percent": res.realization.fit,
                "singular_values": res.realization.singular_values[:40],

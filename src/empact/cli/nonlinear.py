@@ -39,6 +39,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     the partial result, marked INCOMPLETE); 2 bad input.
     """
     from .._io import atomic_folder
+    from .._progress import progress as progress_bar
     from ..control.closed_loop import run_closed_loop
     from ..nonlinear.scenario import example_path, list_examples, load_scenario
     from ..nonlinear.simulation import csv_text, run_scenario
@@ -68,9 +69,12 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     if not res.complete and not keep_partial:
         raise Failed(f"simulation stopped early, nothing written (--keep-partial keeps it): "
                      f"{res.message}")
-    with atomic_folder(dest) as tmp:
+    with atomic_folder(dest) as tmp, progress_bar(total=2, desc=f"writing {sc.name}",
+                                                  unit="file", enabled=not quiet) as bar:
         (tmp / f"{sc.name}.csv").write_text(csv_text(res, states))
+        bar.update(1)
         save_figure(plot_simulation(res).figure, tmp / sc.name)
+        bar.update(1)
     click.echo(str(dest / f"{sc.name}.csv"))
     if not res.complete:
         raise Failed(f"incomplete: {res.message}")

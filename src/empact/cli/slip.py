@@ -22,7 +22,7 @@ from ..slip import (INPUTS, OUTPUTS, VARIABLES, belt_root_locus, pole_sweep,
 from ..variator.traction import TractionModel, load_traction, traction_curves, traction_from_params
 from ._common import (LINEAR_OPTIONS, OPTION_VARIABLE, ErrorGroup, InputError, emit_json,
                       force_option, get_params, json_options, operating_values,
-                      params_option, sweep_from_options, sweep_options)
+                      params_option, quiet_option, sweep_from_options, sweep_options)
 from .linear import frequency_grid, plot_option
 
 VARIABLE_OPTION = {OPTION_VARIABLE[k]: k for k in LINEAR_OPTIONS}
@@ -338,8 +338,9 @@ def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_o
 @json_options
 @plot_option
 @force_option
+@quiet_option
 def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk, scheduler,
-            workers, scheduler_timeout, as_json, json_out, plot, force) -> None:
+            workers, scheduler_timeout, as_json, json_out, plot, force, quiet) -> None:
     """Stability map over two ranges (--slip 0.001:0.06:200 --ratio 0.5:2.2:200)."""
     params, tr = _setup(params_file, traction_file)
     raw = dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed)
@@ -349,7 +350,7 @@ def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk
     if x.size * y.size > MAX_MAP:
         raise InputError(f"--{VARIABLE_OPTION[x_name]} x --{VARIABLE_OPTION[y_name]}: "
                          f"{x.size} x {y.size} = {x.size * y.size} points; at most {MAX_MAP}")
-    sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
+    sweep = sweep_from_options(scheduler, workers, scheduler_timeout, progress=not quiet)
     sm = stability_map(params, x_name, x, y_name, y, base=base,  # type: ignore[arg-type]
                        traction=tr, method=method, chunk_size=check_int("--chunk", chunk, 1),
                        workers=workers, sweep=sweep)
