@@ -80,3 +80,22 @@ def test_progress_lines_wait_for_a_second(capsys):
         bar.update(2)
     lines = capsys.readouterr().err.splitlines()
     assert len(lines) == 2 and "1/3" in lines[0] and "3/3" in lines[1], lines
+
+
+def test_a_first_run_says_that_the_model_compiles(capsys):
+    """numba's compile event (it fires on a cache miss only) for a function of empact prints
+    one line, once; a compile of someone else's function prints nothing."""
+    import numba
+    from numba.core import event
+
+    from empact.cli import _common
+    from empact.nonlinear import _kernel
+
+    _common.announce_compilation()
+    _common._announced.value = 0  # (as in a fresh process: a first run)
+    other = numba.njit(lambda x: x + 1)
+    for disp in (other, _kernel.traction_mu, _kernel.belt_geometry):
+        with event.trigger_event("numba:compile", data={"dispatcher": disp, "args": (),
+                                                        "return_type": None}):
+            pass
+    assert capsys.readouterr().err == _common.COMPILING + "\n"
