@@ -1,7 +1,7 @@
 """The README is executed (issue 22, item 2): the commands of its "A short tour", verbatim and
 in order, in an empty folder (any non-zero exit fails), then its Python example in a fresh
 interpreter and the figure call its prose shows (``empact.plotting.plot_bode(...)`` after
-``import empact`` alone).  The tour (about 30 s of mostly process start-up) runs in the
+``import empact`` alone).  The tour (30-50 s, mostly process start-up) runs in the
 background from the start of the session (`conftest.py`, `readme_tour.py`); its test reads
 the records."""
 import pytest
