@@ -110,7 +110,7 @@ def main() -> None:
           f"{'met' if ts / tl >= TARGET else 'NOT met'} end to end ({ts / tl:.2f}x)")
     s = ms.summary()
     print(f"summary: {s['succeeded']} ok, {s['failures']} failed; slip error [pp] q05/q50/q95 "
-          + "/".join(f"{s['outputs']['slip_error_pp'][q]:.3g}" for q in ("q05", "q50", "q95")))
+          + "/".join(f"{100 * s['outputs']['slip_error'][q]:.3g}" for q in ("q05", "q50", "q95")))
 
 
 if __name__ == "__main__":

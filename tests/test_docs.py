@@ -46,14 +46,3 @@ def test_parameters_sections_are_complete():
             if not re.search(rf"(^|[\s,]){re.escape(name)}\b", section, re.M):
                 bad.append(f"{mod_name}.{obj.__name__}: {name}")
     assert bad == []
-
-
-def test_readme_python_example_runs():
-    """The README's Python tour runs as written (the paths it uses keep working)."""
-    from pathlib import Path
-
-    text = (Path(__file__).parents[1] / "README.md").read_text()
-    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
-    assert blocks
-    for code in blocks:
-        exec(compile(code, "README.md", "exec"), {"print": lambda *a, **k: None})

@@ -55,7 +55,7 @@ def test_progress_off_a_terminal_writes_plain_lines(capsys):
     """Captured or redirected stderr gets whole lines (first and final state), no carriage
     returns or escapes; disabled, nothing."""
     from empact._progress import progress
-    assert list(progress(range(7), desc="work", unit="step")) == list(range(7))
+    assert list(progress(range(7), desc="work", unit="step", delay=0)) == list(range(7))
     err = capsys.readouterr().err
     assert "\r" not in err and "\x1b" not in err
     lines = err.splitlines()
@@ -64,3 +64,38 @@ def test_progress_off_a_terminal_writes_plain_lines(capsys):
     with progress(total=3, desc="quiet", unit="step", enabled=False) as bar:
         bar.update(3)
     assert capsys.readouterr().err == ""
+
+
+def test_progress_lines_wait_for_a_second(capsys):
+    """Off a terminal a bar writes nothing when its work ends within `delay` (a quick run, bad
+    input found at once: its one error line stays alone); a bar still running when the delay's
+    timer fires writes its state then, and its final state."""
+    from empact._progress import progress
+    with progress(total=3, desc="quick", unit="step") as bar:
+        bar.update(3)
+    assert capsys.readouterr().err == ""
+    with progress(total=3, desc="long", unit="step", delay=60.0) as bar:
+        bar.update(1)
+        bar.show()  # what the timer does after 60 s
+        bar.update(2)
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 2 and "1/3" in lines[0] and "3/3" in lines[1], lines
+
+
+def test_a_first_run_says_that_the_model_compiles(capsys):
+    """numba's compile event (it fires on a cache miss only) for a function of empact prints
+    one line, once; a compile of someone else's function prints nothing."""
+    import numba
+    from numba.core import event
+
+    from empact.cli import _common
+    from empact.nonlinear import _kernel
+
+    _common.announce_compilation()
+    _common._announced.value = 0  # (as in a fresh process: a first run)
+    other = numba.njit(lambda x: x + 1)
+    for disp in (other, _kernel.traction_mu, _kernel.belt_geometry):
+        with event.trigger_event("numba:compile", data={"dispatcher": disp, "args": (),
+                                                        "return_type": None}):
+            pass
+    assert capsys.readouterr().err == _common.COMPILING + "\n"

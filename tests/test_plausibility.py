@@ -39,7 +39,9 @@ def _mutate(rng, base: dict) -> str:
         for p in path[:-1]:
             node = node[p]
         old = node[path[-1]]
-        kind = rng.integers(12)
+        if isinstance(old, bool) or not isinstance(old, (int, float)):
+            old = 1.0  # (an earlier mutation of this file made it text, a list, a table)
+        kind = rng.integers(14)
         if kind == 0:
             new = float(old) * 10.0 ** rng.integers(-15, 16)      # scaled by decades
         elif kind == 1:
@@ -62,15 +64,32 @@ def _mutate(rng, base: dict) -> str:
             new = float(old) * rng.uniform(0.5, 1.5)               # plausible change
         elif kind == 10:
             new = float(rng.choice([math.inf, -math.inf, math.nan]))
-        else:
+        elif kind == 11:
             node[f"unknown_{rng.integers(100)}"] = 1.0
             continue
+        elif kind == 12:  # the operating point by torque ratio or load (issue 10's options)
+            op = doc.setdefault("operating", {})
+            op[str(rng.choice(["tau", "T_l"]))] = float(rng.choice(
+                [rng.uniform(-2, 2), rng.uniform(-500, 500), 0.9, 60.0, math.nan]))
+            if rng.integers(2):
+                op.pop(str(rng.choice(["nu", "F_s"])), None)
+            continue
+        else:  # a number written as text
+            new = str(old)
         node[path[-1]] = new
     try:
-        return tomli_w.dumps(doc)
+        text = tomli_w.dumps(doc)
     except (TypeError, ValueError):  # nan / inf: write TOML by hand
-        return tomli_w.dumps({k: v for k, v in doc.items() if k != "operating"}) + \
+        text = tomli_w.dumps({k: v for k, v in doc.items() if k != "operating"}) + \
             "\n[operating]\nnu = nan\n"
+    edit = rng.integers(12)
+    if edit == 0:  # as a spreadsheet or Windows editor saves it (accepted or one line)
+        text = "\ufeff" + text
+    elif edit == 1:
+        text = text.replace("\n", "\r\n")
+    elif edit == 2:  # truncated
+        text = text[:int(rng.integers(1, max(2, len(text))))]
+    return text
 
 
 def _models_sound(params) -> None:
@@ -136,3 +155,16 @@ def test_span_beyond_double_precision_names_the_keys(params):
     with pytest.raises(ParameterError, match=r"rigid-body modes, expected 1.*largest "
                                              r"actuation.k_tp"):
         check_plausible(bad, "x.toml")
+
+
+@pytest.mark.parametrize("text", ["[operating]\nr_g = 1.0\nnu = 0.004\nT_l = 60.0\n"
+                                  "omega_p = 300.0\n", "[operating]\ntau = 0.9\nT_l = 60.0\n"])
+def test_a_point_given_by_torque_ratio_or_load_is_checked(tmp_path, text):
+    """Found by the fuzzer (issue 22): a file whose [operating] point is given by a load (or a
+    torque ratio and a load) crashed the check and the slip model (None compared with 0);
+    its slip and clamping force are solved first."""
+    path = tmp_path / "p.toml"
+    path.write_text(text)
+    params = check_plausible(load_params(path), str(path))
+    assert params.operating.F_s is None
+    _models_sound(params)  # the slip model at the resolved point

@@ -63,6 +63,8 @@ def test_report_renders_in_a_real_browser_with_every_image(tmp_path, params):
     broken = int(re.search(r'data-broken-images="(\d+)"', dom).group(1))
     # Table 1 has none; Figs. 4-5 four (Sec. 2.1 rows and the machine); Fig. 10 one
     assert images == 5 and broken == 1, (images, broken)
+    # every id once (the section "table1" and its table were both id="table1")
+    assert re.search(r'data-duplicate-ids="0"', dom), re.findall(r"data-duplicate-ids=\S+", dom)
     build_report(params, out, progress=False, sections=sections, formats=("png",))
     dom = subprocess.run([_chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'ud2'}",
                           "--virtual-time-budget=2000", "--dump-dom",

@@ -128,13 +128,22 @@ DEPRECATED_MODULES = {"empact.geometry": "empact.variator.geometry",
                       "empact.thrust_ratio": "empact.variator.thrust_ratio"}
 
 
+#: subpackages and modules reached as attributes (``empact.plotting.plot_bode`` without an
+#: ``import empact.plotting`` first), imported on first use
+SUBMODULES = ("control", "experiments", "identification", "linear", "montecarlo", "nonlinear",
+              "plotting", "report", "reproduction", "slip", "variator", "errors", "export",
+              "lti", "paper", "params", "plausibility", "sweep")
+
+
 def __getattr__(name: str) -> Any:
     if name in _CATALOGUE:
         value = getattr(importlib.import_module(f".{_CATALOGUE[name]}", __name__), name)
         globals()[name] = value
         return value
+    if name in SUBMODULES:
+        return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'empact' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_CATALOGUE))
+    return sorted(set(globals()) | set(_CATALOGUE) | set(SUBMODULES))

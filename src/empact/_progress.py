@@ -1,8 +1,12 @@
 """Progress bars on stderr: tqdm's redrawn bar on a terminal; on a pipe or a log file, whole
-lines (at most one every 10 s, and the final state) with no carriage returns or escapes."""
+lines (the first after 1 s, then at most one every 10 s, and the final state) with no
+carriage returns or escapes: work that ends within a second writes none.  A bar
+left by an exception (a Ctrl-C, an error) writes no final state: the error line is the last
+word."""
 from __future__ import annotations
 
 import sys
+import threading
 from typing import Any, Iterable
 
 from tqdm import tqdm
@@ -25,17 +29,101 @@ class _Lines:
         self.stream.flush()
 
 
+class _Bar(tqdm):
+    """tqdm that, left by an exception (as a context manager, or an iteration that an
+    exception ends), closes without writing its final state."""
+
+    def __exit__(self, exc_type: Any, exc_value: Any, traceback: Any) -> Any:
+        if exc_type is not None:
+            self.leave = False
+        return super().__exit__(exc_type, exc_value, traceback)
+
+    def close(self) -> None:
+        if sys.exc_info()[0] is not None:  # in a finally: an exception (or GeneratorExit)
+            self.leave = False
+        super().close()
+
+
+class _LineBar(_Bar):
+    """A bar written as lines that shows itself only once it has run `delay` seconds: a timer
+    writes its first state then (tqdm's own ``delay`` waits for the next update, which a long
+    step does not give), so work that ends sooner (a quick run, bad input found at once)
+    leaves no progress lines beside its result or its one error line."""
+
+    def __init__(self, *args: Any, delay: float = 0.0, **kwargs: Any) -> None:
+        super().__init__(*args, delay=delay, **kwargs)
+        self._timer = None
+        self._once = threading.Lock()
+        if delay > 0 and not self.disable:
+            self._timer = threading.Timer(delay, self.show)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def show(self) -> None:
+        """Write the current state now (the timer's call after `delay`)."""
+        with self._once:
+            if not self.disable and not getattr(self, "_closed", False):
+                self.delay = 0  # shown: later updates and the final state are written
+                self.refresh()
+                self.last_print_t, self.last_print_n = self._time(), self.n
+
+    def close(self) -> None:
+        timer, once = getattr(self, "_timer", None), getattr(self, "_once", None)
+        if timer is not None:
+            timer.cancel()
+        if once is not None:
+            with once:
+                self._closed = True
+        super().close()
+
+
+class _Off:
+    """A disabled bar: iterates, counts and closes, and writes nothing."""
+
+    def __init__(self, iterable: Iterable[Any] | None) -> None:
+        self.iterable, self.n, self.disable = iterable, 0, True
+
+    def __iter__(self) -> Any:
+        return iter(self.iterable if self.iterable is not None else ())
+
+    def __enter__(self) -> "_Off":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        return None
+
+    def update(self, n: float = 1) -> None:
+        """Count `n` more steps."""
+        self.n += n
+
+    def refresh(self) -> None:
+        """Nothing to draw."""
+
+    def show(self) -> None:
+        """Nothing to draw."""
+
+    def close(self) -> None:
+        """Nothing to close."""
+
+
+#: seconds a bar written as lines waits before its first line
+LINE_DELAY = 1.0
+
+
 def progress(iterable: Iterable[Any] | None = None, *, total: int | None = None, desc: str,
-             unit: str, enabled: bool = True) -> tqdm:
+             unit: str, enabled: bool = True, delay: float = LINE_DELAY) -> tqdm:
     """A progress bar on stderr (disabled unless `enabled`).
 
     On a terminal the bar is redrawn in place and removed when done; elsewhere (captured,
-    piped, redirected to a log) it is written as plain lines, at most one every 10 s, plus the
-    final state.
+    piped, redirected to a log) it is written as plain lines once it has run `delay` seconds
+    (its state then, at most one line every 10 s, and the final state).
     """
+    if not enabled:  # no tqdm at all: it would make a multiprocessing lock (a semaphore
+        return _Off(iterable)  # that a worker killed by a Ctrl-C leaves to the tracker)
     stream = sys.stderr
     if getattr(stream, "isatty", lambda: False)():
-        return tqdm(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
+        return _Bar(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
                     file=stream, leave=False)
-    return tqdm(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
-                file=_Lines(stream), leave=True, mininterval=10.0, ascii=True, ncols=80)
+    return _LineBar(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
+                    file=_Lines(stream), leave=True, mininterval=10.0, ascii=True, ncols=80,
+                    delay=delay)

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import json
 import os
+import zipfile
+import zlib
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -21,10 +23,11 @@ import numpy as np
 from ._io import atomic_file, atomic_write_text
 from ._lazy import lazy_module
 from ._validate import check_choice
+from .errors import ParameterError
 
 sio = lazy_module("scipy.io")
 
-__all__ = ["FORMATS", "system_dict", "save_system", "format_of", "jsonable"]
+__all__ = ["FORMATS", "system_dict", "save_system", "format_of", "jsonable", "read_npz"]
 
 #: File formats of `save_system`.
 FORMATS = ("json", "mat", "npz")
@@ -115,3 +118,30 @@ def write_arrays(path: str | os.PathLike[str], arrays: Mapping[str, Any], fmt: s
             with open(tmp, "wb") as fh:
                 np.savez(fh, **arrays)
     return Path(path)
+
+
+def read_npz(path: str | os.PathLike[str], what: str, required: Sequence[str],
+             hint: str = "") -> dict[str, np.ndarray]:
+    """Every array of a numpy ``.npz`` archive written by empact, read whole.
+
+    One-line `ParameterError` naming the file and `what` it should be (and `hint`, how to
+    write one) for a missing file, a file that is not an ``.npz`` archive (text, truncated,
+    damaged), a pickled (object) array, or a missing array of `required`.
+    """
+    p = Path(path)
+    how = f"; {hint}" if hint else ""
+    if not p.exists():
+        raise ParameterError(f"{p}: no such {what} file")
+    if p.is_dir():
+        raise ParameterError(f"{p}: is a folder, not a {what} file")
+    try:
+        with np.load(p, allow_pickle=False) as z:
+            arrays = {name: z[name] for name in z.files}
+    except (zipfile.BadZipFile, zlib.error, EOFError, OSError, ValueError, KeyError):
+        # a text or truncated file, a damaged member, a pickled (object) array
+        raise ParameterError(f"{p}: not a {what} (not a readable .npz archive{how})") from None
+    missing = [name for name in required if name not in arrays]
+    if missing:
+        raise ParameterError(f"{p}: not a {what} (no {', '.join(missing)} in the archive"
+                             f"{how})")
+    return arrays

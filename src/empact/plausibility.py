@@ -50,6 +50,10 @@ def check_plausible(params: Params, source: str = "parameters") -> Params:
     """
     where = f"{source}: "
     tr = traction_from_params(params)
+    try:  # a point given by a torque ratio or a load: its slip and clamping force solved
+        op = params.operating.resolve(params, tr)
+    except ParameterError as exc:
+        raise ParameterError(f"{where}[operating] {exc}") from None
     lo, hi = tr.nu_range
     op = params.operating
     if op.nu is not None and not lo <= op.nu <= hi:

@@ -18,13 +18,16 @@ that a sweep's results are bitwise equal whatever the scheduler or the number of
 callers' chunk functions compute each point independently of its chunk).  A worker that dies
 mid-sweep is survived: Dask reschedules its chunks (and retries a chunk up to ``retries``
 times); a chunk that raises is reported with its index.  Size chunks for >= 50 ms of compute
-(`chunk_count`): a Dask task costs about 5 ms of overhead.
+(`chunk_count`): a Dask task costs about 5 ms of overhead.  A Ctrl-C stops a sweep at once:
+the workers of a local cluster ignore SIGINT and are killed, not waited for, and a Ctrl-C
+while the cluster starts is delivered once it is up (`empact._parallel`).
 
 Dask is an optional extra (``pip install empact[dask]``); this module imports it only when a
 sweep uses it.
 """
 from __future__ import annotations
 
+import asyncio
 import importlib
 import math
 import os
@@ -33,6 +36,7 @@ from typing import Any, Callable, Sequence
 
 from threadpoolctl import threadpool_limits
 
+from ._parallel import sigint_held
 from ._progress import progress as progress_bar
 from ._validate import check_int, check_number
 from .errors import ParameterError
@@ -161,10 +165,18 @@ def _client(opts: SweepOptions):
     distributed = _distributed(opts)
     if opts.scheduler == "local":
         workers = opts.parallelism
-        with importlib.import_module("dask").config.set(LOCAL_CONFIG):
-            cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
-                                               processes=True, dashboard_address=":0",
-                                               silence_logs=50)
+        cluster = None
+        try:
+            # the worker processes ignore Ctrl-C, which at a terminal reaches them too (each
+            # would print a traceback): this process stops the sweep and closes the cluster
+            with importlib.import_module("dask").config.set(LOCAL_CONFIG), sigint_held():
+                cluster = distributed.LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True,
+                    dashboard_address=":0", silence_logs=50, preload=["empact._parallel"])
+        except BaseException:
+            if cluster is not None:  # a Ctrl-C while it started: delivered once it is up
+                cluster.close()
+            raise
         return distributed.Client(cluster), cluster
     address = opts.scheduler if "://" in opts.scheduler else f"tcp://{opts.scheduler}"
     try:
@@ -194,7 +206,25 @@ def _run_dask(fn, chunks, opts: SweepOptions, desc: str) -> list[Any]:
                 results[k] = fut.result()
                 bar.update(1)
         return results
+    except BaseException:
+        if cluster is not None:  # interrupted or failed: do not wait for running chunks
+            _stop_workers(cluster)
+        raise
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+async def _close_all(workers: list[Any], timeout: float) -> None:
+    await asyncio.gather(*(w.close(timeout=timeout) for w in workers), return_exceptions=True)
+
+
+def _stop_workers(cluster: Any, timeout: float = 0.5) -> None:
+    """Close the worker processes of a local cluster within about `timeout` seconds (a
+    Ctrl-C, a failed chunk): a worker that is computing a chunk is killed, not waited for
+    (a graceful close waits up to 4 s for it)."""
+    try:
+        cluster.sync(_close_all, list(cluster.workers.values()), timeout)
+    except Exception:  # noqa: BLE001 - cluster.close() follows and closes what is left
+        pass

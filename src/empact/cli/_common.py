@@ -3,10 +3,16 @@ errors, output paths checked before work, JSON with schema and units, common opt
 
 Exit status: 0 success; 2 bad input (one line ``error: ...`` on stderr, nothing written);
 1 a computation that ran but did not succeed (a simulation that stopped early, a calibration
-that misses its targets), with one line saying why.
+that misses its targets), with one line saying why; 130 interrupted (Ctrl-C: one line
+``error: interrupted``, nothing written).
+
+Output files are declared with the `OutputFile` type; before a command's body runs, one
+check (`check_outputs`) refuses any of them that exists (unless ``--force``), has the wrong
+suffix, or names the same file as another output of the command.
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import json
 import os
@@ -30,7 +36,10 @@ __all__ = ["sweep_options", "sweep_from_options",
            "InputError", "Failed", "ErrorGroup", "LazyGroup", "to_jsonable", "emit_json",
            "params_option", "json_options", "force_option", "get_params", "operating_point",
            "operating_values", "PLOT_SUFFIXES", "LINEAR_OPTIONS",
-           "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION"]
+           "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
+           "OutputFile", "check_outputs", "check_references", "quiet_option", "Interrupted",
+           "EXIT_INTERRUPTED", "parse_list", "schema_version", "fraction_metrics",
+           "announce_compilation", "COMPILING"]
 
 #: suffixes of ``--plot`` files (the figure's format)
 PLOT_SUFFIXES = ("png", "svg", "pdf")
@@ -63,14 +72,98 @@ class Failed(click.ClickException):
         click.echo(f"error: {_one_line(self.format_message())}", err=True)
 
 
+#: exit status of an interrupted command (128 + SIGINT, as a shell reports it)
+EXIT_INTERRUPTED = 130
+
+
+class Interrupted(click.ClickException):
+    """Ctrl-C (SIGINT): one line on stderr, exit status 130; nothing was written (every
+    output is moved into place only when complete)."""
+
+    exit_code = EXIT_INTERRUPTED
+
+    def __init__(self) -> None:
+        super().__init__("interrupted")
+
+    def show(self, file: Any = None) -> None:
+        click.echo("error: interrupted", err=True)
+
+
+#: the line a first run prints when numba compiles the model (its cache is cold)
+COMPILING = ("compiling the model (a first run: numba compiles it once, 10 to 30 s; later runs "
+             "load it from the cache)")
+
+#: the commands that run the compiled nonlinear model (by their last name)
+MODEL_COMMANDS = {"simulate", "linearize", "nmp", "identify", "rig", "reproduce", "plants",
+                  "montecarlo", "design"}
+
+_announced: Any = None  # a flag shared with forked workers (they compile too)
+
+
+def announce_compilation() -> None:
+    """Print `COMPILING` on stderr, once (in this process and the processes it forks), when
+    numba starts compiling a function of empact: numba compiles only on a cache miss (its
+    ``numba:compile`` event), i.e. on a first run or after the code changed, and a progress
+    bar's estimate means nothing meanwhile."""
+    global _announced
+    if _announced is not None:
+        return
+    import multiprocessing
+
+    from numba.core import event
+    from tqdm import tqdm
+
+    _announced = multiprocessing.RawValue("b", 0)
+
+    class _Notice(event.Listener):
+        def on_start(self, ev: Any) -> None:
+            fn = getattr(ev.data.get("dispatcher"), "py_func", None)
+            if getattr(fn, "__module__", "").startswith("empact.") and not _announced.value:
+                _announced.value = 1
+                tqdm.write(COMPILING, file=sys.stderr)  # (a bar on a terminal is redrawn)
+
+        def on_end(self, ev: Any) -> None:
+            pass
+
+    event.register("numba:compile", _Notice())
+
+
+def _checked(cmd: click.Command | None) -> click.Command | None:
+    """`cmd` with `check_outputs` run before its body, and for a command of the model
+    `announce_compilation` (installed once, on every command the groups hand out, so that
+    no command can forget it)."""
+    if cmd is None or cmd.callback is None or getattr(cmd.callback, "_outputs_checked", False):
+        return cmd
+    body = cmd.callback
+
+    @functools.wraps(body)
+    def run(*args: Any, **kwargs: Any) -> Any:
+        ctx = click.get_current_context()
+        check_outputs(ctx)
+        if ctx.command.name in MODEL_COMMANDS and not ctx.params.get("quiet"):
+            announce_compilation()
+        return body(*args, **kwargs)
+
+    run._outputs_checked = True  # type: ignore[attr-defined]
+    cmd.callback = run
+    return cmd
+
+
 class ErrorGroup(click.Group):
-    """A group that turns the library's validation errors into `InputError`."""
+    """A group that turns the library's validation errors into `InputError` and Ctrl-C into
+    `Interrupted`; every command it hands out checks its output files first
+    (`check_outputs`)."""
+
+    def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
+        return _checked(super().get_command(ctx, name))
 
     def invoke(self, ctx: click.Context) -> Any:
         try:
             return super().invoke(ctx)
         except (ParameterError, ValueError) as exc:
             raise InputError(str(exc) or type(exc).__name__) from None
+        except KeyboardInterrupt:
+            raise Interrupted() from None
 
 
 class LazyGroup(ErrorGroup):
@@ -92,7 +185,7 @@ class LazyGroup(ErrorGroup):
         if name not in self.lazy:
             return super().get_command(ctx, name)
         module, attr = self.lazy[name][0].split(":")
-        return getattr(importlib.import_module(module), attr)
+        return _checked(getattr(importlib.import_module(module), attr))
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
         rows = [(name, self.lazy[name][1]) for name in sorted(self.lazy)]
@@ -117,14 +210,38 @@ class LazyGroup(ErrorGroup):
         except click.ClickException as exc:
             exc.show()
             sys.exit(exc.exit_code)
-        except click.exceptions.Abort:
+        except click.exceptions.Abort as exc:
+            if isinstance(exc.__cause__, KeyboardInterrupt):  # Ctrl-C outside a command
+                Interrupted().show()
+                sys.exit(EXIT_INTERRUPTED)
             click.echo("error: aborted", err=True)
             sys.exit(1)
         sys.exit(rv if isinstance(rv, int) else 0)
 
 
-#: Version of every JSON document the commands print (``schema.version``).
+#: Version of the JSON documents the commands print (``schema.version``), unless
+#: `SCHEMA_VERSIONS` names another for a schema.
 JSON_VERSION = 1
+
+#: Schemas whose keys or units changed since version 1 (the README's interchange section says
+#: what changed): ``control.simulate`` and ``montecarlo`` 2, slips as fractions
+#: (``slip_error``, ``peak_slip``, ``slip_setpoint`` [-] in place of ``slip_error_pp``
+#: [percentage points], ``peak_slip_pp``, ``slip_setpoint_pp`` [%]).
+SCHEMA_VERSIONS = {"control.simulate": 2, "montecarlo": 2}
+
+
+def schema_version(schema: str) -> int:
+    """The version of JSON schema ``empact.<schema>``."""
+    return SCHEMA_VERSIONS.get(schema, JSON_VERSION)
+
+
+def fraction_metrics(metrics: Mapping[str, Any]) -> dict[str, Any]:
+    """Closed-loop metrics for machine-readable output: a slip in percent or percentage points
+    (a key ending ``_pp``) becomes a fraction under the key without it (``slip_error_pp``
+    0.05 -> ``slip_error`` 0.0005 [-]); percent is for people (`empact.control.closed_loop.
+    metrics` keeps it for the report)."""
+    return {(k[:-3] if k.endswith("_pp") else k): (v / 100 if k.endswith("_pp") else v)
+            for k, v in metrics.items()}
 
 #: Units of every quantity key that appears in the commands' JSON (SI; complex numbers are
 #: ``[re, im]`` pairs; arrays keep the unit of their elements).
@@ -138,7 +255,9 @@ UNITS = {
     "poles": "rad/s, complex as [re, im]", "zeros": "rad/s, complex as [re, im]",
     "rhp_zeros": "rad/s, complex as [re, im]", "start": "rad/s, complex as [re, im]",
     "end": "rad/s, complex as [re, im]", "branches": "rad/s, complex as [re, im]",
-    "max_real": "1/s", "min_damping": "-", "unstable_fraction": "-", "energy_fraction": "-",
+    "max_real": "1/s", "min_damping": "-", "unstable_fraction": "-",
+    "energy_fraction": "- (signed: the sign of the spring's elongation in the mode shape; the "
+                       "magnitudes of a mode sum to 1)",
     "shapes": "SI of each coordinate (mass-normalised)", "normalised_shapes": "-",
     "mass_matrix": "kg, kg m^2", "stiffness_matrix": "N/m, N m/rad", "coherence": "-",
     "multiple_coherence": "-", "fit_percent": "%", "singular_values": "-",
@@ -153,8 +272,8 @@ UNITS = {
     "ki": "N m/s per unit error", "wi_rad_s": "rad/s", "crossover_hz": "Hz", "roll_off_hz": "Hz",
     "kappa": "-", "bandwidth_scale": "-", "alpha_min": "-", "gamma": "-", "gamma_opt": "-",
     "bandwidth_hz": "Hz", "f_keep_hz": "Hz", "omega_peak": "rad/s",
-    "captured": "-", "slip_error_pp": "percentage points", "peak_slip_pp": "%",
-    "slip_setpoint_pp": "%", "ratio_error": "-", "ratio_rate": "1/s", "ratio_span": "-",
+    "captured": "-", "slip_error": "-", "peak_slip": "-", "slip_setpoint": "-",
+    "ratio_error": "-", "ratio_rate": "1/s", "ratio_span": "-",
     "mean_clamping_force": "N", "mean_slip_power": "W", "mean_actuation_power": "W",
     "mean_losses": "W", "shape": "-", "points": "-", "trimmed": "-",
     "f_slow_hz": "Hz", "zeta_slow": "-", "n_rhp_zeros": "-", "rhp_zero_hz": "Hz", "runs": "-",
@@ -177,7 +296,7 @@ def emit_json(data: Mapping[str, Any], schema: str, json_out: str | None = None)
                 collect(v)
 
     collect(data)
-    doc = {"schema": {"name": f"empact.{schema}", "version": JSON_VERSION},
+    doc = {"schema": {"name": f"empact.{schema}", "version": schema_version(schema)},
            "units": {k: UNITS[k] for k in sorted(keys) if k in UNITS}, **data}
     text = json.dumps(to_jsonable(doc), indent=1)
     if json_out is None:
@@ -191,12 +310,63 @@ params_option = click.option("--params", "params_file", type=click.Path(dir_okay
 force_option = click.option("--force", is_flag=True,
                             help="Replace existing output (in a folder: only empact's own "
                                  "files).")
+quiet_option = click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
+
+
+class OutputFile(click.Path):
+    """The type of an option that names an output file: `check_outputs` checks it before the
+    command runs.
+
+    Parameters
+    ----------
+    suffixes : the allowed suffixes without the dot (None: any); the file's format follows
+        its suffix
+    format_param : the name of a ``--format`` parameter of the same command; when given, the
+        suffix must be that format's
+    """
+
+    def __init__(self, suffixes: tuple[str, ...] | None = None,
+                 format_param: str | None = None) -> None:
+        super().__init__(dir_okay=False)
+        self.suffixes = suffixes
+        self.format_param = format_param
+
+
+def check_outputs(ctx: click.Context) -> None:
+    """Check every `OutputFile` option given to the command of `ctx` (`output_file`: suffix,
+    folder, existence unless the command's ``--force``); refuse two options naming one file.
+    Runs before the command's body (the groups install it, `ErrorGroup`)."""
+    force = bool(ctx.params.get("force", False))
+    seen: dict[str, str] = {}
+    for param in ctx.command.params:
+        value = ctx.params.get(param.name or "")
+        if not isinstance(param.type, OutputFile) or value is None:
+            continue
+        option = max(param.opts, key=len)
+        suffixes = param.type.suffixes
+        fmt = ctx.params.get(param.type.format_param) if param.type.format_param else None
+        if fmt is not None:
+            suffix = Path(value).suffix.lstrip(".").lower()
+            if suffix != fmt:
+                shown = f".{suffix}" if suffix else "none"
+                raise InputError(f"{option} {value}: file suffix {shown!r} does not match "
+                                 f"--format {fmt} (name the file "
+                                 f"{Path(value).with_suffix('.' + fmt).name}, or drop --format: "
+                                 "the format follows the suffix)")
+        output_file(value, option, force=force, suffixes=suffixes)
+        key = os.path.realpath(value)
+        if key in seen:
+            raise InputError(f"{option} {value}: the same file as {seen[key]}; give each output "
+                             "its own file")
+        seen[key] = option
 
 
 def json_options(fn: Callable) -> Callable:
-    """``--json`` (print JSON on stdout) and ``--json-out FILE`` (write it atomically)."""
-    fn = click.option("--json-out", "json_out", type=click.Path(dir_okay=False), default=None,
-                      help="Write the JSON to FILE (atomically) instead of stdout.")(fn)
+    """``--json`` (print JSON on stdout) and ``--json-out FILE`` (write it atomically; a
+    ``.json`` file, new unless ``--force``)."""
+    fn = click.option("--json-out", "json_out", type=OutputFile(("json",)), default=None,
+                      help="Write the JSON to FILE.json (atomically) instead of stdout; an "
+                           "existing file only with --force.")(fn)
     return click.option("--json", "as_json", is_flag=True, help="Print JSON on stdout.")(fn)
 
 
@@ -215,16 +385,59 @@ def sweep_options(fn: Callable) -> Callable:
     return fn
 
 
-def sweep_from_options(scheduler: str, workers: int | None, timeout: float):
+def sweep_from_options(scheduler: str, workers: int | None, timeout: float,
+                       progress: bool | None = None):
     """The `empact.sweep.SweepOptions` of the sweep options (each checked under its name);
-    a progress bar on stderr for a Dask scheduler or an interactive terminal."""
+    a progress bar on stderr unless `progress` is false (off a terminal the bar writes lines
+    only once the sweep has run a second: `empact._progress`)."""
     from ..sweep import SweepOptions
 
     if workers is not None:
         check_int("--workers", workers, 1, 256)
     check_number("--scheduler-timeout", timeout, 0.1, 3600.0, unit="s")
+    if progress is None:
+        progress = True
     return SweepOptions(scheduler=scheduler, workers=workers, timeout=timeout,
-                        progress=scheduler.strip() != "none" or sys.stderr.isatty())
+                        progress=progress)
+
+
+def parse_list(text: str, option: str, *, most: int, example: str = "0.5,1,2") -> list[float]:
+    """A comma-separated list of finite numbers (``--ratios 0.5,1,2``), as every command reads
+    one: an empty item, a non-number or more than `most` values is one line naming the
+    option."""
+    items = text.split(",")
+    if any(not x.strip() for x in items):
+        raise InputError(f"{option} {text!r}: an empty item; give comma-separated numbers, "
+                         f"e.g. {example}")
+    try:
+        values = [float(x) for x in items]
+    except ValueError:
+        raise InputError(f"{option} {text!r}: must be comma-separated numbers, e.g. "
+                         f"{example}") from None
+    if not all(np.isfinite(values)):
+        raise InputError(f"{option} {text!r}: values must be finite")
+    if len(values) > most:
+        raise InputError(f"{option} {text!r}: {len(values)} values; give 1 to {most}")
+    return values
+
+
+def check_references(scenario: Any, params: Params) -> None:
+    """A closed-loop scenario's ``[references]`` within what the machine can follow, checked
+    before the run (not found out when the simulation stops): a slip (``nu``, ``nu_r``, a
+    fraction) within the traction curve's valid range, a ratio within the variator's."""
+    lo, hi = traction_from_params(params).nu_range
+    src = getattr(scenario, "source", "") or getattr(scenario, "name", "scenario")
+    for name, points in scenario.references.items():
+        values = np.asarray(points, float)[:, 1]
+        key = f"references.{name}"
+        if name in ("nu", "nu_r"):
+            check_values(key, values, lo, hi, where=src,
+                         note="a slip fraction: 0.01 is 1 %; the traction curve's valid range")
+        elif name == "r_g":
+            try:
+                check_ratio(values, params.variator, key)
+            except ParameterError as exc:
+                raise InputError(f"{src}: {exc}") from None
 
 
 def get_params(path: str | None) -> Params:

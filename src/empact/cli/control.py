@@ -7,9 +7,11 @@ import time
 import click
 import numpy as np
 
+from .._progress import progress as progress_bar
 from .._validate import check_number
-from ._common import (ErrorGroup, Failed, InputError, emit_json, force_option, get_params,
-                      json_options, output_file, params_option, sweep_from_options,
+from ._common import (UNITS, ErrorGroup, Failed, InputError, OutputFile, check_references,
+                      emit_json, force_option, fraction_metrics, get_params, json_options,
+                      operating_values, params_option, quiet_option, sweep_from_options,
                       sweep_options)
 from .slip import parse_values
 
@@ -81,6 +83,8 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
         for x in v:
             check_number(f"--{opt}", x, lo, hi, lo_open=var in ("r_g", "F_s", "omega_p"),
                          unit=unit)
+        if var == "nu":
+            operating_values(params, "slip", v)  # within the traction curve's valid range
         if var == "r_g":
             check_ratio(v, params.variator, "--ratio")
         values[var] = v if v.size > 1 else float(v[0])
@@ -105,22 +109,22 @@ def _summary(fam) -> dict:
 
 @click.command("plants")
 @grid_options
-@click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
-              help="Write the family (.npz, .json or .mat).")
+@click.option("--out", "out", type=OutputFile(("npz", "json", "mat")), default=None,
+              help="Write the family (.npz, which `empact control check` reads; .json or "
+                   ".mat); an existing file only with --force.")
 @sweep_options
 @params_option
 @json_options
 @force_option
+@quiet_option
 def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics, shift_law,
                drive, load_mode, out, scheduler, workers, scheduler_timeout, params_file,
-               as_json, json_out, force) -> None:
+               as_json, json_out, force, quiet) -> None:
     """Trim and exactly linearise the machine over a grid of operating points (a plant
     family: T_mp, T_ms and the load -> r_g, nu, nu_r), for control design and LPV models."""
     from ..control.family import save_family
 
-    output_file(out, "--out", force=force, suffixes=("npz", "json", "mat"))
-    output_file(json_out, "--json-out", force=True)
-    sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
+    sweep = sweep_from_options(scheduler, workers, scheduler_timeout, progress=not quiet)
     params = get_params(params_file)
     t0 = time.perf_counter()
     fam = family_from_options(params, {"ratio": ratio, "slip": slip, "tau": tau,
@@ -158,22 +162,21 @@ def control_group() -> None:
 @click.option("--nominal", default=None, metavar="I,J,...",
               help="Grid index of the nominal plant (default: the middle).")
 @grid_options
-@click.option("--out", "out", type=click.Path(dir_okay=False), required=True,
-              help="Controller file (.json or .mat).")
+@click.option("--out", "out", type=OutputFile(("json", "mat")), required=True,
+              help="Controller file (.json or .mat; an existing file only with --force).")
 @params_option
 @json_options
 @force_option
+@quiet_option
 def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, tau, clamp,
                speed, load_torque, damping, kinematics, shift_law, drive, load_mode, out,
-               params_file, as_json, json_out, force) -> None:
+               params_file, as_json, json_out, force, quiet) -> None:
     """Design a controller (T_mp, T_ms) from the errors of (r_g, slip) on a plant family
     (default family: r_g 0.5..2 (7, geometric), torque ratio tau 0.8..0.95 (4) at
     [operating]'s clamping force and speed; empact.control.family.DESIGN_GRID)."""
     from ..control.hinf import design_hinf
     from ..control.pi import design_pi
 
-    output_file(out, "--out", force=force, suffixes=("json", "mat"))
-    output_file(json_out, "--json-out", force=True)
     bw_text = bandwidth or "0.1,0.05"
     try:
         bw = tuple(float(x) for x in bw_text.split(","))
@@ -183,29 +186,38 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
         raise InputError(f"--bandwidth {bw_text!r}: two numbers RATIO,SLIP [Hz]")
     for b in bw:
         check_number("--bandwidth", b, 0.0, 50.0, lo_open=True, unit="Hz")
+    if method == "pi":
+        check_number("--alpha-min", alpha_min, 0.05, 1.9,
+                     note="the multiloop disk margin each plant must keep")
     params = get_params(params_file)
     from ..control.family import DESIGN_GRID
 
     raw = {"ratio": ratio or DESIGN_GRID["r_g"],
            "slip": slip, "tau": tau or (None if slip else DESIGN_GRID["tau"]),
            "clamp": clamp, "speed": speed, "load-torque": load_torque}
-    fam = family_from_options(params, raw, damping, kinematics, shift_law, drive, load_mode)
-    if not fam.ok.all():
-        raise InputError(f"{int((~fam.ok).sum())} grid points do not trim ("
-                         f"{sorted({str(r) for r in fam.reason.ravel() if r})[0]}); narrow "
-                         "the grid")
     nom = None
     if nominal:
         try:
             nom = tuple(int(x) for x in nominal.split(","))
         except ValueError:
             raise InputError(f"--nominal {nominal!r}: grid indices I,J,...") from None
-        if len(nom) != len(fam.shape) or any(not 0 <= i < s for i, s in zip(nom, fam.shape)):
+    with progress_bar(total=2, desc=f"control design ({method}): family, design",
+                      unit="step", enabled=not quiet) as bar:
+        fam = family_from_options(params, raw, damping, kinematics, shift_law, drive,
+                                  load_mode)
+        bar.update(1)
+        if not fam.ok.all():
+            raise InputError(f"{int((~fam.ok).sum())} grid points do not trim ("
+                             f"{sorted({str(r) for r in fam.reason.ravel() if r})[0]}); "
+                             "narrow the grid")
+        if nom is not None and (len(nom) != len(fam.shape)
+                                or any(not 0 <= i < s for i, s in zip(nom, fam.shape))):
             raise InputError(f"--nominal {nominal!r}: indices in a grid of shape {fam.shape}")
-    if method == "pi":
-        ctrl = design_pi(fam, bw, alpha_min=alpha_min, slip=slip_signal, nominal=nom)
-    else:
-        ctrl = design_hinf(fam, bw, slip=slip_signal, nominal=nom)
+        if method == "pi":
+            ctrl = design_pi(fam, bw, alpha_min=alpha_min, slip=slip_signal, nominal=nom)
+        else:
+            ctrl = design_hinf(fam, bw, slip=slip_signal, nominal=nom)
+        bar.update(1)
     ctrl.save(out)
     if as_json or json_out:
         emit_json({"method": method, "n_states": ctrl.n, "design": dict(ctrl.design),
@@ -225,13 +237,14 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
 @click.option("--mu", is_flag=True, help="Also the structured singular value bound "
               "(slycot ab13md) over a parametric spread covering the family.")
 @json_options
-def check_cmd(controller, family_file, mu, as_json, json_out) -> None:
+@force_option
+@quiet_option
+def check_cmd(controller, family_file, mu, as_json, json_out, force, quiet) -> None:
     """Closed-loop poles and disk margins of CONTROLLER against every plant of a family."""
     from ..control.controller import load_controller
     from ..control.family import load_family
     from ..control.robustness import mu_upper_bound, robustness_map
 
-    output_file(json_out, "--json-out", force=True)
     ctrl = load_controller(controller)
     fam = load_family(family_file)
     for name in ctrl.measured:
@@ -239,11 +252,16 @@ def check_cmd(controller, family_file, mu, as_json, json_out) -> None:
         if base not in fam.outputs:
             raise InputError(f"{controller}: measures {name!r}, the family has "
                              f"{', '.join(fam.outputs)}")
-    rm = robustness_map(fam, ctrl)
-    data = {"worst": rm.worst(), "max_real_pole": rm.max_real_pole,
-            "disk_margin": rm.disk_margin, "axes": {k: v for k, v in fam.axes.items()}}
-    if mu:
-        data["mu"] = mu_upper_bound(fam, ctrl, tuple(s // 2 for s in fam.shape))
+    with progress_bar(total=2 if mu else 1, desc="control check: margins" + (", mu" if mu
+                                                                           else ""),
+                      unit="step", enabled=not quiet) as bar:
+        rm = robustness_map(fam, ctrl)
+        bar.update(1)
+        data = {"worst": rm.worst(), "max_real_pole": rm.max_real_pole,
+                "disk_margin": rm.disk_margin, "axes": {k: v for k, v in fam.axes.items()}}
+        if mu:
+            data["mu"] = mu_upper_bound(fam, ctrl, tuple(s // 2 for s in fam.shape))
+            bar.update(1)
     if as_json or json_out:
         emit_json(data, "control.check", json_out)
         return
@@ -263,13 +281,14 @@ def check_cmd(controller, family_file, mu, as_json, json_out) -> None:
 @click.option("--list-examples", "list_ex", is_flag=True, help="List them.")
 @click.option("--controller", "controller", default=None, type=click.Path(dir_okay=False),
               help="Controller file replacing the scenario's.")
-@click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
-              help="Write the time histories (CSV).")
+@click.option("--out", "out", type=OutputFile(("csv",)), default=None,
+              help="Write the time histories (.csv; an existing file only with --force).")
 @params_option
 @json_options
 @force_option
+@quiet_option
 def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_json, json_out,
-                 force) -> None:
+                 force, quiet) -> None:
     """Closed loop on the nonlinear machine: print the scenario's metrics against its
     targets (exit 1 when the run stops early)."""
     from ..control.closed_loop import control_example_path, control_examples, run_closed_loop
@@ -282,8 +301,6 @@ def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_js
         return
     if (scenario is None) == (example is None):
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
-    output_file(out, "--out", force=force, suffixes=("csv",))
-    output_file(json_out, "--json-out", force=True)
     sc = load_scenario(control_example_path(example) if example else scenario)
     if not sc.closed_loop:
         raise InputError(f"{scenario}: no [controller] table (an open-loop scenario: run it "
@@ -291,14 +308,19 @@ def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_js
     if controller:
         sc = sc.with_controller(controller)
     params = get_params(params_file)
-    run = run_closed_loop(sc, params)
+    check_references(sc, params)
+    run = run_closed_loop(sc, params, progress=not quiet)
     if out:
         write_csv(run.result, out)
     m = run.metrics
-    if as_json or json_out:
-        emit_json({"scenario": sc.name, "metrics": m}, "control.simulate", json_out)
-    else:
+    if as_json or json_out:  # slips as fractions (schema version 2)
+        emit_json({"scenario": sc.name, "metrics": fraction_metrics(m)}, "control.simulate",
+                  json_out)
+    else:  # for people: slips in % and percentage points
         for k, v in m.items():
-            click.echo(f"{k:22s} {v}")
+            name, unit = (k[:-3], "percentage points" if "error" in k else "%") \
+                if k.endswith("_pp") else (k, UNITS.get(k, ""))
+            shown = f"{v:.6g}" if isinstance(v, float) else str(v)
+            click.echo(f"{name:22s} {shown} {unit if unit != '-' else ''}".rstrip())
     if not run.result.complete:
         raise Failed(f"closed loop stopped early: {run.result.message}")

@@ -5,13 +5,15 @@ from __future__ import annotations
 import click
 import numpy as np
 
+from .._progress import progress as progress_bar
 from .._validate import check_int, check_number
 from ..experiments.rig import EXCITATIONS
 from ..variator.geometry import check_ratio
 from ..identification import METHODS, estimate_frf
 from ..identification.records import load_records, sample_rate
-from ._common import (PLOT_SUFFIXES, InputError, emit_json, force_option, get_params, json_options,
-                      operating_point, output_file, output_folder, params_option, to_jsonable)
+from ._common import (InputError, OutputFile, emit_json, force_option, get_params,
+                      json_options, operating_point, output_folder, params_option, parse_list,
+                      quiet_option, to_jsonable)
 from .linear import plot_option
 
 #: Most samples of a virtual rig record (duration x sample rate).
@@ -40,8 +42,14 @@ def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], f
         raise InputError("give exactly one of --fs HZ and --time COLUMN")
     if fs is not None:
         fs = check_number("--fs", fs, 0.0, 1e9, lo_open=True, unit="Hz")
-    output_file(plot, "--plot", force=force, suffixes=PLOT_SUFFIXES)
-    output_file(json_out, "--json-out", force=True)
+    named = [("--input", c) for c in inputs] + [("--output", c) for c in outputs] \
+        + ([("--time", time_col)] if time_col else [])
+    for k, (opt, col) in enumerate(named):
+        first = next(o for o, c in named if c == col)
+        if [c for _, c in named].index(col) < k:
+            raise InputError(f"{opt} {col}: " + ("given twice" if first == opt else
+                             f"the column is already the {first.lstrip('-')}") + "; each "
+                             "column is one signal (an input, an output or the time)")
     cols = list(dict.fromkeys(list(inputs) + list(outputs) + ([time_col] if time_col else [])))
     rec = load_records(data, cols)
     n = len(next(iter(rec.values())))
@@ -77,14 +85,7 @@ def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], f
 
 
 def _ratios(text: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise InputError(f"--ratios {text!r}: give comma-separated numbers, e.g. 0.5,1,2") \
-            from None
-    if not values or len(values) > 50:
-        raise InputError(f"--ratios {text!r}: give 1 to 50 ratios")
-    return values
+    return parse_list(text, "--ratios", most=50)
 
 
 @click.command("identify")
@@ -104,9 +105,10 @@ def _ratios(text: str) -> list[float]:
               help="Folder for the step responses (CSV), models (JSON) and the Fig. 2 plot; "
                    "new or empty unless --force.")
 @force_option
+@quiet_option
 def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | None,
              order: int | None, step: float, params_file: str | None, as_json: bool,
-             json_out: str | None, out: str | None, force: bool) -> None:
+             json_out: str | None, out: str | None, force: bool, quiet: bool) -> None:
     """Identify (T_mp, T_ms) -> (r_g, nu) from step responses of the nonlinear model (Fig 2)."""
     from .._io import atomic_folder
     from ..experiments.plant_id import identify_plant
@@ -118,12 +120,11 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
         raise InputError("--step = 0: must be a non-zero torque step in [-1, 1] [N m]")
     r_list = _ratios(ratios)
     dest = None if out is None else output_folder(out, "--out", force=force)
-    output_file(json_out, "--json-out", force=True)
     params = get_params(params_file)
     base = operating_point(params, trim=True, slip=nu, clamp=F_s, speed=omega_p)
     check_ratio(r_list, params.variator, "--ratios")
     results = [identify_plant(params, base.replace(r_g=r), order=order, amplitudes=(step, step))
-               for r in r_list]
+               for r in progress_bar(r_list, desc="identify", unit="ratio", enabled=not quiet)]
     models = [{"r_g": res.r_g, "operating_point": res.experiment.op.to_dict(),
                "order": res.realization.order, "fit_percent": res.realization.fit,
                "singular_values": res.realization.singular_values[:40],
@@ -176,8 +177,9 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
               help="Spindle Coulomb friction torque [N m] (both spindles).")
 @click.option("--seed", type=int, default=1, show_default=True)
 @params_option
-@click.option("--out", required=True, type=click.Path(dir_okay=False),
-              help="CSV records (time, T_mp, T_ms, theta_mp, theta_ms, nu).")
+@click.option("--out", required=True, type=OutputFile(("csv",)),
+              help="CSV records (time, T_mp, T_ms, theta_mp, theta_ms, nu; units in the "
+                   "header); an existing file only with --force.")
 @force_option
 @click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
 def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p: float,
@@ -199,6 +201,9 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
     if duration * fs > MAX_RIG_SAMPLES:
         raise InputError(f"--duration x --fs = {duration:g} s x {fs:g} Hz = "
                          f"{duration * fs:.3g} samples; at most {MAX_RIG_SAMPLES}")
+    if duration * fs < 64:
+        raise InputError(f"--duration x --fs = {duration:g} s x {fs:g} Hz = "
+                         f"{duration * fs:.3g} samples; at least 64 (an FRF needs records)")
     lo = check_number("--band (low end)", lo, 0.0, fs / 2, lo_open=True, hi_open=True,
                       unit="Hz", note="below half the sample rate")
     hi = check_number("--band (high end)", hi, lo, fs / 2, lo_open=True, hi_open=True,
@@ -206,7 +211,6 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
     rms = check_number("--rms", rms, 0.0, 100.0, lo_open=True, unit="N m")
     friction = check_number("--friction", friction, 0.0, 100.0, unit="N m")
     seed = check_int("--seed", seed, 0, 2**32 - 1)
-    output_file(out, "--out", force=force)
     params = get_params(params_file)
     op = operating_point(params, trim=True, ratio=r_g, slip=nu, clamp=F_s, speed=omega_p)
     settings = RigSettings(r_g=op.r_g, nu=op.nu, F_s=op.F_s, omega_p=op.omega_p, excite=excite,

@@ -11,8 +11,8 @@ from ..linear.actuation import actuation_model
 from ..linear.calibration import calibrate, load_targets
 from ..linear.driveline import driveline_model, uncoupled_frequencies
 from ..params import DAMPING_LEVELS, save_params
-from ._common import (PLOT_SUFFIXES, Failed, InputError, emit_json, force_option, get_params,
-                      json_options, output_file, params_option)
+from ._common import (PLOT_SUFFIXES, Failed, InputError, OutputFile, emit_json, force_option,
+                      get_params, json_options, params_option)
 
 MODELS = {"actuation": actuation_model, "driveline": driveline_model}
 #: Most frequencies one response may have.
@@ -21,8 +21,9 @@ MAX_FREQUENCIES = 100_000
 
 def plot_option(fn):
     """``--plot FILE`` (format from the suffix)."""
-    return click.option("--plot", "plot", type=click.Path(dir_okay=False), default=None,
-                        help="Write the figure (format from the suffix: .png, .svg, .pdf).")(fn)
+    return click.option("--plot", "plot", type=OutputFile(PLOT_SUFFIXES), default=None,
+                        help="Write the figure (format from the suffix: .png, .svg, .pdf); an "
+                             "existing file only with --force.")(fn)
 
 
 def kinematics_option(fn):
@@ -45,10 +46,10 @@ def ratio_option(default: float):
 @kinematics_option
 @params_option
 @json_options
+@force_option
 def modes(model: str, r_g: float, kinematics: str, params_file: str | None, as_json: bool,
-          json_out: str | None) -> None:
+          json_out: str | None, force: bool) -> None:
     """Undamped eigenfrequencies, mode shapes and modal energy of MODEL at a ratio."""
-    output_file(json_out, "--json-out", force=True)
     params = get_params(params_file)
     r_g = float(check_ratio(check_number("--ratio", r_g), params.variator, "--ratio"))
     lm = actuation_model(params, r_g, kinematics=kinematics) if model == "actuation" \
@@ -66,8 +67,9 @@ def modes(model: str, r_g: float, kinematics: str, params_file: str | None, as_j
         emit_json(data, "modes", json_out)
         return
     click.echo(f"{lm.name}")
-    click.echo(f"{'mode':>4s} {'f [Hz]':>10s}  energy fraction per spring "
-               f"({', '.join(m.springs)})")
+    click.echo(f"{'mode':>4s} {'f [Hz]':>10s}  signed energy fraction per spring "
+               f"({', '.join(m.springs)}): sign of the spring's elongation in the mode, "
+               "magnitudes sum to 1")
     for j, f in enumerate(m.frequencies_hz):
         e = " ".join(f"{x:+6.3f}" for x in m.energy_fraction[j])
         click.echo(f"{j + 1:4d} {f:10.3f}  {e}")
@@ -119,8 +121,10 @@ def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: 
         r_g: float, fmin: float, fmax: float, n: int, params_file: str | None, as_json: bool,
         json_out: str | None, plot: str | None, force: bool) -> None:
     """Damped frequency response of MODEL, computed directly from M, C and K."""
-    output_file(plot, "--plot", force=force, suffixes=PLOT_SUFFIXES)
-    output_file(json_out, "--json-out", force=True)
+    for opt, names in (("--input", inputs), ("--output", outputs)):
+        twice = sorted({x for x in names if names.count(x) > 1})
+        if twice:
+            raise InputError(f"{opt} {twice[0]}: given twice; name each signal once")
     params = get_params(params_file)
     f = frequency_grid(fmin, fmax, n)
     r_g = float(check_ratio(check_number("--ratio", r_g), params.variator, "--ratio"))
@@ -162,8 +166,8 @@ def frf(model: str, inputs: tuple[str, ...], outputs: tuple[str, ...], damping: 
 @click.command("calibrate")
 @click.argument("targets", type=click.Path(dir_okay=False))
 @params_option
-@click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
-              help="Where to write the calibrated parameter file (TOML).")
+@click.option("--out", "out", required=True, type=OutputFile(("toml",)),
+              help="Where to write the calibrated parameter file (.toml).")
 @click.option("--tolerance", type=float, default=1.0, show_default=True,
               help="Largest relative miss of any target [%]; beyond it nothing is written "
                    "and the exit status is 1.")
@@ -189,7 +193,6 @@ def calibrate_cmd(targets: str, params_file: str | None, out: str, tolerance: fl
             raise InputError(f"--tie {item!r}: expected DEPENDENT=FREE, e.g. "
                              "actuation.k_ts=actuation.k_tp")
         ties[dep.strip()] = src.strip()
-    output_file(out, "--out", force=force)
     params = get_params(params_file)
     tgts, free, ties = load_targets(targets, kinematics=kinematics, ties=ties)
     res = calibrate(params, tgts, free, ties)

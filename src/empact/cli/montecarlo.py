@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import click
 
-from ._common import (InputError, emit_json, force_option, get_params, json_options,
-                      output_file, output_folder, params_option, sweep_from_options,
-                      sweep_options)
+from ._common import (Failed, InputError, check_references, emit_json, force_option,
+                      get_params, json_options, output_folder, params_option, quiet_option,
+                      sweep_from_options, sweep_options)
 
 
 @click.command("montecarlo")
@@ -33,12 +33,16 @@ from ._common import (InputError, emit_json, force_option, get_params, json_opti
 @params_option
 @json_options
 @force_option
+@quiet_option
 def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, example, controller,
                    seed, out, scheduler, workers, scheduler_timeout, params_file, as_json,
-                   json_out, force) -> None:
+                   json_out, force, quiet) -> None:
     """Monte Carlo over parameter spread: each run draws the spread's parameters, evaluates
     the analysis and is recorded (a failed run with its reason); prints the summary
-    (quantiles, failure count)."""
+    (quantiles, failure count).
+
+    Exit status: 0 when at least one run succeeded; 1 when every run failed (nothing
+    written); 2 bad input (a spread none of whose values a parameter may take, ...)."""
     from importlib import resources
 
     from .._validate import check_int
@@ -61,8 +65,7 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
                          "--example NAME")
     if out:
         output_folder(out, "--out", force=force)
-    output_file(json_out, "--json-out", force=True)
-    sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
+    sweep = sweep_from_options(scheduler, workers, scheduler_timeout, progress=not quiet)
     params = get_params(params_file)
     spread = load_spread(spread_file, params)
     sc = ctrl = None
@@ -74,9 +77,14 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
         if not sc.closed_loop:
             raise InputError(f"--scenario {scenario}: no [controller] table (the closed-loop "
                              "analysis needs a closed-loop scenario)")
+        check_references(sc, params)
         ctrl = resolve_controller(controller or sc.controller.file)
     result = monte_carlo(params, spread, runs, analysis, seed=seed, scenario=sc,
                          controller=ctrl, sweep=sweep)
+    if result.failures == result.runs:
+        kind, f = next(iter(result.summary()["failure_reasons"].items()))
+        raise Failed(f"every one of the {result.runs} runs failed ({f['count']} x {kind}, "
+                     f"e.g. {f['example'].partition(': ')[2]}); nothing written")
     if out:
         save_montecarlo(result, out)
     summary = result.summary()

@@ -6,8 +6,9 @@ import numpy as np
 
 from .._validate import check_number
 from ..variator.geometry import check_ratio
-from ._common import (PLOT_SUFFIXES, Failed, InputError, emit_json, force_option, get_params,
-                      json_options, operating_point, output_file, output_folder, params_option)
+from ._common import (Failed, InputError, OutputFile, check_references, emit_json,
+                      force_option, get_params, json_options, operating_point, output_folder,
+                      params_option, parse_list)
 from .linear import plot_option
 
 #: Most output samples (duration x sample rate) one simulation may write.
@@ -38,6 +39,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     the partial result, marked INCOMPLETE); 2 bad input.
     """
     from .._io import atomic_folder
+    from .._progress import progress as progress_bar
     from ..control.closed_loop import run_closed_loop
     from ..nonlinear.scenario import example_path, list_examples, load_scenario
     from ..nonlinear.simulation import csv_text, run_scenario
@@ -60,15 +62,19 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     dest = output_folder(out or f"sim-{sc.name}", "--out", force=force)
     params = get_params(params_file)
     if sc.closed_loop:
+        check_references(sc, params)
         res = run_closed_loop(sc, params, progress=not quiet).result
     else:
         res = run_scenario(sc, params, progress=not quiet)
     if not res.complete and not keep_partial:
         raise Failed(f"simulation stopped early, nothing written (--keep-partial keeps it): "
                      f"{res.message}")
-    with atomic_folder(dest) as tmp:
+    with atomic_folder(dest) as tmp, progress_bar(total=2, desc=f"writing {sc.name}",
+                                                  unit="file", enabled=not quiet) as bar:
         (tmp / f"{sc.name}.csv").write_text(csv_text(res, states))
+        bar.update(1)
         save_figure(plot_simulation(res).figure, tmp / sc.name)
+        bar.update(1)
     click.echo(str(dest / f"{sc.name}.csv"))
     if not res.complete:
         raise Failed(f"incomplete: {res.message}")
@@ -147,9 +153,11 @@ def _add(options):
 @click.option("--speed", "omega_p", type=float, default=None,
               help="Primary speed omega_p [rad/s].")
 @click.option("--format", "fmt", type=click.Choice(["json", "mat", "npz"]), default=None,
-              help="File format (default: from the --out suffix; JSON on stdout without --out).")
-@click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
-              help="Output file (.json, .mat or .npz).")
+              help="File format (default: from the --out suffix, which must match it; JSON on "
+                   "stdout without --out).")
+@click.option("--out", "out", type=OutputFile(("json", "mat", "npz"), format_param="fmt"),
+              default=None, help="Output file (.json, .mat or .npz; an existing file only with "
+                                 "--force).")
 @click.option("--all-io", is_flag=True, help="All inputs and outputs, not only the plant's.")
 @_add(model_options_for("speed"))
 @params_option
@@ -171,7 +179,6 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, dr
 
     if out is None and fmt not in (None, "json"):
         raise InputError(f"--format {fmt} needs --out FILE")
-    output_file(out, "--out", force=force, suffixes=("json", "mat", "npz"))
     params = get_params(params_file)
     point = operating_point(params, trim=True, ratio=r_g, slip=nu, tau=tau, clamp=F_s,
                             load_torque=T_l, speed=omega_p)
@@ -220,15 +227,8 @@ def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, dampin
     """Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio (Sec 2.3)."""
     from ..nonlinear.nmp import nmp_analysis
 
-    try:
-        r = [float(x) for x in ratios.split(",") if x.strip()]
-    except ValueError:
-        raise InputError(f"--ratios {ratios!r}: must be comma-separated numbers") from None
-    if not r or len(r) > 200:
-        raise InputError(f"--ratios {ratios!r}: give 1 to 200 ratios")
+    r = parse_list(ratios, "--ratios", most=200)
     f_max = check_number("--fmax", f_max, 0.0, 1e5, lo_open=True, unit="Hz")
-    output_file(plot, "--plot", force=force, suffixes=PLOT_SUFFIXES)
-    output_file(json_out, "--json-out", force=True)
     params = get_params(params_file)
     base = operating_point(params, trim=True, slip=nu, tau=tau, clamp=F_s, load_torque=T_l,
                            speed=omega_p)

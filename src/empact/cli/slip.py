@@ -20,9 +20,9 @@ from ..params import OperatingPoint, Params
 from ..slip import (INPUTS, OUTPUTS, VARIABLES, belt_root_locus, pole_sweep,
                     slip_frequency_responses, slip_model, stability_map, zero_locus)
 from ..variator.traction import TractionModel, load_traction, traction_curves, traction_from_params
-from ._common import (LINEAR_OPTIONS, OPTION_VARIABLE, PLOT_SUFFIXES, ErrorGroup, InputError, emit_json,
-                      force_option, get_params, json_options, operating_values, output_file,
-                      params_option, sweep_from_options, sweep_options)
+from ._common import (LINEAR_OPTIONS, OPTION_VARIABLE, ErrorGroup, InputError, emit_json,
+                      force_option, get_params, json_options, operating_values,
+                      params_option, quiet_option, sweep_from_options, sweep_options)
 from .linear import frequency_grid, plot_option
 
 VARIABLE_OPTION = {OPTION_VARIABLE[k]: k for k in LINEAR_OPTIONS}
@@ -115,11 +115,6 @@ def _pairs(z: np.ndarray) -> list[list[float]]:
     return [[float(c.real), float(c.imag)] for c in np.asarray(z, complex).ravel()]
 
 
-def _outputs(plot: str | None, json_out: str | None, force: bool) -> None:
-    output_file(plot, "--plot", force=force, suffixes=PLOT_SUFFIXES)
-    output_file(json_out, "--json-out", force=True)
-
-
 @click.group("slip", cls=ErrorGroup)
 def slip_group() -> None:
     """Slip dynamics: traction, poles, root locus, FRFs, zeros, stability map (Figs. 9-13)."""
@@ -129,10 +124,10 @@ def slip_group() -> None:
 @slip_group.command("statespace")
 @op_options
 @json_options
+@force_option
 def statespace(ratio, slip, clamp, speed, traction_file, params_file, as_json,
-               json_out) -> None:
+               json_out, force) -> None:
     """The linearised slip model at one operating point (A, B, C, D with names)."""
-    _outputs(None, json_out, True)
     params, tr = _setup(params_file, traction_file)
     base, _ = _grid(params, tr, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed),
                     max_sweeps=0)
@@ -165,7 +160,6 @@ def statespace(ratio, slip, clamp, speed, traction_file, params_file, as_json,
 def poles(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_out, plot,
           force) -> None:
     """Poles at one operating point, or over one swept variable (Fig. 11: --slip range)."""
-    _outputs(plot, json_out, force)
     params, tr = _setup(params_file, traction_file)
     base, sweeps = _grid(params, tr, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed),
                          max_sweeps=1)
@@ -218,7 +212,6 @@ def poles(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_o
 def rootlocus(ratio, slip, cb_min, cb_max, params_file, as_json, json_out, plot,
               force) -> None:
     """Root locus over the belt damping c_b from 0 to infinity (Fig. 9)."""
-    _outputs(plot, json_out, force)
     params = get_params(params_file)
     ratio = float(operating_values(params, "ratio", ratio))
     slip = check_number("--slip", slip, -1.0, 1.0, lo_open=True, hi_open=True)
@@ -262,7 +255,6 @@ def rootlocus(ratio, slip, cb_min, cb_max, params_file, as_json, json_out, plot,
 def frf(ratio, slip, clamp, speed, traction_file, params_file, inp, out, fmin, fmax, n,
         as_json, json_out, plot, force) -> None:
     """Frequency response (default F_s -> nu) at one or several points (Fig. 12)."""
-    _outputs(plot, json_out, force)
     params, tr = _setup(params_file, traction_file)
     f = frequency_grid(fmin, fmax, n)
     base, sweeps = _grid(params, tr, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed),
@@ -304,7 +296,6 @@ def frf(ratio, slip, clamp, speed, traction_file, params_file, inp, out, fmin, f
 def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_out, plot,
           force) -> None:
     """Zeros of F_s -> nu at one ratio or over a --ratio list/range (Fig. 13)."""
-    _outputs(plot, json_out, force)
     params, tr = _setup(params_file, traction_file)
     raw = dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed)
     base, sweeps = _grid(params, tr, raw, max_sweeps=1)
@@ -347,10 +338,10 @@ def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_o
 @json_options
 @plot_option
 @force_option
+@quiet_option
 def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk, scheduler,
-            workers, scheduler_timeout, as_json, json_out, plot, force) -> None:
+            workers, scheduler_timeout, as_json, json_out, plot, force, quiet) -> None:
     """Stability map over two ranges (--slip 0.001:0.06:200 --ratio 0.5:2.2:200)."""
-    _outputs(plot, json_out, force)
     params, tr = _setup(params_file, traction_file)
     raw = dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed)
     base, sweeps = _grid(params, tr, raw, max_sweeps=2, exact=2, limit=MAX_MAP // 2)
@@ -359,7 +350,7 @@ def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk
     if x.size * y.size > MAX_MAP:
         raise InputError(f"--{VARIABLE_OPTION[x_name]} x --{VARIABLE_OPTION[y_name]}: "
                          f"{x.size} x {y.size} = {x.size * y.size} points; at most {MAX_MAP}")
-    sweep = sweep_from_options(scheduler, workers, scheduler_timeout)
+    sweep = sweep_from_options(scheduler, workers, scheduler_timeout, progress=not quiet)
     sm = stability_map(params, x_name, x, y_name, y, base=base,  # type: ignore[arg-type]
                        traction=tr, method=method, chunk_size=check_int("--chunk", chunk, 1),
                        workers=workers, sweep=sweep)
@@ -394,7 +385,6 @@ def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk
 @force_option
 def traction(ratio, slip, traction_file, params_file, as_json, json_out, plot, force) -> None:
     """Traction coefficient mu and slope mu' over slip at some ratios (Fig. 10)."""
-    _outputs(plot, json_out, force)
     params, tr = _setup(params_file, traction_file)
     r = operating_values(params, "ratio", parse_values(ratio, "ratio"))
     nu = operating_values(params, "slip", parse_values(slip, "slip"), traction=tr)

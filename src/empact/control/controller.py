@@ -39,6 +39,9 @@ __all__ = ["Controller", "load_controller"]
 
 SCHEMA = {"name": "empact.controller", "version": 1}
 
+#: the signals a controller may measure (a slip or ratio, or its logarithm ``ln_...``)
+MEASURABLE = ("r_g", "nu", "nu_r", "ln_r_g", "ln_nu", "ln_nu_r")
+
 
 @dataclass(frozen=True, eq=False)
 class Controller:
@@ -151,24 +154,80 @@ class Controller:
         return Path(path)
 
 
+def _names(doc: Mapping[str, Any], key: str, src: Path, allowed: tuple[str, ...]
+           ) -> tuple[str, ...]:
+    """A list of distinct signal names of a controller file, each one of `allowed`."""
+    names = doc.get(key)
+    if not isinstance(names, list) or not names or \
+            not all(isinstance(n, str) for n in names):
+        raise ParameterError(f"{src}: {key} = {names!r}: must be a list of signal names "
+                             f"({', '.join(allowed)})")
+    for n in names:
+        if n not in allowed:
+            raise ParameterError(f"{src}: {key} names {n!r}; allowed: {', '.join(allowed)}")
+    if len(set(names)) < len(names):
+        raise ParameterError(f"{src}: {key} = {names!r}: a signal named twice")
+    return tuple(names)
+
+
+def _matrix(doc: Mapping[str, Any], key: str, shape: tuple[int, int], what: str,
+            src: Path) -> NDArray[np.float64]:
+    """Matrix `key` of a controller file: rows of finite JSON numbers, of `shape`."""
+    rows = doc.get(key)
+    expected = f"{shape[0]} x {shape[1]} ({what})"
+    if rows is None:
+        raise ParameterError(f"{src}: no {key} matrix (expected {expected})")
+    if shape[0] == 0 or shape[1] == 0:  # an empty matrix: [] or rows of []
+        if isinstance(rows, list) and all(r == [] for r in rows) and len(rows) in (0, shape[0]):
+            return np.zeros(shape)
+    if not isinstance(rows, list) or not all(isinstance(r, list) for r in rows):
+        raise ParameterError(f"{src}: {key} must be a list of rows (expected {expected})")
+    got = (len(rows), len(rows[0]) if rows else 0)
+    if got != shape or any(len(r) != shape[1] for r in rows):
+        lengths = sorted({len(r) for r in rows})
+        raise ParameterError(f"{src}: {key} has {len(rows)} rows of "
+                             f"{', '.join(map(str, lengths)) or 0} entries; expected "
+                             f"{expected}")
+    for i, r in enumerate(rows):
+        for j, x in enumerate(r):
+            if isinstance(x, bool) or not isinstance(x, (int, float)):
+                raise ParameterError(f"{src}: {key}[{i}][{j}] = {x!r}: must be a number")
+            if not np.isfinite(x):
+                raise ParameterError(f"{src}: {key}[{i}][{j}] = {x!r}: must be finite")
+    return np.array(rows, float).reshape(shape)
+
+
 def load_controller(path: str | os.PathLike[str]) -> Controller:
-    """Read a controller JSON file (`Controller.save`); one-line errors for bad files."""
+    """Read a controller JSON file (`Controller.save`); one-line errors for bad files, naming
+    the key, its value and what is allowed."""
     p = Path(path)
     if not p.is_file():
         raise ParameterError(f"{p}: no such controller file")
     try:
         doc = json.loads(p.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ParameterError(f"{p}: not a controller JSON file ({exc})") from None
-    if not isinstance(doc, dict) or doc.get("schema", {}).get("name") != SCHEMA["name"]:
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise ParameterError(f"{p}: not a controller file (not JSON text)") from None
+    if not isinstance(doc, dict) or not isinstance(doc.get("schema"), dict) \
+            or doc["schema"].get("name") != SCHEMA["name"]:
         raise ParameterError(f"{p}: not a controller file (schema {SCHEMA['name']!r} "
                              "expected)")
+    measured = _names(doc, "measured", p, MEASURABLE)
+    outputs = _names(doc, "outputs", p, ("T_mp", "T_ms"))
+    a = doc.get("A")
+    n = len(a) if isinstance(a, list) else 0
+    ne, nu = len(measured), len(outputs)
+    A = _matrix(doc, "A", (n, n), "states x states", p)
+    B = _matrix(doc, "B", (n, ne), "states x measured", p)
+    C = _matrix(doc, "C", (nu, n), "outputs x states", p)
+    D = _matrix(doc, "D", (nu, ne), "outputs x measured", p)
+    dt = doc.get("dt", 0.0)
+    if isinstance(dt, bool) or not isinstance(dt, (int, float)):
+        raise ParameterError(f"{p}: dt = {dt!r}: must be a number of seconds (0: continuous)")
+    design = doc.get("design", {})
+    if not isinstance(design, dict):
+        raise ParameterError(f"{p}: design = {design!r}: must be a table")
     try:
-        return Controller(A=np.array(doc["A"] or np.zeros((0, 0)), float),
-                          B=np.array(doc["B"] or np.zeros((0, len(doc["measured"]))), float),
-                          C=np.array(doc["C"] or np.zeros((len(doc["outputs"]), 0)), float),
-                          D=np.array(doc["D"], float), measured=tuple(doc["measured"]),
-                          outputs=tuple(doc["outputs"]), dt=float(doc.get("dt", 0.0)),
-                          method=str(doc.get("method", "")), design=doc.get("design", {}))
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ParameterError(f"{p}: bad controller data ({exc})") from None
+        return Controller(A=A, B=B, C=C, D=D, measured=measured, outputs=outputs,
+                          dt=float(dt), method=str(doc.get("method", "")), design=design)
+    except ParameterError as exc:
+        raise ParameterError(f"{p}: {exc}") from None

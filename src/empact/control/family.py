@@ -47,7 +47,7 @@ from .._io import atomic_write_text
 from .._lazy import lazy_module
 from .._validate import check_choice, check_values
 from ..errors import ParameterError
-from ..export import jsonable, write_arrays
+from ..export import jsonable, read_npz, write_arrays
 from ..lti import statespace
 from ..nonlinear.equilibrium import trim_grid
 from ..nonlinear.linearization import (BENCH_OPTIONS, PLANT_INPUTS, PLANT_OUTPUTS, Plant,
@@ -356,23 +356,35 @@ def save_family(family: PlantFamily, path: str | os.PathLike[str], fmt: str | No
 
 
 def load_family(path: str | os.PathLike[str]) -> PlantFamily:
-    """Read a family written by `save_family` as ``.npz``."""
+    """Read a family written by `save_family` as ``.npz`` (one-line errors for a file that is
+    not one)."""
     p = Path(path)
+    hint = "write one with `empact plants --out FILE.npz`"
     if p.suffix.lower() != ".npz":
-        raise ParameterError(f"{p}: a plant family is read from .npz (save_family)")
-    try:
-        z = np.load(p, allow_pickle=False)
-    except (OSError, ValueError) as exc:
-        raise ParameterError(f"{p}: not a plant family ({exc})") from None
+        raise ParameterError(f"{p}: a plant family is read from .npz, not "
+                             f"{p.suffix or 'no suffix'!r} ({hint})")
+    z = read_npz(p, "plant family", ("axes", "A", "B", "C", "D", "states", "inputs",
+                                     "outputs", "ok", "reason"), hint)
     names = [str(a) for a in z["axes"]]
+    missing = [f"axis_{n}" for n in names if f"axis_{n}" not in z]
+    if missing:
+        raise ParameterError(f"{p}: not a plant family (no {', '.join(missing)} in the "
+                             f"archive; {hint})")
+    grid = tuple(len(z[f"axis_{n}"]) for n in names)
+    n, m, q = len(z["states"]), len(z["inputs"]), len(z["outputs"])
+    for key, shape in (("ok", grid), ("A", grid + (n, n)), ("B", grid + (n, m)),
+                       ("C", grid + (q, n)), ("D", grid + (q, m))):
+        if z[key].shape != shape:
+            raise ParameterError(f"{p}: not a plant family ({key} has shape "
+                                 f"{z[key].shape}, expected {shape} for the grid {grid} of "
+                                 f"{n} states, {m} inputs, {q} outputs)")
     axes = {n: z[f"axis_{n}"] for n in names}
-    fixed = {k[len("fixed_"):]: float(z[k]) for k in z.files if k.startswith("fixed_")}
+    fixed = {k[len("fixed_"):]: float(z[k]) for k in z if k.startswith("fixed_")}
     return PlantFamily(axes=axes, fixed=fixed, A=z["A"], B=z["B"], C=z["C"], D=z["D"],
                        states=tuple(map(str, z["states"])), inputs=tuple(map(str, z["inputs"])),
                        outputs=tuple(map(str, z["outputs"])),
                        operating={n: z[f"operating_{n}"] for n in VARIABLES
-                                  if f"operating_{n}" in z.files},
-                       ok=z["ok"], reason=np.array(z["reason"], dtype=object),
-                       options={k[len("options_"):]: str(z[k]) for k in z.files
+                                  if f"operating_{n}" in z},
+                       ok=z["ok"].astype(bool), reason=np.array(z["reason"], dtype=object),
+                       options={k[len("options_"):]: str(z[k]) for k in z
                                 if k.startswith("options_")})
-

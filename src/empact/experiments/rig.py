@@ -26,7 +26,8 @@ from .._lazy import lazy_module
 from .._validate import check_choice, check_int, check_number
 from ..errors import ParameterError
 from ..identification.frf_estimation import FRFEstimate, estimate_frf
-from ..nonlinear.model import nonlinear_model
+from ..identification.records import header_cell
+from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, nonlinear_model
 from ..nonlinear.simulation import METHODS, simulate
 from ..nonlinear.equilibrium import trim
 from ..params import OperatingPoint
@@ -37,6 +38,10 @@ __all__ = ["EXCITATIONS", "RigSettings", "RigRecord", "excitation_signal", "run_
 
 EXCITATIONS = ("multisine", "chirp", "noise")
 MEASURED = ("theta_mp", "theta_ms", "nu")
+
+#: units of the recorded signals (the servo torques and the measured signals)
+RECORD_UNITS = {**{n: INPUT_UNITS[n] for n in ("T_mp", "T_ms")},
+                **{n: {**STATE_UNITS, **OUTPUT_UNITS}[n] for n in MEASURED}}
 
 
 def excitation_signal(kind: str, n: int, fs: float, band_hz: tuple[float, float], rms: float,
@@ -169,11 +174,17 @@ class RigRecord:
     message: str
 
     def to_csv(self) -> str:
-        """CSV text with a header of names (units in the names), one row per sample."""
-        names = ["time", *self.signals]
+        """CSV text: a ``#`` comment line (the experiment), a header of names with units in
+        brackets (``theta_ms [rad]``, as `empact simulate` writes them), one row per
+        sample; `empact.identification.load_records` reads it."""
+        s = self.settings
         buf = io.StringIO()
+        buf.write(f"# empact rig: {s.excitation} on {s.excite} at r_g = {s.r_g:g}, nu = "
+                  f"{s.nu:g}, F_s = {s.F_s:g} N, omega_p = {s.omega_p:g} rad/s; signals are "
+                  "deviations from the operating point\n")
         w = csv.writer(buf, lineterminator="\n")
-        w.writerow(names)
+        w.writerow([header_cell("time", "s")] + [header_cell(n, RECORD_UNITS[n])
+                                                  for n in self.signals])
         data = np.column_stack([self.t, *self.signals.values()])
         w.writerows([f"{v:.9g}" for v in row] for row in data)
         return buf.getvalue()

@@ -22,7 +22,13 @@ import numpy as np
 
 from ..errors import DataError
 
-__all__ = ["load_records", "sample_rate", "column_name"]
+__all__ = ["load_records", "sample_rate", "column_name", "header_cell"]
+
+
+def header_cell(name: str, unit: str) -> str:
+    """The one style of a CSV header cell that empact writes: ``"theta_mp [rad]"``
+    (``"nu [-]"`` for a dimensionless quantity; `column_name` reads it back)."""
+    return f"{name} [{unit}]"
 
 
 def column_name(header: str) -> str:
@@ -38,8 +44,8 @@ def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
     ------
     DataError
         One line naming the file, and the column, row and value that are wrong: a missing file
-        or column, a non-numeric or non-finite entry, fewer than `min_rows` rows, a binary or
-        non-UTF-8 file.
+        or column, a column named twice, a non-numeric or non-finite entry, fewer than
+        `min_rows` rows, a binary or non-UTF-8 file.
     """
     path = Path(path)
     try:
@@ -67,6 +73,10 @@ def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
     for name in columns:
         if name not in header:
             raise DataError(f"{path}: no column {name!r} (columns: {', '.join(header)})")
+        where = [k + 1 for k, h in enumerate(header) if h == name]
+        if len(where) > 1:
+            raise DataError(f"{path}: column {name!r} appears {len(where)} times (columns "
+                            f"{', '.join(map(str, where))}); name each column once")
         j = header.index(name)
         values = np.empty(len(rows))
         for i, row in enumerate(rows):
@@ -90,8 +100,8 @@ def sample_rate(t: np.ndarray, name: str = "time", rtol: float = 1e-6) -> float:
     dt = np.diff(t)
     if np.any(dt <= 0):
         i = int(np.argmax(dt <= 0))
-        raise DataError(f"column {name!r} must increase: row {i + 2} has {t[i + 1]!r} after "
-                         f"{t[i]!r}")
+        raise DataError(f"column {name!r} must increase: data row {i + 2} has "
+                        f"{float(t[i + 1]):.10g} after {float(t[i]):.10g}")
     mean = (t[-1] - t[0]) / (len(t) - 1)
     dev = np.abs(dt - mean).max() / mean
     if dev > rtol:

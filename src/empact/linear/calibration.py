@@ -167,6 +167,9 @@ def load_targets(path: str, kinematics: str | None = None,
         raise ParameterError(f"{path}: unknown key {sorted(unknown)[0]!r} (allowed: free, "
                              "kinematics, ties, target)")
     free = data.get("free")
+    if free is None:
+        raise ParameterError(f"{path}: missing free (the list of parameters to fit, e.g. "
+                             "free = [\"driveline.k_tc\"])")
     if not isinstance(free, list) or not free or not all(isinstance(x, str) for x in free):
         raise ParameterError(f"{path}: free = {free!r}: must be a non-empty list of parameter "
                              "names")

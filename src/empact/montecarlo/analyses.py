@@ -15,7 +15,8 @@
     ratio of its poles, the belt damper ``c_b`` and the traction coefficient.
 ``"closed-loop"``
     A closed-loop scenario with a controller on the nonlinear machine
-    (`empact.control.closed_loop`): its metrics.  The scenario sets its own operating point, so
+    (`empact.control.closed_loop`): its metrics, slips as fractions (``slip_error``,
+    ``peak_slip`` [-]).  The scenario sets its own operating point, so
     ``operating.*`` spreads do not act here.  A run whose simulation stops early fails with the
     solver's message.
 """
@@ -44,8 +45,8 @@ OUTPUTS: dict[str, dict[str, str]] = {
               "f_slow_hz": "Hz", "zeta_slow": "-", "n_rhp_zeros": "-",
               "rhp_zero_hz": "Hz"},
     "slip": {"max_real": "1/s", "min_damping": "-", "c_b": "N m s/rad", "mu": "-"},
-    "closed-loop": {"slip_error_pp": "percentage points", "peak_slip_pp": "%",
-                    "ratio_error": "-", "mean_clamping_force": "N", "mean_slip_power": "W",
+    "closed-loop": {"slip_error": "-", "peak_slip": "-", "ratio_error": "-",
+                    "mean_clamping_force": "N", "mean_slip_power": "W",
                     "mean_actuation_power": "W", "mean_losses": "W"},
 }
 
@@ -109,7 +110,7 @@ def _plant(params: Params, context: AnalysisContext) -> dict[str, float]:
 
 
 def _slip(params: Params, context: AnalysisContext) -> dict[str, float]:
-    op: OperatingPoint = params.operating.resolve(params)
+    op: OperatingPoint = params.operating.resolve(params)  # (a point given by tau or T_l)
     sm = stability_map(params, "nu", [op.nu], "r_g", [op.r_g], base=op, workers=1)
     belt = linearize_belt(params, op)
     return {"max_real": float(sm.max_real[0, 0]), "min_damping": float(sm.min_damping[0, 0]),
@@ -120,7 +121,9 @@ def _closed_loop(params: Params, context: AnalysisContext) -> dict[str, float]:
     run = run_closed_loop(context.scenario, params, context.controller)
     if not run.metrics["complete"]:
         raise RunFailed(run.metrics["message"])
-    return {k: float(run.metrics[k]) for k in OUTPUTS["closed-loop"]}
+    m = run.metrics  # slips as fractions (the metrics give them in % and percentage points)
+    return {k: float(m[k + "_pp"]) / 100 if k + "_pp" in m else float(m[k])
+            for k in OUTPUTS["closed-loop"]}
 
 
 _EVALUATE = {"plant": _plant, "slip": _slip, "closed-loop": _closed_loop}

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
@@ -38,6 +39,7 @@ from scipy.special import ndtr, ndtri
 from .._validate import check_number, fmt
 from ..errors import ParameterError
 from ..params import Params, read_toml
+from ..variator.traction import traction_from_params
 
 __all__ = ["Distribution", "Spread", "load_spread", "spread_from_dict", "DISTRIBUTIONS"]
 
@@ -183,7 +185,34 @@ def _distribution(name: str, table: Any, params: Params, src: str) -> Distributi
         if hi - lo < _MIN_MASS:
             raise ParameterError(f"{where}: the bounds [{fmt(lower)}, {fmt(upper)}] keep "
                                  f"no probability of {d.describe().split(' in ')[0]}")
+    _check_reachable(d, params, where)
     return d
+
+
+#: quantiles at which a distribution is tried against the parameter's allowed values
+_PROBES = np.linspace(0.0005, 0.9995, 41)
+
+
+def _check_reachable(d: Distribution, params: Params, where: str) -> None:
+    """Refuse a distribution none of whose values (41 quantiles, 0.05 % to 99.95 %) the
+    parameter set accepts: every run of the study would fail."""
+    why = ""
+    for x in d.ppf(_PROBES):
+        try:
+            p = params.from_dotted({d.name: float(x)})
+            nu = p.operating.nu
+            if d.name == "operating.nu" and nu is not None:
+                lo, hi = traction_from_params(p).nu_range
+                if not lo <= nu <= hi:
+                    raise ParameterError(f"{d.name} = {fmt(nu)}: outside the valid slip range "
+                                         f"[{fmt(lo)}, {fmt(hi)}] of the traction curve")
+            return
+        except ParameterError as exc:
+            why = why or str(exc)
+    m = re.search(r"= \S+: (.*)$", why)
+    raise ParameterError(f"{where}: {d.describe()} lies wholly outside the values "
+                         f"{d.name} may take ({m.group(1) if m else why}); every run would "
+                         "fail")
 
 
 def spread_from_dict(data: Mapping[str, Any], params: Params, source: str = "") -> Spread:

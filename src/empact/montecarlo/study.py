@@ -28,16 +28,21 @@ from ..control.closed_loop import resolve_controller
 from ..export import jsonable
 from ..params import Params
 from ..sweep import SweepOptions, plan_chunks, run_chunks
-from .analyses import OUTPUTS, SECONDS_PER_RUN, AnalysisContext, evaluate
+from ..errors import ParameterError, TrimError
+from .analyses import OUTPUTS, SECONDS_PER_RUN, AnalysisContext, RunFailed, evaluate
 from .spread import Spread
 
-__all__ = ["MonteCarloResult", "monte_carlo", "save_montecarlo", "QUANTILES", "MAX_RUNS"]
+__all__ = ["MonteCarloResult", "monte_carlo", "save_montecarlo", "failure_kind", "QUANTILES",
+           "MAX_RUNS"]
 
 #: quantiles of the summary
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 
 #: most runs of one study
 MAX_RUNS = 1_000_000
+
+#: version of the saved study's JSON (2: closed-loop slips as fractions, failure kinds)
+SCHEMA_VERSION = 2
 
 #: files of a saved study (the folder's own files, replaced by ``--force``)
 FILES = ("runs.csv", "runs.json", "summary.json")
@@ -58,7 +63,8 @@ class MonteCarloResult:
     values : outputs, shape (runs, n_outputs); NaN for a failed run (and where an output does
         not exist, e.g. no right-half-plane zero)
     ok : run succeeded, shape (runs,)
-    reasons : why each run failed ("" for a run that succeeded)
+    reasons : why each run failed ("" for a run that succeeded): ``kind: message`` with the
+        kind of `failure_kind`
     """
 
     analysis: str
@@ -82,9 +88,9 @@ class MonteCarloResult:
         return int(np.count_nonzero(~self.ok))
 
     def summary(self, quantiles: Sequence[float] = QUANTILES) -> dict[str, Any]:
-        """Failure count (by exception type, with the first run's reason) and, per output,
-        the statistics of the successful runs where it is finite: ``n``, ``mean``, ``std``,
-        ``min``, quantiles ``q05`` ..., ``max``."""
+        """Failure count (by kind, `failure_kind`, with the first run's reason) and, per
+        output, the statistics of the successful runs where it is finite: ``n``, ``mean``,
+        ``std``, ``min``, quantiles ``q05`` ..., ``max``."""
         stats: dict[str, Any] = {}
         for j, name in enumerate(self.outputs):
             v = self.values[self.ok, j]
@@ -153,8 +159,21 @@ def _run_chunk(task) -> tuple[NDArray, NDArray, NDArray, list[str]]:
             ok[k] = True
         except Exception as exc:  # noqa: BLE001 - recorded with its reason, never dropped
             text = " ".join(str(exc).split()) or "no message"
-            reasons[k] = f"{type(exc).__name__}: {text}"[:500]
+            reasons[k] = f"{failure_kind(exc)}: {text}"[:500]
     return samples, values, ok, reasons
+
+
+def failure_kind(exc: BaseException) -> str:
+    """What kind of failure an exception of a run is (the reasons' first word, by which the
+    summary counts them): ``parameters`` (a value out of its range), ``trim`` (no steady
+    point), ``stopped`` (the simulation stopped early), ``error`` (anything else)."""
+    if isinstance(exc, TrimError):
+        return "trim"
+    if isinstance(exc, ParameterError):
+        return "parameters"
+    if isinstance(exc, RunFailed):
+        return "stopped"
+    return "error"
 
 
 def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plant", *,
@@ -201,10 +220,12 @@ def save_montecarlo(result: MonteCarloResult, folder: str | os.PathLike[str]) ->
     `folder`, all or nothing (a temporary folder moved into place)."""
     with atomic_folder(folder) as tmp:
         (tmp / "runs.csv").write_text(result.to_csv())
-        doc = {"analysis": result.analysis, "seed": result.seed, "units": result.units,
+        doc = {"schema": {"name": "empact.montecarlo.runs", "version": SCHEMA_VERSION},
+               "analysis": result.analysis, "seed": result.seed, "units": result.units,
                "parameters": list(result.spread.names), "outputs": list(result.outputs),
                "runs": result.table()}
         (tmp / "runs.json").write_text(json.dumps(jsonable(doc), indent=1) + "\n")
-        (tmp / "summary.json").write_text(json.dumps(jsonable(result.summary()), indent=1)
-                                          + "\n")
+        summary = {"schema": {"name": "empact.montecarlo", "version": SCHEMA_VERSION},
+                   **result.summary()}
+        (tmp / "summary.json").write_text(json.dumps(jsonable(summary), indent=1) + "\n")
     return Path(folder)

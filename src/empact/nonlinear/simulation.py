@@ -419,7 +419,8 @@ def csv_text(result: SimulationResult, states: bool = False) -> str:
     ``x_<state>``) and one row per sample; `empact.identification.load_records` reads it."""
     buf = io.StringIO()
     status = "complete" if result.complete else "INCOMPLETE"
-    buf.write(f"# empact simulation {result.scenario!r}: {status}: {result.message}\n")
+    detail = result.message.removeprefix("completed: ")  # (not "complete: completed: ...")
+    buf.write(f"# empact simulation {result.scenario!r}: {status}: {detail}\n")
     w = csv.writer(buf, lineterminator="\n")
     cols = ["time [s]"] + [f"{o} [{OUTPUT_UNITS[o]}]" for o in result.outputs] \
         + [f"{i} [{INPUT_UNITS[i]}]" for i in result.inputs]

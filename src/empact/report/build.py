@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import html
 import json
-import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Sequence
 
 from .._io import atomic_folder
+from .._parallel import run_forked
 from .._progress import progress as progress_bar
 from .._validate import check_int
 from ..params import Params, dumps_params
@@ -28,12 +27,15 @@ nav ol{columns:2}.summary td{text-align:left}.summary td.v{white-space:nowrap}
 ul.claims li{margin:2px 0}.why{color:#555;font-size:90%}section{margin-top:2em}"""
 
 
-#: Marks the page once loaded: ``data-images`` (count) and ``data-broken-images`` (images that
-#: did not load), for a reader's browser console and the test that renders the page.
+#: Marks the page once loaded: ``data-images`` (count), ``data-broken-images`` (images that
+#: did not load) and ``data-duplicate-ids`` (elements whose id an earlier one has), for a
+#: reader's browser console and the test that renders the page.
 IMAGE_CHECK = ("<script>window.addEventListener('load',function(){var i=document.images,b=0;"
                "for(var k=0;k<i.length;k++){if(!i[k].complete||i[k].naturalWidth===0){b++;"
                "i[k].classList.add('broken');}}document.body.dataset.images=i.length;"
-               "document.body.dataset.brokenImages=b;});</script>")
+               "document.body.dataset.brokenImages=b;var e=document.querySelectorAll('[id]'),"
+               "s={},d=0;for(var k=0;k<e.length;k++){if(s[e[k].id]){d++;}s[e[k].id]=1;}"
+               "document.body.dataset.duplicateIds=d;});</script>")
 
 
 def _summary(done: Sequence[tuple[Section, Sequence[Claim]]]) -> str:
@@ -89,23 +91,21 @@ def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool 
     n_workers = min(len(todo), os.cpu_count() or 1) if workers is None else \
         check_int("workers", workers, 1, 64)
     fmts = tuple(formats)
-    with atomic_folder(out) as tmp:
-        bar = progress_bar(total=len(todo), desc="report", unit="section", enabled=progress)
+    with atomic_folder(out) as tmp, progress_bar(total=len(todo), desc="report",
+                                                 unit="section", enabled=progress) as bar:
         built: dict[str, tuple[str, tuple[Claim, ...]]] = {}
         if n_workers <= 1:
             for sec in todo:
                 built[sec.anchor] = _build_section(sec, params, tmp, fmts)
                 bar.update(1)
         else:
-            # fork: the children start with everything imported (no second start-up)
-            ctx = multiprocessing.get_context("fork")
-            with ProcessPoolExecutor(n_workers, mp_context=ctx) as pool:
-                futures = {pool.submit(_build_section, sec, params, tmp, fmts): sec
-                           for sec in sorted(todo, key=lambda s: -s.cost)}
-                for fut in as_completed(futures):
-                    built[futures[fut].anchor] = fut.result()
-                    bar.update(1)
-        bar.close()
+            # fork: the children start with everything imported (no second start-up); a
+            # Ctrl-C terminates them at once (`run_forked`)
+            order = sorted(todo, key=lambda s: -s.cost)
+            for sec, result in zip(order, run_forked(
+                    _build_section, [(sec, params, tmp, fmts) for sec in order], n_workers,
+                    done=lambda k, r: bar.update(1))):
+                built[sec.anchor] = result
         done = [(sec, built[sec.anchor][1]) for sec in todo]
         parts = [built[sec.anchor][0] for sec in todo]
         toc = "".join(f'<li><a href="#{s.anchor}">{html.escape(s.title)}</a></li>'

@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import html
 import io
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -20,7 +21,7 @@ from ..params import Params
 from ..plotting import Plot, save_figure
 from ..reproduction.claims import Claim
 
-__all__ = ["Section", "Context", "fmt_cell"]
+__all__ = ["Section", "Context", "fmt_cell", "csv_slip_columns"]
 
 
 @dataclass(frozen=True)
@@ -30,7 +31,9 @@ class Section:
     Attributes
     ----------
     title : heading
-    anchor : HTML id (also the table-of-contents link)
+    anchor : HTML id (also the table-of-contents link); the ids of the page are unique:
+        sections by their anchor, figures ``fig-<stem>``, tables ``tab-<stem>``, claims
+        ``claim-<key>``
     compute : ``params -> result`` with a ``claims`` attribute (`empact.reproduction`)
     render : ``(Context, result) -> html``
     cost : rough build time [s] on one core; the parallel build starts the costly sections
@@ -42,6 +45,23 @@ class Section:
     compute: Callable[[Params], Any]
     render: Callable[["Context", Any], str]
     cost: float = 1.0
+
+
+#: a slip column given in percent or percentage points: "nu [%]", "peak slip [%]",
+#: "max |nu - nu*| [pp]"
+_SLIP_PERCENT = re.compile(r"^(.*\bslip\b.*|\|?nu\b.*|max \|nu.*) \[(%|pp)\]$")
+
+
+def csv_slip_columns(header: Sequence[str], rows: Sequence[Sequence[object]]
+                     ) -> list[list[object]]:
+    """Header and rows for a CSV file: a slip column in % or percentage points (a header
+    ``... slip ... [%]``, ``nu [%]``, ``max |nu - nu*| [pp]``) as a fraction ``[-]`` (one unit
+    per quantity in machine-readable output; % is for the page)."""
+    slip = [bool(_SLIP_PERCENT.match(str(h))) for h in header]
+    head = [re.sub(r" \[(%|pp)\]$", " [-]", str(h)) if s else h for h, s in zip(header, slip)]
+    return [head] + [[c / 100 if s and isinstance(c, (int, float, np.number))
+                      and not isinstance(c, bool) else c for c, s in zip(row, slip)]
+                     for row in rows]
 
 
 def fmt_cell(value: object) -> str:
@@ -69,22 +89,24 @@ class Context:
         shown = "png" if "png" in self.formats else self.formats[0]
         others = " ".join(f'<a href="{stem}.{fmt}">{fmt.upper()}</a>' for fmt in self.formats
                           if fmt != shown)
-        return (f'<figure id="{stem}"><img src="{stem}.{shown}" alt="{html.escape(stem)}">'
+        return (f'<figure id="fig-{stem}"><img src="{stem}.{shown}" alt="{html.escape(stem)}">'
                 f'<figcaption>{caption}{f" ({others})" if others else ""}</figcaption>'
                 f"</figure>\n")
 
     def table(self, stem: str, header: Sequence[str], rows: Sequence[Sequence[object]],
               caption: str) -> str:
-        """Write a CSV table; return it as an HTML table (caption is HTML)."""
+        """Write a CSV table; return it as an HTML table (caption is HTML).
+
+        The page shows a slip in % or percentage points where the section gives it so; the
+        CSV, machine-readable, has it as a fraction (`csv_slip_columns`)."""
         buf = io.StringIO()
         writer = csv.writer(buf, lineterminator="\n")
-        writer.writerow(header)
-        writer.writerows(rows)
+        writer.writerows(csv_slip_columns(header, rows))
         atomic_write_text(self.out / f"{stem}.csv", buf.getvalue())
         head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
         body = "".join("<tr>" + "".join(f"<td>{fmt_cell(c)}</td>" for c in row) + "</tr>\n"
                        for row in rows)
-        return (f'<table id="{stem}"><caption>{caption} (<a href="{stem}.csv">CSV</a>)'
+        return (f'<table id="tab-{stem}"><caption>{caption} (<a href="{stem}.csv">CSV</a>)'
                 f"</caption><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>\n")
 
     @staticmethod

@@ -161,7 +161,8 @@ def linearisation_terms(params: Params, r_g: ArrayLike, nu: ArrayLike, F_s: Arra
 
 def linearize_belt(params: Params, op: OperatingPoint | None = None,
                    traction: TractionModel | None = None) -> BeltLinearisation:
-    """Eq. 3 at `op` (default: the ``[operating]`` point of `params`)."""
+    """Eq. 3 at `op` (default: the ``[operating]`` point of `params`; a point given by a torque
+    ratio or a load is resolved first)."""
     op = (params.operating if op is None else op).resolve(params, traction)
     t = linearisation_terms(params, op.r_g, op.nu, op.F_s, op.omega_p, traction)
     return BeltLinearisation(op=op, **{k: float(t[k]) for k in

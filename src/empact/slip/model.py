@@ -259,7 +259,8 @@ def slip_model(params: Params, op: OperatingPoint | None = None,
     Parameters
     ----------
     params : parameter set (variator, driveline, traction)
-    op : operating point (r_g, nu, F_s, omega_p)
+    op : operating point (r_g, nu, F_s, omega_p; one given by a torque ratio or a load is
+        resolved, `OperatingPoint.resolve`)
     traction : traction model (default `traction_from_params(params)`)
     """
     op = (params.operating if op is None else op).resolve(params, traction)

@@ -18,6 +18,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._progress import progress as progress_bar
 from .._validate import check_choice, check_int
 from ..errors import ParameterError
 from ..lti import damping_ratio
@@ -167,12 +168,19 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
         def work(b: tuple[int, int]) -> None:
             max_real[b[0]:b[1]], min_damp[b[0]:b[1]] = _map_points(task, *b)
 
-        if workers == 1:
-            for b in bounds:
-                work(b)
-        else:
-            with ThreadPoolExecutor(workers) as pool:
-                list(pool.map(work, bounds))
+        with progress_bar(total=len(bounds), desc="stability map", unit="chunk",
+                          enabled=sweep is not None and sweep.progress) as bar:
+            if workers == 1:
+                for b in bounds:
+                    work(b)
+                    bar.update(1)
+            else:
+                pool = ThreadPoolExecutor(workers)
+                try:
+                    for _ in pool.map(work, bounds):
+                        bar.update(1)
+                finally:  # a Ctrl-C or an error: the chunks not started are dropped
+                    pool.shutdown(wait=True, cancel_futures=True)
     shape = (yv.size, nx)
     return StabilityMap(x_name=x_name, y_name=y_name, x=xv, y=yv, base=base,
                         max_real=max_real.reshape(shape), min_damping=min_damp.reshape(shape),
