@@ -376,8 +376,10 @@ def files(tmp_path, monkeypatch):
     w("c_text.json", "not JSON")
     step = resources.files("empact.data").joinpath("control", "slip-load-step-r1.toml") \
         .read_text()
-    w("ref_nu.toml", step.replace("nu = [[0.0, 0.01]]", "nu = [[0.0, 0.01], [1.0, 2.0]]"))
-    w("ref_rg.toml", step.replace("nu = [[0.0, 0.01]]", "r_g = [[0.0, 1.0], [1.0, 9.0]]"))
+    assert "tau = [[0.0, 0.9]]" in step  # the set-point by torque ratio
+    w("ref_nu.toml", step.replace("tau = [[0.0, 0.9]]", "nu = [[0.0, 0.01], [1.0, 2.0]]"))
+    w("ref_rg.toml", step.replace("tau = [[0.0, 0.9]]",
+                                  "tau = [[0.0, 0.9]]\nr_g = [[0.0, 1.0], [1.0, 9.0]]"))
     w("sp_out.toml", sp + 'distribution = "uniform"\nlower = -2\nupper = -1\n')
     w("sp_nu.toml", '[spread."operating.nu"]\ndistribution = "uniform"\nlower = 0.3\n'
                     'upper = 0.4\n')
@@ -482,11 +484,11 @@ BAD_INPUT = [
     (["control", "design", "--bandwidth", "1", "--out", "c.json"],
      "--bandwidth '1': two numbers RATIO,SLIP"),
     (["control", "design", "--bandwidth", "0,1", "--out", "c.json"], "--bandwidth = 0"),
-    (["control", "design", "--method", "hinf", "--drive", "torque", "--nominal", "3,2",
+    (["control", "design", "--method", "hinf", "--drive", "torque", "--nominal", "3,1,0",
       "--out", "c.json"],
-     "nominal point (3, 2) (r_g = 1, tau = 0.9): H-infinity ill-posed (A1)"),
+     "nominal point (3, 1, 0) (r_g = 1, tau = 0.9, F_s = 8000): H-infinity ill-posed (A1)"),
     (["control", "design", "--nominal", "9,9", "--out", "c.json"],
-     "--nominal '9,9': indices in a grid of shape (7, 4)"),
+     "--nominal '9,9': indices in a grid of shape (7, 3, 3)"),
     (["control", "check", "nosuch.json", "--family", "f.npz"], "nosuch.json: no such controller"),
     (["control", "simulate"], "give exactly one of SCENARIO or --example"),
     (["control", "simulate", "--example", "nosuch"], "unknown control example 'nosuch'"),

@@ -238,3 +238,16 @@ def test_calibration_reproduces_shipped_defaults(params):
     # both actuation row sets are calibrated: three targets each at r_g = 1
     kins = sorted(t.kinematics for t in targets if t.model == "actuation")
     assert kins == ["equal-translation"] * 3 + ["paper-sec2.1"] * 3
+
+
+def test_table2_unchanged_by_the_driveline_scale(params):
+    """Issue 20: Table 2 fixes the driveline only up to one factor alpha on every J and k; the
+    eigenfrequencies at every ratio with alpha undone (x 1/10) and doubled equal the shipped
+    ones to 1e-12 relative (closed form: omega^2 = k/J is invariant)."""
+    names = [f"driveline.{n}" for n in ("J_d", "J_p", "J_s", "J_l", "k_tc", "k_belt", "k_ds")]
+    for factor in (0.1, 2.0):
+        scaled = params.from_dotted({n: factor * params.get(n) for n in names})
+        for r_g in paper.TABLE2_HZ:
+            f0 = driveline_model(params, r_g).modes().frequencies_hz
+            f1 = driveline_model(scaled, r_g).modes().frequencies_hz
+            assert_allclose(f1[1:], f0[1:], rtol=1e-12)

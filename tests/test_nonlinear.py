@@ -411,7 +411,7 @@ def test_one_scenario_format_for_both_loops(tmp_path, params):
     from empact.control.closed_loop import run_closed_loop
 
     sc = load_scenario(example_path("slip-load-step-r1"))
-    assert sc.closed_loop and sc.controller.file == "shipped:pi" and "nu" in sc.references
+    assert sc.closed_loop and sc.controller.file == "shipped:pi" and "tau" in sc.references
     with pytest.raises(ParameterError, match="run it with empact.run_closed_loop"):
         run_scenario(sc, params)
     run = run_closed_loop(sc.with_duration(0.2), params)

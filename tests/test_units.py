@@ -42,7 +42,12 @@ def test_control_simulate_gives_slips_as_fractions(tmp_path, params):
                           params).metrics
     assert m["slip_error"] == ref["slip_error_pp"] / 100
     assert m["peak_slip"] == ref["peak_slip_pp"] / 100
-    assert m["slip_setpoint"] == ref["slip_setpoint_pp"] / 100 == pytest.approx(0.01, rel=1e-12)
+    # the set-point by torque ratio: the slip where mu = 0.9 mu_max at r_g = 1
+    from empact.nonlinear.equilibrium import slip_at_torque_ratio
+    from empact.nonlinear.model import nonlinear_model
+    nu_star = float(slip_at_torque_ratio(nonlinear_model(params), 0.9, 1.0))
+    assert m["slip_setpoint"] == ref["slip_setpoint_pp"] / 100 == pytest.approx(nu_star,
+                                                                               rel=1e-12)
     assert all(CELL.match(c) for c in _header(tmp_path / "run.csv"))
 
 
@@ -51,7 +56,8 @@ def test_control_simulate_text_keeps_percent(monkeypatch):
 
     class Run:
         metrics = {"complete": True, "message": "completed", "slip_error_pp": 0.05,
-                   "peak_slip_pp": 1.5, "ratio_error": 0.002, "mean_clamping_force": 9000.0}
+                   "peak_slip_pp": 1.5, "ratio_error": 0.002, "mean_clamping_force": 9000.0,
+                   "peak_slip_error_pp": 0.3, "macro_slip": False}
 
         class result:
             complete = True
@@ -69,7 +75,9 @@ def test_montecarlo_closed_loop_outputs_are_fractions(monkeypatch, params):
     class Run:
         metrics = {"complete": True, "message": "", "slip_error_pp": 0.25, "peak_slip_pp": 1.5,
                    "slip_setpoint_pp": 1.0, "ratio_error": 0.01, "mean_clamping_force": 1.0,
-                   "mean_slip_power": 2.0, "mean_actuation_power": 3.0, "mean_losses": 5.0}
+                   "mean_slip_power": 2.0, "mean_actuation_power": 3.0, "mean_losses": 5.0,
+                   "peak_slip_error_pp": 0.5, "slip_reserve_pp": 2.0, "macro_slip": False,
+                   "peak_T_mp": 0.4, "peak_T_ms": 8.0}
 
     monkeypatch.setattr(analyses, "run_closed_loop", lambda *a, **k: Run)
     sc = load_scenario(control_example_path("slip-load-step-r1"))

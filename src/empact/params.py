@@ -12,6 +12,8 @@ A parameter set has one section per concept::
     [shift]             creep-mode shifting of the belt (Carbone et al. 2007; Ide et al.)
     [thrust_ratio]      torque-dependent equilibrium thrust ratio kappa(tau, r_g)
     [paper_sec21]       stiffnesses of the paper's Sec. 2.1 kinematics (the published variant)
+    [servo]             torque and speed limits of the servo drives (`empact.hardware`)
+    [sensors]           the closed loop's instruments: delay, encoders, noise
     [operating]         the default operating point (r_g, nu, F_s, omega_p), used by every
                         analysis that is not given one (slip model, trim, plants, NMP, Fig. 2)
 
@@ -39,6 +41,7 @@ from ._io import atomic_write_text
 from ._section import Section, param
 from ._validate import check_choice, check_number
 from .errors import ParameterError
+from .hardware import SensorParams, ServoLimits
 from .variator.geometry import VariatorParams, ratio_range, variator_state
 from .variator.shift_law import ShiftParams
 from .variator.thrust_ratio import ThrustRatioParams
@@ -336,8 +339,11 @@ def _slip_at(traction: Any, r_g: float, mu: float, name: str, value: float) -> f
 _SECTIONS = {
     "variator": VariatorParams, "actuation": ActuationParams, "driveline": DrivelineParams,
     "traction": TractionParams, "shift": ShiftParams, "thrust_ratio": ThrustRatioParams,
-    "paper_sec21": Sec21Stiffness, "operating": OperatingPoint,
+    "paper_sec21": Sec21Stiffness, "servo": ServoLimits, "sensors": SensorParams,
+    "operating": OperatingPoint,
 }
+#: sections whose every key has a default (a file may leave them out)
+_OPTIONAL_SECTIONS = ("servo", "sensors")
 
 
 @dataclass(frozen=True)
@@ -352,6 +358,8 @@ class Params:
     shift: ShiftParams
     thrust_ratio: ThrustRatioParams
     paper_sec21: Sec21Stiffness
+    servo: ServoLimits
+    sensors: SensorParams
     operating: OperatingPoint
 
     def __post_init__(self) -> None:
@@ -390,6 +398,8 @@ class Params:
         try:
             damping = merged["damping"]
             levels = {name: DampingLevel(**damping[name]) for name in DAMPING_LEVELS}
+            for name in _OPTIONAL_SECTIONS:  # every key has a default
+                merged.setdefault(name, {})
             sections = {name: kind(**merged[name]) for name, kind in _SECTIONS.items()}
             return cls(damping=DampingParams(**levels, omega_pulley=damping["omega_pulley"]),
                        **sections)
@@ -555,7 +565,7 @@ def describe_parameters(params: Params | None = None) -> list[ParameterInfo]:
     out = []
     blocks: list[tuple[str, Any]] = []
     for name in ("variator", "actuation", "damping", "driveline", "traction", "shift",
-                 "thrust_ratio", "paper_sec21", "operating"):
+                 "thrust_ratio", "paper_sec21", "servo", "sensors", "operating"):
         block = getattr(params, name)
         if name == "damping":
             blocks += [(f"damping.{lvl}", getattr(block, lvl)) for lvl in DAMPING_LEVELS]

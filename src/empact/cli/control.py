@@ -68,9 +68,11 @@ class LoadMode(click.Choice):
 
 
 def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_law: str,
-                        drive: str = "speed", load: str = "torque", sweep=None):
-    """Parse the grid options (each checked under its name) and build the family."""
-    from ..control.family import plant_family
+                        drive: str = "speed", load: str = "torque", sweep=None,
+                        loop_outputs: bool = True):
+    """Parse the grid options (each checked under its name) and build the family (with the
+    outputs the loop model needs, `empact.control.family.LOOP_FAMILY_OUTPUTS`)."""
+    from ..control.family import LOOP_FAMILY_OUTPUTS, plant_family
     from ..variator.geometry import check_ratio
 
     values = {}
@@ -97,7 +99,8 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
         raise InputError("give at most two of --slip (or --tau), --clamp, --load-torque (the "
                          "trim solves the third)")
     return plant_family(params, damping=damping, kinematics=kinematics, shift_law=shift_law,
-                        drive=drive, load=load, sweep=sweep, **values)
+                        drive=drive, load=load, sweep=sweep,
+                        outputs=LOOP_FAMILY_OUTPUTS if loop_outputs else None, **values)
 
 
 def _summary(fam) -> dict:
@@ -150,17 +153,47 @@ def control_group() -> None:
     """Slip and ratio control: design, robustness across a family, closed loop."""
 
 
+def _loop_from(scenario_file, params):
+    """The loop a design or check uses: a closed-loop scenario's (its [controller],
+    [sensors], [limits]), or the shipped loop (`empact.control.law.SHIPPED_LOOP`)."""
+    from ..control.law import SHIPPED_LOOP, LoopConfig
+    from ..nonlinear.scenario import load_scenario
+
+    if scenario_file is None:
+        return LoopConfig.of(params, **SHIPPED_LOOP)
+    sc = load_scenario(scenario_file)
+    if not sc.closed_loop:
+        raise InputError(f"--loop-scenario {scenario_file}: no [controller] table (the loop "
+                         "is a closed-loop scenario's)")
+    return LoopConfig.for_scenario(sc, params)
+
+
+loop_option = click.option(
+    "--loop-scenario", "loop_scenario", type=click.Path(dir_okay=False), default=None,
+    help="Take the loop (rate, feedforwards, sensors, servo limits) from this closed-loop "
+         "scenario (default: the shipped loop, empact.control.law.SHIPPED_LOOP).")
+
+
 @control_group.command("design")
 @click.option("--method", type=click.Choice(["pi", "hinf"]), default="pi", show_default=True,
-              help="Decentralised PI for the family, or H-infinity mixed sensitivity.")
+              help="Decentralised PI checked on the loop that runs (gain-scheduled by "
+                   "default), or H-infinity mixed sensitivity on the continuous plant.")
 @click.option("--bandwidth", default=None, metavar="RATIO,SLIP",
-              help="Loop bandwidths [Hz] (default 0.1,0.05: the shipped designs).")
-@click.option("--alpha-min", "alpha_min", type=float, default=0.2, show_default=True,
+              help="Loop bandwidths [Hz] (default: the shipped designs: 0.5,1 for pi, "
+                   "0.1,0.05 for hinf).")
+@click.option("--alpha-min", "alpha_min", type=float, default=0.3, show_default=True,
               help="PI: smallest multiloop disk margin at every grid point.")
-@click.option("--slip-signal", "slip_signal", type=click.Choice(["nu", "nu_r"]), default="nu",
-              show_default=True, help="The measured slip.")
+@click.option("--schedule/--no-schedule", default=True, show_default=True,
+              help="PI: gain-schedule the proportional gains over the family's axes (r_g, "
+                   "tau, F_s).")
+@click.option("--slip-signal", "slip_signal",
+              type=click.Choice(["nu", "nu_r", "ln_nu", "ln_nu_r"]), default="nu",
+              show_default=True, help="The measured slip, or its logarithm (ln_: the slip's "
+              "response to the clamping varies by orders of magnitude along the traction "
+              "curve; the logarithm evens much of it out).")
 @click.option("--nominal", default=None, metavar="I,J,...",
               help="Grid index of the nominal plant (default: the middle).")
+@loop_option
 @grid_options
 @click.option("--out", "out", type=OutputFile(("json", "mat")), required=True,
               help="Controller file (.json or .mat; an existing file only with --force).")
@@ -168,16 +201,17 @@ def control_group() -> None:
 @json_options
 @force_option
 @quiet_option
-def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, tau, clamp,
-               speed, load_torque, damping, kinematics, shift_law, drive, load_mode, out,
-               params_file, as_json, json_out, force, quiet) -> None:
+def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loop_scenario,
+               ratio, slip, tau, clamp, speed, load_torque, damping, kinematics, shift_law,
+               drive, load_mode, out, params_file, as_json, json_out, force, quiet) -> None:
     """Design a controller (T_mp, T_ms) from the errors of (r_g, slip) on a plant family
-    (default family: r_g 0.5..2 (7, geometric), torque ratio tau 0.8..0.95 (4) at
-    [operating]'s clamping force and speed; empact.control.family.DESIGN_GRID)."""
+    (default: empact.control.family.DESIGN_GRID: r_g 0.5..2 (7, geometric) x torque ratio
+    tau 0.8, 0.9, 0.95 x clamping force 8, 16, 32 kN at [operating]'s speed)."""
+    from ..control.family import DESIGN_GRID
     from ..control.hinf import design_hinf
     from ..control.pi import design_pi
 
-    bw_text = bandwidth or "0.1,0.05"
+    bw_text = bandwidth or ("0.5,1" if method == "pi" else "0.1,0.05")
     try:
         bw = tuple(float(x) for x in bw_text.split(","))
     except ValueError:
@@ -190,11 +224,14 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
         check_number("--alpha-min", alpha_min, 0.05, 1.9,
                      note="the multiloop disk margin each plant must keep")
     params = get_params(params_file)
-    from ..control.family import DESIGN_GRID
-
-    raw = {"ratio": ratio or DESIGN_GRID["r_g"],
-           "slip": slip, "tau": tau or (None if slip else DESIGN_GRID["tau"]),
-           "clamp": clamp, "speed": speed, "load-torque": load_torque}
+    loop = _loop_from(loop_scenario, params)
+    defaults = not any(v is not None for v in (ratio, slip, tau, clamp, load_torque))
+    raw = {"ratio": ratio if ratio is not None else DESIGN_GRID["r_g"],
+           "slip": slip, "tau": tau if tau is not None else (None if slip
+                                                              else DESIGN_GRID["tau"]),
+           "clamp": clamp if clamp is not None else (DESIGN_GRID["F_s"] if defaults
+                                                      else None),
+           "speed": speed, "load-torque": load_torque}
     nom = None
     if nominal:
         try:
@@ -204,7 +241,7 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
     with progress_bar(total=2, desc=f"control design ({method}): family, design",
                       unit="step", enabled=not quiet) as bar:
         fam = family_from_options(params, raw, damping, kinematics, shift_law, drive,
-                                  load_mode)
+                                  load_mode, loop_outputs=True)
         bar.update(1)
         if not fam.ok.all():
             raise InputError(f"{int((~fam.ok).sum())} grid points do not trim ("
@@ -214,7 +251,8 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
                                 or any(not 0 <= i < s for i, s in zip(nom, fam.shape))):
             raise InputError(f"--nominal {nominal!r}: indices in a grid of shape {fam.shape}")
         if method == "pi":
-            ctrl = design_pi(fam, bw, alpha_min=alpha_min, slip=slip_signal, nominal=nom)
+            ctrl = design_pi(fam, bw, alpha_min=alpha_min, slip=slip_signal, nominal=nom,
+                             loop=loop, params=params, schedule=schedule)
         else:
             ctrl = design_hinf(fam, bw, slip=slip_signal, nominal=nom)
         bar.update(1)
@@ -232,21 +270,35 @@ def design_cmd(method, bandwidth, alpha_min, slip_signal, nominal, ratio, slip, 
 
 @control_group.command("check")
 @click.argument("controller", type=click.Path(dir_okay=False))
-@click.option("--family", "family_file", type=click.Path(dir_okay=False), required=True,
-              help="Plant family (.npz from `empact plants`).")
+@click.option("--family", "family_file", type=click.Path(dir_okay=False), default=None,
+              help="Plant family (.npz from `empact plants`; default: the design family "
+                   "on the parameter set).")
+@loop_option
+@click.option("--min-disk-margin", "min_dm", type=float, default=0.0, show_default=True,
+              help="With --strict: the smallest multiloop disk margin allowed.")
+@click.option("--strict", is_flag=True, help="Exit 1 when a plant is unstable or a disk "
+              "margin is below --min-disk-margin (without it: report and exit 0).")
 @click.option("--mu", is_flag=True, help="Also the structured singular value bound "
-              "(slycot ab13md) over a parametric spread covering the family.")
+              "(slycot ab13md, continuous loop) over a parametric spread covering the family.")
+@params_option
 @json_options
 @force_option
 @quiet_option
-def check_cmd(controller, family_file, mu, as_json, json_out, force, quiet) -> None:
-    """Closed-loop poles and disk margins of CONTROLLER against every plant of a family."""
+def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, params_file,
+              as_json, json_out, force, quiet) -> None:
+    """Closed-loop poles and disk margins of CONTROLLER on the loop that runs (sampled, with
+    the loop's sensors and feedforwards; empact.control.loop) against every plant of a
+    family."""
     from ..control.controller import load_controller
-    from ..control.family import load_family
-    from ..control.robustness import mu_upper_bound, robustness_map
+    from ..control.family import design_family, load_family
+    from ..control.loop import family_loops
+    from ..control.robustness import disk_gain_phase, mu_upper_bound
 
+    check_number("--min-disk-margin", min_dm, 0.0, 1.99)
     ctrl = load_controller(controller)
-    fam = load_family(family_file)
+    params = get_params(params_file)
+    loop = _loop_from(loop_scenario, params)
+    fam = load_family(family_file) if family_file else design_family(params)
     for name in ctrl.measured:
         base = name[3:] if name.startswith("ln_") else name
         if base not in fam.outputs:
@@ -255,24 +307,42 @@ def check_cmd(controller, family_file, mu, as_json, json_out, force, quiet) -> N
     with progress_bar(total=2 if mu else 1, desc="control check: margins" + (", mu" if mu
                                                                            else ""),
                       unit="step", enabled=not quiet) as bar:
-        rm = robustness_map(fam, ctrl)
+        lm = family_loops(fam, ctrl, loop, params)
+        rho = lm.spectral_radius()
+        dm = lm.disk_margins()
         bar.update(1)
-        data = {"worst": rm.worst(), "max_real_pole": rm.max_real_pole,
-                "disk_margin": rm.disk_margin, "axes": {k: v for k, v in fam.axes.items()}}
+        worst = float(dm["alpha"].min())
+        gm, pm = disk_gain_phase(worst)
+        data = {"worst": {"disk_margin": worst, "gain_margin_db": float(gm),
+                          "phase_margin_deg": float(pm),
+                          "spectral_radius": float(rho.max()),
+                          "all_stable": bool(np.all(rho < 1)),
+                          "stable": int((rho < 1).sum()), "points": int(rho.size)},
+                "spectral_radius": rho, "disk_margin": dm["alpha"],
+                "input_disk_margin": dm["input"], "output_disk_margin": dm["output"],
+                "axes": {k: v for k, v in fam.axes.items()},
+                "loop": {"rate_hz": loop.spec.rate, "feedforward": loop.spec.feedforward,
+                         "sensors": loop.sensors is not None}}
         if mu:
-            data["mu"] = mu_upper_bound(fam, ctrl, tuple(s // 2 for s in fam.shape))
+            data["mu"] = mu_upper_bound(fam, ctrl.at(
+                {k: float(np.median(v)) for k, v in fam.operating.items()})
+                if ctrl.schedule is not None else ctrl, tuple(s // 2 for s in fam.shape))
             bar.update(1)
+    ok = data["worst"]["all_stable"] and worst >= min_dm
     if as_json or json_out:
-        emit_json(data, "control.check", json_out)
-        return
-    w = rm.worst()
-    click.echo(f"{fam.size} plants: {int(rm.stable.sum())} closed-loop stable; worst disk "
-               f"margin {w['disk_margin']:.3f} (+-{w['gain_margin_db']:.2f} dB, "
-               f"+-{w['phase_margin_deg']:.1f} deg); largest pole real part "
-               f"{w['max_real_pole']:.4g} 1/s")
-    if mu:
-        click.echo(f"mu upper bound {data['mu']['mu_peak']:.3g} ({data['mu']['n_blocks']} real "
-                   f"blocks; < 1 certifies the box)")
+        emit_json({**data, "passed": ok}, "control.check", json_out)
+    else:
+        w = data["worst"]
+        click.echo(f"{fam.size} plants: {w['stable']} closed-loop stable; worst disk margin "
+                   f"{worst:.3f} (+-{w['gain_margin_db']:.2f} dB, +-{w['phase_margin_deg']:.1f}"
+                   f" deg); largest |z| {w['spectral_radius']:.6f} (sampled at "
+                   f"{loop.spec.rate:g} Hz)")
+        if mu:
+            click.echo(f"mu upper bound {data['mu']['mu_peak']:.3g} ({data['mu']['n_blocks']} "
+                       "real blocks; < 1 certifies the box)")
+    if strict and not ok:
+        raise Failed(f"check failed: {fam.size - data['worst']['stable']} unstable plants, "
+                     f"worst disk margin {worst:.3f} (--min-disk-margin {min_dm:g})")
 
 
 @control_group.command("simulate")
@@ -281,17 +351,21 @@ def check_cmd(controller, family_file, mu, as_json, json_out, force, quiet) -> N
 @click.option("--list-examples", "list_ex", is_flag=True, help="List them.")
 @click.option("--controller", "controller", default=None, type=click.Path(dir_okay=False),
               help="Controller file replacing the scenario's.")
+@click.option("--strict", is_flag=True, help="Exit 1 when a target of the scenario's "
+              "[targets] is missed (without it: report and exit 0; a run that stops early "
+              "exits 1 either way).")
 @click.option("--out", "out", type=OutputFile(("csv",)), default=None,
               help="Write the time histories (.csv; an existing file only with --force).")
 @params_option
 @json_options
 @force_option
 @quiet_option
-def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_json, json_out,
-                 force, quiet) -> None:
-    """Closed loop on the nonlinear machine: print the scenario's metrics against its
-    targets (exit 1 when the run stops early)."""
-    from ..control.closed_loop import control_example_path, control_examples, run_closed_loop
+def simulate_cmd(scenario, example, list_ex, controller, strict, out, params_file, as_json,
+                 json_out, force, quiet) -> None:
+    """Closed loop on the nonlinear machine: print the scenario's metrics and its targets
+    (exit 1 when the run stops early, or with --strict when a target is missed)."""
+    from ..control.closed_loop import (check_targets, control_example_path, control_examples,
+                                       run_closed_loop)
     from ..nonlinear.scenario import load_scenario
     from ..nonlinear.simulation import write_csv
 
@@ -313,14 +387,50 @@ def simulate_cmd(scenario, example, list_ex, controller, out, params_file, as_js
     if out:
         write_csv(run.result, out)
     m = run.metrics
+    checks = check_targets(m, sc.targets)
     if as_json or json_out:  # slips as fractions (schema version 2)
-        emit_json({"scenario": sc.name, "metrics": fraction_metrics(m)}, "control.simulate",
-                  json_out)
+        emit_json({"scenario": sc.name, "metrics": fraction_metrics(m),
+                   "targets": [{"name": c.name, "met": c.met, "target": c.describe()}
+                               for c in checks]}, "control.simulate", json_out)
     else:  # for people: slips in % and percentage points
         for k, v in m.items():
-            name, unit = (k[:-3], "percentage points" if "error" in k else "%") \
-                if k.endswith("_pp") else (k, UNITS.get(k, ""))
+            name, unit = (k[:-3], "percentage points" if "error" in k or "reserve" in k
+                          else "%") if k.endswith("_pp") else (k, UNITS.get(k, ""))
             shown = f"{v:.6g}" if isinstance(v, float) else str(v)
             click.echo(f"{name:22s} {shown} {unit if unit != '-' else ''}".rstrip())
+        for c in checks:
+            click.echo(f"target: {c.describe()}")
     if not run.result.complete:
         raise Failed(f"closed loop stopped early: {run.result.message}")
+    missed = [c for c in checks if not c.met]
+    if strict and missed:
+        raise Failed(f"{len(missed)} of {len(checks)} targets missed: "
+                     + "; ".join(c.describe() for c in missed))
+
+
+@control_group.command("discretize")
+@click.argument("controller", type=click.Path(dir_okay=False))
+@click.option("--rate", required=True, metavar="HZ", help="Sample rate [Hz].")
+@click.option("--method", type=click.Choice(["tustin", "zoh", "foh", "bilinear"]),
+              default="tustin", show_default=True, help="Discretisation (scipy.signal."
+              "cont2discrete).")
+@click.option("--out", "out", type=OutputFile(("json", "mat")), required=True,
+              help="The discrete controller (.json or .mat; an existing file only with "
+                   "--force).")
+@force_option
+def discretize_cmd(controller, rate, method, out, force) -> None:
+    """Write CONTROLLER as a discrete-time state space at its sample rate (x[k+1] = A x[k] +
+    B e[k], du[k] = C x[k] + D e[k]; a schedule's gains act on e as before)."""
+    from ..control.controller import load_controller
+
+    try:
+        rate = float(rate)
+    except ValueError:
+        raise InputError(f"--rate {rate!r}: a sample rate in Hz") from None
+    check_number("--rate", rate, 1.0, 1e5, unit="Hz")
+    ctrl = load_controller(controller)
+    if ctrl.dt:
+        raise InputError(f"{controller}: already discrete (dt = {ctrl.dt:g} s)")
+    cd = ctrl.discretize(1.0 / rate, method)
+    cd.save(out)
+    click.echo(f"{ctrl.n}-state controller at {rate:g} Hz ({method}) written to {out}")

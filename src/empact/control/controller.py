@@ -8,13 +8,21 @@ values::
     dx_c/dt = A x_c + B e,   du = C x_c + D e          (continuous, dt = 0)
     x_c[k+1] = A x_c[k] + B e[k],   du[k] = C x_c[k] + D e[k]   (discrete, sample time dt)
 
-Files: JSON (schema ``empact.controller``) with A, B, C, D, the names, units, ``dt`` and the
-design data; ``.mat`` with the same fields (in MATLAB: ``k = load('c.mat'); K = ss(k.A, k.B,
-k.C, k.D, k.dt)``, ``dt = 0`` for continuous).
+A gain-scheduled controller carries a `Schedule`: gains on its error inputs that depend on
+the operating point (``e -> g(sigma) e``, then the fixed state space), interpolated over a
+grid of the ratio, the set-point's torque ratio and the clamping force.  Scaling the errors
+before the dynamics keeps the integrators' states continuous when the gains move (no bump).
+
+Files: JSON (schema ``empact.controller``) with A, B, C, D, the names, units, ``dt``, the
+schedule and the design data; ``.mat`` with the same fields (in MATLAB: ``k =
+load('c.mat'); K = ss(k.A, k.B, k.C, k.D, k.dt)``, ``dt = 0`` for continuous; the schedule
+as ``schedule_axes`` names, ``schedule_<axis>`` grids and ``schedule_gains``).
 """
 from __future__ import annotations
 
+import bisect
 import json
+import math
 import os
 import warnings
 from dataclasses import dataclass, field
@@ -35,12 +43,85 @@ from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS
 signal = lazy_module("scipy.signal")
 sio = lazy_module("scipy.io")
 
-__all__ = ["Controller", "load_controller"]
+__all__ = ["Controller", "Schedule", "load_controller", "SCHEDULE_VARIABLES"]
 
 SCHEMA = {"name": "empact.controller", "version": 1}
 
 #: the signals a controller may measure (a slip or ratio, or its logarithm ``ln_...``)
 MEASURABLE = ("r_g", "nu", "nu_r", "ln_r_g", "ln_nu", "ln_nu_r")
+
+#: what a schedule may depend on: the measured ratio, the slip set-point's torque ratio
+#: ``mu / mu_max``, the clamping force [N] the loop commands; interpolated in ``ln r_g``,
+#: ``tau`` and ``ln F_s``
+SCHEDULE_VARIABLES = ("r_g", "tau", "F_s")
+_LOG_AXES = ("r_g", "F_s")
+
+
+@dataclass(frozen=True, eq=False)
+class Schedule:
+    """Gains on a controller's error inputs over a grid of operating points.
+
+    Attributes
+    ----------
+    axes : dict name -> array
+        Increasing grid values of `SCHEDULE_VARIABLES` (SI).
+    gains : array, shape ``grid + (n_e,)``
+        The gain on each error input at each grid point (non-zero, one sign per input).
+
+    Calling it with a mapping of the variables gives the gains there (multilinear in
+    ``ln |gain|`` over ``ln r_g``, ``tau``, ``ln F_s``; held at the grid's edges).
+    """
+
+    axes: Mapping[str, NDArray[np.float64]]
+    gains: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        axes = {}
+        for name, grid in self.axes.items():
+            if name not in SCHEDULE_VARIABLES:
+                raise ParameterError(f"schedule axis {name!r}: choose from "
+                                     f"{', '.join(SCHEDULE_VARIABLES)}")
+            g = np.asarray(grid, float).ravel()
+            if g.size < 1 or not np.all(np.isfinite(g)) or np.any(np.diff(g) <= 0) or \
+                    (name in _LOG_AXES and np.any(g <= 0)):
+                raise ParameterError(f"schedule axis {name!r}: must be finite and increasing"
+                                     + (" and positive" if name in _LOG_AXES else ""))
+            axes[name] = g
+        gains = np.asarray(self.gains, float)
+        shape = tuple(len(g) for g in axes.values())
+        if gains.shape[:-1] != shape or not np.all(np.isfinite(gains)):
+            raise ParameterError(f"schedule gains: shape {gains.shape}, expected "
+                                 f"{shape} + (inputs,) of finite numbers")
+        sign = np.sign(gains.reshape(-1, gains.shape[-1]))
+        if np.any(sign == 0) or np.any(sign != sign[:1]):
+            raise ParameterError("schedule gains: each input's gain must keep one sign, "
+                                 "never zero")
+        object.__setattr__(self, "axes", axes)
+        object.__setattr__(self, "gains", gains)
+        object.__setattr__(self, "_sign", sign[0])
+        object.__setattr__(self, "_log", np.log(np.abs(gains)))
+        object.__setattr__(self, "_q", [np.log(g) if n in _LOG_AXES else g
+                                        for n, g in axes.items()])
+        object.__setattr__(self, "_qlist", [q.tolist() for q in self._q])
+
+    def __call__(self, point: Mapping[str, float]) -> NDArray[np.float64]:
+        """The gains at an operating point (``{name: value}`` for every axis)."""
+        L = self._log
+        for q, qs, name in zip(self._q, self._qlist, self.axes):
+            v = float(point[name])
+            v = math.log(max(v, 1e-12)) if name in _LOG_AXES else v
+            if len(qs) == 1:
+                L = L[0]
+                continue
+            i = min(max(bisect.bisect_left(qs, v) - 1, 0), len(qs) - 2)
+            f = min(max((v - qs[i]) / (qs[i + 1] - qs[i]), 0.0), 1.0)
+            L = (1 - f) * L[i] + f * L[i + 1]
+        return self._sign * np.exp(L)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain data (the file layout)."""
+        return {"axes": {k: v.tolist() for k, v in self.axes.items()},
+                "gains": self.gains.tolist()}
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,6 +141,8 @@ class Controller:
         How it was designed (``"pi"``, ``"hinf"``, ...).
     design : dict
         Design data (gains, weights, margins, the family's grid, the nominal point).
+    schedule : Schedule or None
+        Gains on the error inputs by operating point (a gain-scheduled controller).
     """
 
     A: NDArray[np.float64]
@@ -71,6 +154,7 @@ class Controller:
     dt: float = 0.0
     method: str = ""
     design: Mapping[str, Any] = field(default_factory=dict)
+    schedule: Schedule | None = None
 
     def __post_init__(self) -> None:
         A, B, C, D = (np.atleast_2d(np.asarray(M, float)) for M in (self.A, self.B, self.C,
@@ -88,6 +172,18 @@ class Controller:
         object.__setattr__(self, "measured", tuple(self.measured))
         object.__setattr__(self, "outputs", tuple(self.outputs))
         object.__setattr__(self, "dt", check_number("dt", self.dt, 0.0, unit="s"))
+        if self.schedule is not None and self.schedule.gains.shape[-1] != len(self.measured):
+            raise ParameterError(f"controller schedule: {self.schedule.gains.shape[-1]} gains "
+                                 f"per point for {len(self.measured)} inputs")
+
+    def at(self, point: Mapping[str, float]) -> "Controller":
+        """The controller frozen at an operating point: its schedule's gains folded into B
+        and D (an LTI controller; itself when it has no schedule)."""
+        if self.schedule is None:
+            return self
+        g = self.schedule(point)
+        return Controller(self.A, self.B * g, self.C, self.D * g, self.measured, self.outputs,
+                          self.dt, self.method, self.design)
 
     @property
     def inputs(self) -> tuple[str, ...]:
@@ -119,11 +215,11 @@ class Controller:
         dt = check_number("dt", dt, 0.0, 1.0, lo_open=True, unit="s")
         if self.n == 0:
             return Controller(self.A, self.B, self.C, self.D, self.measured, self.outputs,
-                              dt, self.method, self.design)
+                              dt, self.method, self.design, self.schedule)
         Ad, Bd, Cd, Dd, _ = signal.cont2discrete((self.A, self.B, self.C, self.D), dt,
                                                  method=method)
         return Controller(Ad, Bd, Cd, Dd, self.measured, self.outputs, dt, self.method,
-                          {**self.design, "discretized": method})
+                          {**self.design, "discretized": method}, self.schedule)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain data (the file layout)."""
@@ -132,7 +228,8 @@ class Controller:
                 "outputs": list(self.outputs), "dt": self.dt, "method": self.method,
                 "inputs_units": [OUTPUT_UNITS.get(m, "-") for m in self.measured],
                 "outputs_units": [INPUT_UNITS[o] for o in self.outputs],
-                "design": dict(self.design)}
+                "design": dict(self.design),
+                "schedule": None if self.schedule is None else self.schedule.to_dict()}
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write JSON or ``.mat`` (by the suffix) atomically."""
@@ -142,9 +239,14 @@ class Controller:
             atomic_write_text(path, json.dumps(jsonable({"schema": SCHEMA, **data}),
                                                indent=1) + "\n")
         elif suffix == ".mat":
-            flat = {k: v for k, v in data.items() if k != "design"}
+            flat = {k: v for k, v in data.items() if k not in ("design", "schedule")}
             for k in ("inputs", "measured", "outputs", "inputs_units", "outputs_units"):
                 flat[k] = np.array(flat[k], dtype=object)
+            if self.schedule is not None:
+                flat["schedule_axes"] = np.array(list(self.schedule.axes), dtype=object)
+                for name, grid in self.schedule.axes.items():
+                    flat[f"schedule_{name}"] = grid
+                flat["schedule_gains"] = self.schedule.gains
             flat["design_json"] = json.dumps(jsonable(data["design"]))
             with atomic_file(path) as tmp:
                 sio.savemat(tmp, flat)
@@ -197,6 +299,21 @@ def _matrix(doc: Mapping[str, Any], key: str, shape: tuple[int, int], what: str,
     return np.array(rows, float).reshape(shape)
 
 
+def _schedule(doc: Any, src: Path) -> Schedule:
+    """A controller file's ``schedule``: ``{"axes": {name: [values]}, "gains": nested
+    rows}``."""
+    if not isinstance(doc, dict) or not isinstance(doc.get("axes"), dict) \
+            or "gains" not in doc:
+        raise ParameterError(f"{src}: schedule must be a table with axes (name -> values) and "
+                             "gains")
+    try:
+        axes = {str(k): np.array(v, float) for k, v in doc["axes"].items()}
+        gains = np.array(doc["gains"], float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{src}: schedule axes and gains must be numbers") from None
+    return Schedule(axes=axes, gains=gains)
+
+
 def load_controller(path: str | os.PathLike[str]) -> Controller:
     """Read a controller JSON file (`Controller.save`); one-line errors for bad files, naming
     the key, its value and what is allowed."""
@@ -227,7 +344,10 @@ def load_controller(path: str | os.PathLike[str]) -> Controller:
     if not isinstance(design, dict):
         raise ParameterError(f"{p}: design = {design!r}: must be a table")
     try:
+        sched = doc.get("schedule")
+        schedule = None if sched is None else _schedule(sched, p)
         return Controller(A=A, B=B, C=C, D=D, measured=measured, outputs=outputs,
-                          dt=float(dt), method=str(doc.get("method", "")), design=design)
+                          dt=float(dt), method=str(doc.get("method", "")), design=design,
+                          schedule=schedule)
     except ParameterError as exc:
         raise ParameterError(f"{p}: {exc}") from None

@@ -38,7 +38,7 @@ import os
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -60,7 +60,7 @@ from ..sweep import SweepOptions, plan_chunks, run_chunks
 interpolate = lazy_module("scipy.interpolate")
 
 __all__ = ["VARIABLES", "PlantFamily", "plant_family", "save_family", "load_family",
-           "BENCH_OPTIONS", "DESIGN_GRID"]
+           "BENCH_OPTIONS", "DESIGN_GRID", "LOOP_FAMILY_OUTPUTS", "design_family"]
 
 #: operating variables of a family: unit, and whether it is interpolated in its logarithm
 #: (when all its grid values are positive: the plant depends on the slip through the slope of
@@ -73,8 +73,16 @@ MAX_POINTS = 1_000_000
 
 #: the default design family of the shipped controllers and of ``empact control design``:
 #: ratio (7, geometric 0.5-2) x torque ratio (0.8-0.95: set-points with a 5-20 % torque
-#: reserve on the traction curve) at ``params.operating``'s clamping force and speed
-DESIGN_GRID = {"r_g": np.geomspace(0.5, 2.0, 7), "tau": np.array([0.8, 0.85, 0.9, 0.95])}
+#: reserve on the traction curve) x clamping force (8-32 kN: the shipped scenarios' range,
+#: up to the secondary servo's limit) at ``params.operating``'s speed
+DESIGN_GRID = {"r_g": np.geomspace(0.5, 2.0, 7), "tau": np.array([0.8, 0.9, 0.95]),
+               "F_s": np.array([8e3, 16e3, 32e3])}
+
+#: the outputs a family needs for the loop model (`empact.control.loop.family_loops`): the
+#: plant's, what the loop law measures (`empact.control.law.RAW_SIGNALS`) and what the loop
+#: model predicts (`empact.control.loop.PERFORMANCE`)
+LOOP_FAMILY_OUTPUTS = ("r_g", "nu", "nu_r", "omega_p", "omega_s", "T_ds", "omega_mp",
+                       "omega_ms", "T_l_act", "F_s", "tau")
 
 
 @dataclass(frozen=True, eq=False)
@@ -224,7 +232,7 @@ def _axis(name: str, value) -> NDArray[np.float64]:
 def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega_p=None,
                  T_l=None, base: OperatingPoint | None = None,
                  model: EmpactModel | None = None, sweep: SweepOptions | None = None,
-                 **options) -> PlantFamily:
+                 outputs: Sequence[str] | None = None, **options) -> PlantFamily:
     """Trim and exactly linearise the machine on a grid of operating points.
 
     Parameters
@@ -240,6 +248,9 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
     sweep : SweepOptions, optional
         Where the points are computed (`empact.sweep`: in process by default, or on Dask);
         the result is bitwise the same.
+    outputs : sequence of str, optional
+        The model outputs kept (default ``r_g, nu, nu_r``; `empact.control.loop` adds what
+        the loop law measures).
     **options
         `empact.nonlinear.model.ModelOptions` fields (default `BENCH_OPTIONS`, the test bench:
         the same defaults as `empact.nonlinear.linearization.plant`).
@@ -289,7 +300,8 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
     A, B, C, D = res["A"], res["B"], res["C"], res["D"]
     inputs = PLANT_INPUTS + (disturbance_input(model),)
     ii = [model.input_index(k) for k in inputs]
-    oo = [model.output_index(k) for k in PLANT_OUTPUTS]
+    outputs = PLANT_OUTPUTS if outputs is None else tuple(outputs)
+    oo = [model.output_index(k) for k in outputs]
     grid = shape if shape else ()
     n = model.n
     op_all = {k: res[k] for k in ("r_g", "nu", "F_s", "omega_p", "T_l", "tau")}
@@ -298,11 +310,17 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
         A=A.reshape(grid + (n, n)), B=B[:, :, ii].reshape(grid + (n, len(ii))),
         C=C[:, oo].reshape(grid + (len(oo), n)),
         D=D[:, oo][:, :, ii].reshape(grid + (len(oo), len(ii))),
-        states=model.states, inputs=inputs, outputs=PLANT_OUTPUTS,
+        states=model.states, inputs=inputs, outputs=outputs,
         operating={k: v.reshape(grid) for k, v in op_all.items()},
         ok=res["ok"].reshape(grid), reason=res["reason"].reshape(grid),
         options={k: getattr(model.options, k) for k in ("drive", "load", "damping",
                                                         "kinematics", "shift_law")})
+
+
+def design_family(params: Params, **options) -> "PlantFamily":
+    """The design family (`DESIGN_GRID`, with `LOOP_FAMILY_OUTPUTS`) on a parameter set;
+    `options` as `plant_family`'s."""
+    return plant_family(params, **DESIGN_GRID, outputs=LOOP_FAMILY_OUTPUTS, **options)
 
 
 #: measured cost of one point (trim + linearisation), for sizing chunks [s]

@@ -15,11 +15,16 @@ production recipe: robust PI with the highest integral gain the plant spread all
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .._validate import check_number
 from ..errors import ParameterError
-from .controller import Controller
+from ..nonlinear.model import nonlinear_model
+from ..params import Params
+from .controller import SCHEDULE_VARIABLES, Controller, Schedule
 from .family import PlantFamily
+from .law import LoopConfig
+from .loop import family_loops
 from .robustness import (OMEGA, disk_gain_phase, frequency_responses, measured_rows,
                          plant_responses, robustness_map)
 
@@ -55,7 +60,9 @@ def pi_controller(kp, wi, wf, measured=("r_g", "nu"), outputs=("T_mp", "T_ms"),
 
 
 def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float = 0.5,
-              slip: str = "nu", nominal: tuple[int, ...] | None = None) -> Controller:
+              slip: str = "nu", nominal: tuple[int, ...] | None = None,
+              loop: LoopConfig | None = None, params: Params | None = None,
+              schedule: bool = False) -> Controller:
     """The decentralised PI controller of the module notes for every plant of `family`.
 
     Parameters
@@ -73,7 +80,24 @@ def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float 
         traction curve, and the logarithm evens much of that out.
     nominal : grid index, optional
         The nominal plant (default: the grid's middle).
+    loop : LoopConfig, optional
+        Check every candidate on the loop that runs (`empact.control.loop.family_loops`:
+        sampled at the loop's rate with its sensors and feedforwards; needs `params` and a
+        family with `LOOP_FAMILY_OUTPUTS`); without it, on the continuous loop ``u = K (r -
+        y)`` alone.
+    params : Params
+        With `loop`.
+    schedule : bool
+        Gain-schedule the proportional gains over the family's axes (``r_g``, ``tau``,
+        ``F_s``; with `loop`): each loop's crossover is the requested one at every grid
+        point (``|k_p(sigma) G_ii(j w_c; sigma)| = 1``), interpolated between them
+        (`empact.control.controller.Schedule`).
     """
+    if loop is not None:
+        return _design_pi_loop(family, bandwidth_hz, alpha_min, slip, nominal, loop, params,
+                               schedule)
+    if schedule:
+        raise ParameterError("schedule = True needs the loop it runs in (loop=, params=)")
     if not np.all(family.ok):
         raise ParameterError("the family has points that did not trim; design on a family "
                              "whose every point trims")
@@ -142,3 +166,115 @@ def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float 
     gm, pm = disk_gain_phase(alpha_min)
     design["alpha_min_margins"] = {"gain_db": float(gm), "phase_deg": float(pm)}
     return pi_controller(kp, kappa * wc, ROLL_OFF * wc, measured, outputs, design)
+
+
+def _crossover_gains(family: PlantFamily, measured, wc) -> NDArray[np.float64]:
+    """``k_p`` of each loop at every grid point: ``sign / |G_jj(j w_c_j)|`` with the sign of
+    negative feedback (shape ``family.shape + (2,)``)."""
+    ii = [family.inputs.index(n) for n in ("T_mp", "T_ms")]
+    C = measured_rows(family, measured)
+    G = frequency_responses(family.A, family.B[..., ii], C,
+                            np.zeros(C.shape[:-1] + (2,)), wc)  # shape + (2 freq, 2, 2)
+    kp = np.empty(family.shape + (2,))
+    for j in range(2):
+        g = G[..., j, j, j]
+        sign = np.sign((g * np.exp(1j * np.pi / 4)).real)
+        kp[..., j] = np.where(sign == 0, 1.0, sign) / np.abs(g)
+    # one sign per loop over the family (the nominal's)
+    return np.abs(kp) * np.sign(kp.reshape(-1, 2)[kp.size // 4])
+
+
+def _design_pi_loop(family, bandwidth_hz, alpha_min, slip, nominal, loop, params, schedule):
+    """`design_pi` on the loop that runs (see there)."""
+    if params is None:
+        raise ParameterError("design_pi with a loop needs params")
+    if not np.all(family.ok):
+        raise ParameterError("the family has points that did not trim; design on a family "
+                             "whose every point trims")
+    base = slip[3:] if slip.startswith("ln_") else slip
+    if base not in ("nu", "nu_r"):
+        raise ParameterError(f"slip = {slip!r}: choose nu, nu_r, ln_nu or ln_nu_r")
+    alpha_min = check_number("alpha_min", alpha_min, 0.05, 1.9)
+    bw = [check_number("bandwidth", b, 1e-3, 50.0, lo_open=True, unit="Hz")
+          for b in bandwidth_hz]
+    if schedule:
+        bad = [a for a in family.axes if a not in SCHEDULE_VARIABLES]
+        if bad:
+            raise ParameterError(f"a schedule runs over {', '.join(SCHEDULE_VARIABLES)}; the "
+                                 f"family also varies {', '.join(bad)}")
+    nominal = tuple(s_ // 2 for s_ in family.shape) if nominal is None else tuple(nominal)
+    measured, outputs = ("r_g", slip), ("T_mp", "T_ms")
+    model = nonlinear_model(params, **family.options)
+    best = None
+    for scale in SCALES:
+        wc = 2 * np.pi * np.array(bw) * scale
+        kp = _crossover_gains(family, measured, wc)
+        if schedule:
+            sched = Schedule(axes=dict(family.axes), gains=kp)
+            unit = pi_controller(np.ones(2), wc, ROLL_OFF * wc, measured, outputs)
+            ctrl0 = Controller(unit.A, unit.B, unit.C, unit.D, measured, outputs,
+                               schedule=sched)
+        else:
+            sched = None
+            ctrl0 = pi_controller(kp[nominal], wc, ROLL_OFF * wc, measured, outputs)
+        lm = family_loops(family, ctrl0, loop, params, model)
+
+        def make(kappa):
+            if sched is None:
+                return pi_controller(kp[nominal], kappa * wc, ROLL_OFF * wc, measured, outputs)
+            u = pi_controller(np.ones(2), kappa * wc, ROLL_OFF * wc, measured, outputs)
+            return Controller(u.A, u.B, u.C, u.D, measured, outputs, schedule=sched)
+
+        def check(kappa):
+            m = lm.with_controller(make(kappa))
+            dm = m.disk_margins()
+            return bool(np.all(m.spectral_radius() < 1) and dm["alpha"].min() >= alpha_min)
+
+        if not check(1e-3):
+            continue
+        lo, hi = 1e-3, 1.0
+        if check(hi):
+            lo = hi
+        else:
+            for _ in range(12):
+                mid = np.sqrt(lo * hi)
+                lo, hi = (mid, hi) if check(mid) else (lo, mid)
+        # the largest integral action: the product of the loops' integral gains at the
+        # nominal point
+        integral = float(np.prod(np.abs(kp[nominal]) * lo * wc))
+        if best is None or integral > best[0]:
+            best = (integral, scale, kp, wc, lo, lm)
+    if best is None:
+        raise ParameterError(
+            f"no PI design keeps every plant of the family stable with disk margin >= "
+            f"{alpha_min:g} on this loop at crossovers {bw[0]:g} / {bw[1]:g} Hz x "
+            f"{SCALES[0]:g}-{SCALES[-1]:g}; lower the bandwidths or alpha_min, or narrow the "
+            "family")
+    _, scale, kp, wc, kappa, lm = best
+    ctrl = (lambda k: pi_controller(kp[nominal], k * wc, ROLL_OFF * wc, measured, outputs)
+            if not schedule else None)(kappa)
+    if schedule:
+        u = pi_controller(np.ones(2), kappa * wc, ROLL_OFF * wc, measured, outputs)
+        ctrl = Controller(u.A, u.B, u.C, u.D, measured, outputs,
+                          schedule=Schedule(axes=dict(family.axes), gains=kp))
+    m = lm.with_controller(ctrl)
+    dm = m.disk_margins()
+    rho = m.spectral_radius()
+    worst = {"disk_margin": float(dm["alpha"].min()),
+             "input_disk_margin": float(dm["input"].min()),
+             "output_disk_margin": float(dm["output"].min()),
+             "spectral_radius": float(rho.max()), "all_stable": bool(np.all(rho < 1))}
+    gm, pm = disk_gain_phase(worst["disk_margin"])
+    worst.update(gain_margin_db=float(gm), phase_margin_deg=float(pm))
+    design = {"kp_nominal": kp[nominal].tolist(), "wi_rad_s": (kappa * wc).tolist(),
+              "crossover_hz": (wc / 2 / np.pi).tolist(),
+              "roll_off_hz": (ROLL_OFF * wc / 2 / np.pi).tolist(), "kappa": kappa,
+              "bandwidth_scale": scale, "alpha_min": alpha_min, "worst": worst,
+              "nominal": {k: float(v[nominal]) for k, v in family.operating.items()},
+              "family_axes": {k: v.tolist() for k, v in family.axes.items()},
+              "family_fixed": dict(family.fixed), "slip": slip, "scheduled": schedule,
+              "loop": {"rate_hz": loop.spec.rate, "feedforward": loop.spec.feedforward,
+                       "feedforward_filter_hz": loop.spec.feedforward_filter_hz,
+                       "sensors": loop.sensors is not None}}
+    return Controller(ctrl.A, ctrl.B, ctrl.C, ctrl.D, measured, outputs, 0.0, "pi", design,
+                      ctrl.schedule)

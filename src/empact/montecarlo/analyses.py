@@ -45,7 +45,9 @@ OUTPUTS: dict[str, dict[str, str]] = {
               "f_slow_hz": "Hz", "zeta_slow": "-", "n_rhp_zeros": "-",
               "rhp_zero_hz": "Hz"},
     "slip": {"max_real": "1/s", "min_damping": "-", "c_b": "N m s/rad", "mu": "-"},
-    "closed-loop": {"slip_error": "-", "peak_slip": "-", "ratio_error": "-",
+    "closed-loop": {"slip_error": "-", "peak_slip_error": "-", "peak_slip": "-",
+                    "slip_reserve": "-", "macro_slip": "-", "ratio_error": "-",
+                    "peak_T_mp": "N m", "peak_T_ms": "N m",
                     "mean_clamping_force": "N", "mean_slip_power": "W",
                     "mean_actuation_power": "W", "mean_losses": "W"},
 }

@@ -29,7 +29,7 @@ from ..variator.traction import traction_from_params
 from .model import EmpactModel
 
 __all__ = ["TrimError", "TrimResult", "TrimGrid", "trim", "trim_grid", "traction_peak",
-           "RESIDUAL_TOL"]
+           "slip_at_torque_ratio", "RESIDUAL_TOL"]
 
 RESIDUAL_TOL = 1e-8
 
@@ -219,6 +219,28 @@ def trim(model: EmpactModel, op: OperatingPoint | float, omega_p: float | None =
                       omega_s=y["omega_s"], T_b=y["T_b"], T_d=y["T_d_act"], T_l=y["T_l_act"],
                       T_mp=y["T_mp_act"], T_ms=y["T_ms_act"], mu=y["mu"],
                       residual=float(grid.residual[0]), tau=y["tau"], request=op)
+
+
+def slip_at_torque_ratio(model: EmpactModel, tau: ArrayLike,
+                         r_g: ArrayLike) -> NDArray[np.float64]:
+    """The slip on the rising branch of the kernel's traction curve where ``mu = tau mu_max``
+    (a set-point with the torque reserve ``1 - tau``), at ratio(s) `r_g` (broadcast; to
+    rounding).
+
+    Raises
+    ------
+    ParameterError
+        If a `tau` is not in [0, 1].
+    """
+    t, r = np.broadcast_arrays(np.asarray(tau, float), np.asarray(r_g, float))
+    if np.any(~((t >= 0) & (t <= 1))):
+        bad = t[~((t >= 0) & (t <= 1))].flat[0]
+        raise ParameterError(f"tau = {bad:g}: a torque ratio lies in [0, 1]")
+    shape = t.shape
+    t, r = t.ravel(), r.ravel()
+    nu_pk, mu_pk = traction_peak(model, r)
+    goal = np.minimum(t * model.mu_max(r), mu_pk)
+    return _bisect_rising(model, r, goal, np.atleast_1d(nu_pk)).reshape(shape)
 
 
 def _bisect_rising(model: EmpactModel, r: NDArray, target: NDArray, nu_pk: NDArray) -> NDArray:

@@ -9,6 +9,8 @@ and, optionally, a controller and its references::
     duration = 2.0            # [s]
     sample_rate = 1000.0      # output samples per second [Hz]
     load_step_time = 0.5      # optional, [s]: the closed-loop metrics' window starts 0.3 s later
+    load_step = 0.5           # optional: the load torque steps at load_step_time by this
+                              # fraction of the torque capacity at the initial point
     shift_window = [0.5, 2.0] # optional, [s]: the window of the shift metrics
 
     [model]                   # empact.nonlinear.model.ModelOptions
@@ -31,13 +33,36 @@ and, optionally, a controller and its references::
     [controller]              # optional: a sampled controller drives the servo torques
     file = "shipped:pi"       # a controller file (relative to this file) or a shipped one
     rate = 1000.0             # sample rate [Hz]; zero-order hold between samples
-    feedforward = true        # clamping feedforward of the measured driveshaft torque
+    feedforward = true        # clamping feedforward of a measured torque:
+    feedforward_signal = "T_ds"   # the driveshaft torque, or "T_l_act" (the load motor's)
+    feedforward_gain = 0.9    # the share of it clamped for
+    feedforward_filter_hz = 100.0 # its low-pass corner [Hz]
+    traction_error = 1.0      # factor on the feedforward's traction coefficient
     clamping = "feedback"     # or "safety-factor" (open-loop clamping, the slip loop off)
     safety_factor = 1.3
+    mu_design = "ratio-blind" # the safety-factor strategy's mu: or "ratio-aware"
+    decoupling = true         # the primary servo follows the feedforward's clamping
+    decoupling_filter_hz = 5.0    # its low-pass corner [Hz] (also the shift feedforward's)
+    shift_feedforward = false # coordinated shifting: feedforward of the ratio reference's rate
+    anti_windup = true
+    sensors = true            # false: ideal sensors (no delay, quantisation, noise)
+    limits = true             # false: no servo limits
+    seed = 0                  # of the sensor noise
+
+    [sensors]                 # optional: overrides of the parameter set's [sensors]
+    delay = 1
+
+    [limits]                  # optional: overrides of the parameter set's [servo]
+    T_ms_max = 15.0
 
     [references]              # [[t, value], ...]: set-points of the controller's signals
     r_g = [[0.0, 1.0]]
-    nu = [[0.0, 0.01]]
+    tau = [[0.0, 0.9]]        # or nu / nu_r: tau is the slip where mu = tau mu_max
+
+    [targets]                 # optional: what a closed-loop run must meet (metric names of
+    peak_slip_error_pp = 0.6  # empact.control.closed_loop.metrics): a number is an upper
+    ratio_rate = [1.0, inf]   # bound, [lo, hi] a band, a boolean the value
+    macro_slip = false
 
     [solver]                  # optional
     rtol = 1e-4
@@ -66,7 +91,7 @@ from __future__ import annotations
 
 import os
 import tomllib
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
@@ -76,6 +101,7 @@ from numpy.typing import NDArray
 
 from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
+from ..hardware import SensorParams, ServoLimits
 from ..params import OPERATING_VARIABLES, OperatingPoint, read_toml
 from .model import ModelOptions
 
@@ -86,6 +112,10 @@ __all__ = ["Scenario", "ControllerSpec", "load_scenario", "scenario_from_dict", 
 #: clamping strategies of a closed-loop scenario: the slip loop, or a production CVT's
 #: open-loop safety factor
 CLAMPING = ("feedback", "safety-factor")
+#: the safety-factor strategy's traction coefficient: one for all ratios, or per ratio
+MU_DESIGN = ("ratio-blind", "ratio-aware")
+#: what the clamping feedforward may use: the driveshaft torque, the load motor's torque
+FF_SIGNALS = ("T_ds", "T_l_act")
 
 #: integration methods (``[solver] method``, `empact.nonlinear.simulation.simulate`'s
 #: ``method``): the compiled order-2 Rosenbrock method (ode23s) and the stiffly accurate
@@ -97,15 +127,18 @@ METHODS = ("ros2", "rodas5p", "rodas4")
 #: method ("ros2", the default up to 0.1) everywhere at equal accuracy (``bench/RESULTS.md``)
 DEFAULT_METHOD = "rodas4"
 
-#: the signals a controller's references may name
-REFERENCES = ("r_g", "nu", "nu_r")
+#: the signals a controller's references may name (``tau``: the slip set-point given by its
+#: torque ratio mu / mu_max on the traction curve at the reference ratio)
+REFERENCES = ("r_g", "nu", "nu_r", "tau")
 
 _SCENARIO_KEYS = {"scenario": {"name", "description", "duration", "sample_rate",
-                               "load_step_time", "shift_window"},
+                               "load_step_time", "load_step", "shift_window"},
                   "model": None, "initial": set(OPERATING_VARIABLES),
                   "inputs": None, "offsets": None,
-                  "controller": {"file", "rate", "feedforward", "clamping", "safety_factor"},
-                  "references": set(REFERENCES),
+                  "controller": set(),  # ControllerSpec's fields (set below)
+                  "sensors": {f.name for f in fields(SensorParams)},
+                  "limits": {f.name for f in fields(ServoLimits)},
+                  "references": set(REFERENCES), "targets": None,
                   "solver": {"rtol", "max_step", "omega_min", "max_steps", "method"}}
 
 #: keys of the 0.1 closed-loop layout -> where they live now
@@ -121,7 +154,7 @@ _EXAMPLE_FOLDERS = ("scenarios", "control")
 @dataclass(frozen=True)
 class ControllerSpec:
     """The ``[controller]`` table of a scenario (data only: `empact.control.closed_loop`
-    loads the file and builds the loop).
+    loads the file and builds the loop law, `empact.control.law`).
 
     Attributes
     ----------
@@ -131,16 +164,83 @@ class ControllerSpec:
     rate : float
         Sample rate [Hz]; the commands are held between samples.
     feedforward : bool
-        Clamping feedforward of the measured driveshaft torque.
+        Clamping feedforward of a measured torque.
+    feedforward_gain : float
+        Share of the measured torque the feedforward clamps for (below 1 the belt keeps part
+        of its damping of the driveshaft mode, which a full feedforward cancels).
+    feedforward_signal : {"T_ds", "T_l_act"}
+        The driveshaft torque a bench measures, or the load motor's torque (a vehicle's
+        engine torque estimate plays its part at the input).
+    feedforward_filter_hz : float
+        Corner of the feedforward's first-order low-pass [Hz].
+    traction_error : float
+        Factor on the feedforward's traction coefficient (1.05: the estimate 5 % high).
     clamping : {"feedback", "safety-factor"}
     safety_factor : float
+    mu_design : {"ratio-blind", "ratio-aware"}
+        The safety-factor strategy's traction coefficient: the smallest peak over the ratio
+        range, or the peak at the measured ratio.
+    decoupling : bool
+        The primary servo torque follows the feedforward's clamping (the holding torques'
+        ratio at the reference ratio), so that a clamping change keeps the thrust ratio.
+    decoupling_filter_hz : float
+        Corner of the decoupler's first-order low-pass [Hz].
+    shift_feedforward : bool
+        Coordinated shifting: the primary servo torque of the reference's ratio rate and the
+        clamping of the secondary side's acceleration, fed forward.
+    anti_windup : bool
+    sensors, limits : bool
+        The parameter set's (and the scenario's) sensors and servo limits; False: ideal.
+    seed : int
+        Seed of the sensor noise.
     """
 
     file: str
     rate: float = 1000.0
     feedforward: bool = False
+    feedforward_gain: float = 0.9
+    feedforward_signal: str = "T_ds"
+    feedforward_filter_hz: float = 100.0
+    traction_error: float = 1.0
     clamping: str = "feedback"
     safety_factor: float = 1.3
+    mu_design: str = "ratio-blind"
+    decoupling: bool = False
+    decoupling_filter_hz: float = 5.0
+    shift_feedforward: bool = False
+    anti_windup: bool = True
+    sensors: bool = True
+    limits: bool = True
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        rate = check_number("controller.rate", self.rate, 1.0, 1e5, unit="Hz")
+        object.__setattr__(self, "rate", rate)
+        object.__setattr__(self, "feedforward_filter_hz", check_number(
+            "controller.feedforward_filter_hz", self.feedforward_filter_hz, 0.0, 0.5 * rate,
+            lo_open=True, unit="Hz", note="below the Nyquist frequency"))
+        object.__setattr__(self, "decoupling_filter_hz", check_number(
+            "controller.decoupling_filter_hz", self.decoupling_filter_hz, 0.0, 0.5 * rate,
+            lo_open=True, unit="Hz", note="below the Nyquist frequency"))
+        object.__setattr__(self, "traction_error", check_number(
+            "controller.traction_error", self.traction_error, 0.5, 2.0))
+        object.__setattr__(self, "feedforward_gain", check_number(
+            "controller.feedforward_gain", self.feedforward_gain, 0.0, 1.5, lo_open=False))
+        object.__setattr__(self, "safety_factor", check_number(
+            "controller.safety_factor", self.safety_factor, 1.0, 3.0))
+        check_choice("controller.clamping", self.clamping, CLAMPING)
+        check_choice("controller.mu_design", self.mu_design, MU_DESIGN)
+        check_choice("controller.feedforward_signal", self.feedforward_signal, FF_SIGNALS)
+        for name in ("feedforward", "decoupling", "shift_feedforward", "anti_windup",
+                     "sensors", "limits"):
+            check_bool(f"controller.{name}", getattr(self, name))
+        seed = check_number("controller.seed", self.seed, 0, 2**32 - 1, lo_open=False)
+        if seed != int(seed):
+            raise ParameterError(f"controller.seed = {self.seed!r}: must be a whole number")
+        object.__setattr__(self, "seed", int(seed))
+
+
+_SCENARIO_KEYS["controller"] = {f.name for f in fields(ControllerSpec)}
 
 
 @dataclass(frozen=True)
@@ -163,10 +263,17 @@ class Scenario:
         Piecewise-linear signals added to the input's trimmed value.
     controller : ControllerSpec or None
         The sampled controller of a closed-loop scenario.
+    sensors, limits : dict
+        Overrides of the parameter set's ``[sensors]`` and ``[servo]`` for the loop.
+    targets : dict name -> (lo, hi) or bool
+        What a closed-loop run must meet (`empact.control.closed_loop.check_targets`).
     references : dict name -> array, shape (k, 2)
         Set-points of the controller's signals (``r_g``, ``nu``, ``nu_r``).
     load_step_time : float or None
         [s]; the closed-loop metrics' window starts 0.3 s after it.
+    load_step : float or None
+        The load torque steps at `load_step_time` by this fraction of the torque capacity
+        ``2 mu_max F_s R_s / cos(beta)`` at the initial point.
     shift_window : (float, float) or None
         [s]; the window of the shift metrics.
     rtol : float
@@ -193,7 +300,11 @@ class Scenario:
     offsets: Mapping[str, NDArray[np.float64]] = field(default_factory=dict)
     controller: ControllerSpec | None = None
     references: Mapping[str, NDArray[np.float64]] = field(default_factory=dict)
+    sensors: Mapping[str, float] = field(default_factory=dict)
+    limits: Mapping[str, float] = field(default_factory=dict)
+    targets: Mapping[str, Any] = field(default_factory=dict)
     load_step_time: float | None = None
+    load_step: float | None = None
     shift_window: tuple[float, float] | None = None
     rtol: float = 1e-4
     max_step: float = 0.01
@@ -286,16 +397,43 @@ def _controller(table: Mapping[str, Any], src: str) -> ControllerSpec:
                              "'shipped:NAME'")
     if not file.startswith("shipped:") and not Path(file).is_absolute() and Path(src).is_file():
         file = str(Path(src).parent / file)
-    return ControllerSpec(
-        file=file,
-        rate=check_number("controller.rate", table.get("rate", 1000.0), 1.0, 1e5, unit="Hz",
-                          where=src),
-        feedforward=check_bool("controller.feedforward",
-                               table.get("feedforward", False), where=src),
-        clamping=check_choice("controller.clamping", table.get("clamping", "feedback"),
-                              CLAMPING, where=src),
-        safety_factor=check_number("controller.safety_factor",
-                                   table.get("safety_factor", 1.3), 1.0, 3.0, where=src))
+    try:
+        return ControllerSpec(**{**table, "file": file})
+    except ParameterError as exc:
+        raise ParameterError(f"{src}: {exc}") from None
+
+
+def _targets(table: Mapping[str, Any], src: str) -> dict[str, Any]:
+    """A scenario's ``[targets]``: name -> upper bound (number), band ``[lo, hi]`` or a
+    boolean; the names are checked against the metrics when the run is judged."""
+    out: dict[str, Any] = {}
+    for name, value in table.items():
+        where = f"{src}: targets.{name}"
+        if isinstance(value, bool):
+            out[name] = value
+        elif isinstance(value, (int, float)):
+            out[name] = (-np.inf, check_number(f"targets.{name}", value, where=src,
+                                               lo=-np.inf, lo_open=True))
+        elif isinstance(value, list) and len(value) == 2 and all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+            lo, hi = float(value[0]), float(value[1])
+            if np.isnan(lo) or np.isnan(hi) or not lo <= hi:
+                raise ParameterError(f"{where} = {value!r}: a band [lo, hi] with lo <= hi")
+            out[name] = (lo, hi)
+        else:
+            raise ParameterError(f"{where} = {value!r}: give an upper bound (a number), a "
+                                 "band [lo, hi] or true/false")
+    return out
+
+
+def _overrides(table: Mapping[str, Any], kind: type, name: str, src: str) -> dict[str, float]:
+    """A scenario's ``[sensors]`` / ``[limits]`` table, checked against the section it
+    overrides (its defaults stand in for the parameter set's values)."""
+    try:
+        kind(**table)
+    except ParameterError as exc:
+        raise ParameterError(f"{src}: [{name}] {exc}") from None
+    return {k: float(v) for k, v in table.items()}
 
 
 def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenario:
@@ -338,11 +476,34 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
         offsets[name] = signal(f"{src}: offsets.{name}", pts)
     references = {k: signal(f"{src}: references.{k}", v)
                   for k, v in data.get("references", {}).items()}
-    if references and controller is None:
-        raise ParameterError(f"{src}: [references] needs a [controller] table")
-    if "nu" in references and "nu_r" in references:
-        raise ParameterError(f"{src}: give references.nu or references.nu_r, not both")
+    for table in ("references", "sensors", "limits"):
+        if table in data and controller is None:
+            raise ParameterError(f"{src}: [{table}] needs a [controller] table")
+    slips = [k for k in ("nu", "nu_r", "tau") if k in references]
+    if len(slips) > 1:
+        raise ParameterError(f"{src}: give one slip set-point (references.nu, nu_r or tau), "
+                             f"not {' and '.join(slips)}")
+    if "tau" in references:
+        tau = references["tau"][:, 1]
+        if np.any(~((tau > 0) & (tau < 1))):
+            raise ParameterError(f"{src}: references.tau = {tau.tolist()}: a torque ratio "
+                                 "mu / mu_max lies in (0, 1)")
+    sensors = _overrides(data.get("sensors", {}), SensorParams, "sensors", src)
+    targets = _targets(data.get("targets", {}), src)
+    if targets and controller is None:
+        raise ParameterError(f"{src}: [targets] needs a [controller] table")
+    limits = _overrides(data.get("limits", {}), ServoLimits, "limits", src)
     t_step = head.get("load_step_time")
+    load_step = head.get("load_step")
+    if load_step is not None:
+        if t_step is None:
+            raise ParameterError(f"{src}: scenario.load_step needs scenario.load_step_time")
+        load_step = check_number("scenario.load_step", load_step, -1.0, 2.0, where=src,
+                                 note="a fraction of the torque capacity")
+        if "T_l" in inputs or "T_l" in offsets or options.load != "torque":
+            raise ParameterError(f"{src}: scenario.load_step steps the load torque T_l: it "
+                                 "needs a torque-controlled load ([model] load = \"torque\") "
+                                 "and no T_l signal")
     window = head.get("shift_window")
     if window is not None:
         if not (isinstance(window, list) and len(window) == 2):
@@ -368,8 +529,10 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
                     description=str(head.get("description", "")), duration=duration,
                     sample_rate=rate, options=options, initial=initial, inputs=inputs,
                     offsets=offsets, controller=controller, references=references,
+                    sensors=sensors, limits=limits, targets=targets,
                     load_step_time=None if t_step is None else check_number(
                         "scenario.load_step_time", t_step, 0.0, duration, unit="s", where=src),
+                    load_step=load_step,
                     shift_window=window, rtol=rtol, max_step=max_step, omega_min=omega_min,
                     max_steps=max_steps, method=method, source=src)
 

@@ -381,8 +381,16 @@ def scenario_signals(scenario: Scenario, model: EmpactModel,
                      op: TrimResult) -> dict[str, NDArray[np.float64]]:
     """The scenario's input signals for `simulate`: ``F_s_ref`` mapped to the static servo
     torque ``T_ms = i_e s F_s_ref / i_c`` (with the sense of q6), offsets added to the
-    trimmed inputs."""
+    trimmed inputs, and a ``load_step`` (a fraction of the torque capacity ``T_l / tau`` at
+    the trimmed start) as a step of ``T_l`` at ``load_step_time``."""
     signals = dict(scenario.inputs)
+    if scenario.load_step is not None:
+        T_l0, t0 = op.T_l, scenario.load_step_time
+        capacity = T_l0 / op.tau if op.tau else 0.0
+        if not capacity:
+            raise ParameterError(f"scenario {scenario.name!r}: load_step needs a loaded start "
+                                 f"(T_l = {T_l0:g} N m: no torque capacity in use)")
+        signals["T_l"] = np.array([[t0, T_l0], [t0, T_l0 + scenario.load_step * capacity]])
     if "F_s_ref" in signals:
         a = model.params.actuation
         arr = np.array(signals.pop("F_s_ref"), float)

@@ -23,7 +23,7 @@ variator
 """
 from ._common import FORMATS, STYLE, Plot, save_figure, save_plot, symbol
 from .control import (plot_closed_loop, plot_family_poles, plot_loop_shapes,
-                      plot_robustness_maps)
+                      plot_robustness_maps, plot_shift_envelope)
 from .identification import plot_frf_estimate, plot_identified_plant
 from .linear import plot_bode, plot_modal_energy, plot_mode_shapes
 from .nonlinear import plot_nmp, plot_plant_magnitude, plot_simulation
@@ -36,5 +36,5 @@ __all__ = ["Plot", "STYLE", "FORMATS", "save_figure", "save_plot", "symbol", "pl
            "plot_pole_sweep", "plot_slip_bode", "plot_zero_locus", "plot_stability_map",
            "plot_nmp", "plot_simulation", "plot_plant_magnitude", "plot_frf_estimate",
            "plot_identified_plant", "plot_family_poles", "plot_loop_shapes",
-           "plot_robustness_maps", "plot_closed_loop", "plot_traction_reserve",
+           "plot_robustness_maps", "plot_closed_loop", "plot_shift_envelope", "plot_traction_reserve",
            "plot_ratio_stability"]

@@ -8,14 +8,14 @@ import matplotlib
 import numpy as np
 
 from ..control.closed_loop import ClosedLoopResult
-from ..control.controller import Controller
 from ..control.family import PlantFamily
-from ..control.robustness import RobustnessMap, frequency_responses, plant_responses
+from ..control.loop import LoopModel, LoopPrediction
+from ..control.shifting import ShiftEnvelope
 from ..lti import channel_zeros
 from ._common import STYLES, Plot, new_axes, styled, symbol
 
 __all__ = ["plot_family_poles", "plot_loop_shapes", "plot_robustness_maps",
-           "plot_closed_loop"]
+           "plot_closed_loop", "plot_shift_envelope"]
 
 
 @styled
@@ -54,19 +54,20 @@ def plot_family_poles(family: PlantFamily, f_max_hz: float = 60.0, title: str = 
 
 
 @styled
-def plot_loop_shapes(family: PlantFamily, controllers: Mapping[str, Controller],
-                     f_hz: np.ndarray | None = None, title: str = "",
-                     ax: Any = None) -> Plot:
-    """Diagonal loop gains |L_ii| = |(K G)_ii| over the family (thin lines, one per plant)
-    for each controller (one column per loop, one colour per controller)."""
-    f = np.logspace(-2, 2, 150) if f_hz is None else np.asarray(f_hz)
+def plot_loop_shapes(loops: Mapping[str, LoopModel], f_hz: np.ndarray | None = None,
+                     title: str = "", ax: Any = None) -> Plot:
+    """Diagonal loop gains ``|L_ii| = |(K G)_ii|`` of the sampled loops at the servo torques
+    (`empact.control.loop.LoopModel`, one thin line per plant of the family) for each
+    controller (one column per loop, one colour per controller)."""
+    first = next(iter(loops.values()))
+    nyq = 0.49 / first.dt
+    f = np.logspace(-2, np.log10(min(100.0, nyq)), 150) if f_hz is None else np.asarray(f_hz)
     w = 2 * np.pi * f
     fig, axs = new_axes(ax, 1, 2, size=(11, 4.0), sharex=True)
     artists = []
-    for c, (name, ctrl) in enumerate(controllers.items()):
-        G = plant_responses(family, ctrl.outputs, ctrl.measured, w).reshape(
-            (-1, len(w), 2, 2))
-        K = frequency_responses(ctrl.A, ctrl.B, ctrl.C, ctrl.D, w)
+    for c, (name, lm) in enumerate(loops.items()):
+        G = lm.plant_response(w).reshape((-1, len(w), 2, 2))
+        K = lm.controller_response(w) * lm.mask[None, :, None]
         L = K @ G
         for j in range(2):
             for k in range(L.shape[0]):
@@ -75,7 +76,7 @@ def plot_loop_shapes(family: PlantFamily, controllers: Mapping[str, Controller],
     for j, loop in enumerate(("ratio loop (T_mp)", "slip loop (T_ms)")):
         ax = axs[0, j]
         ax.axhline(1, color="k", lw=0.6)
-        ax.set_title(f"|L| of the {loop} at the plant input, every plant", fontsize=8)
+        ax.set_title(f"|L| of the {loop} at the servo torques, every plant", fontsize=8)
         ax.set_xlabel("frequency [Hz]")
         ax.grid(True, which="both")
         ax.legend(loc="best")
@@ -86,29 +87,42 @@ def plot_loop_shapes(family: PlantFamily, controllers: Mapping[str, Controller],
 
 
 @styled
-def plot_robustness_maps(family: PlantFamily, maps: Mapping[str, RobustnessMap],
+def plot_robustness_maps(family: PlantFamily, loops: Mapping[str, LoopModel],
                          title: str = "", ax: Any = None) -> Plot:
-    """Multiloop disk margin over the family's two axes, one panel per controller."""
+    """Multiloop disk margin of each loop model over the family: one row per controller,
+    one panel per value of a third axis (the clamping force), ratio x torque ratio in each
+    (0: unstable)."""
     names = list(family.axes)
-    if len(names) != 2:
-        raise ValueError("robustness maps need a family with two axes")
-    fig, axs = new_axes(ax, 1, len(maps), size=(5.5 * len(maps), 4.0))
+    if len(names) not in (2, 3):
+        raise ValueError("robustness maps need a family with two or three axes")
+    n3 = len(family.axes[names[2]]) if len(names) == 3 else 1
+    fig, axs = new_axes(ax, len(loops), n3, size=(4.2 * n3, 3.6 * len(loops)))
     artists = []
     x, y = family.axes[names[0]], family.axes[names[1]]
-    for ax, (name, m) in zip(axs[0], maps.items()):
-        im = ax.pcolormesh(np.arange(len(y) + 1), np.arange(len(x) + 1), m.disk_margin,
-                           vmin=0, vmax=max(1.0, float(m.disk_margin.max())), cmap="viridis")
-        artists.append(im)
-        for i in range(len(x)):
-            for j in range(len(y)):
-                ax.text(j + 0.5, i + 0.5, f"{m.disk_margin[i, j]:.2f}", ha="center",
-                        va="center", fontsize=6, color="w")
-        ax.set_xticks(np.arange(len(y)) + 0.5, [f"{v:.3g}" for v in y])
-        ax.set_yticks(np.arange(len(x)) + 0.5, [f"{v:.3g}" for v in x])
-        ax.set_xlabel(symbol(names[1]))
-        ax.set_ylabel(symbol(names[0]))
-        ax.set_title(f"{name}: disk margin (unstable: 0)", fontsize=9)
-        fig.colorbar(im, ax=ax)
+    for row, (name, lm) in enumerate(loops.items()):
+        dm = lm.disk_margins()["alpha"]
+        dm = dm[..., None] if dm.ndim == 2 else dm
+        for k in range(n3):
+            ax = axs[row, k]
+            m = dm[..., k]
+            im = ax.pcolormesh(np.arange(len(y) + 1), np.arange(len(x) + 1), m, vmin=0,
+                               vmax=max(1.0, float(dm.max())), cmap="viridis")
+            artists.append(im)
+            for i in range(len(x)):
+                for j in range(len(y)):
+                    ax.text(j + 0.5, i + 0.5, f"{m[i, j]:.2f}", ha="center", va="center",
+                            fontsize=6, color="w")
+            ax.set_xticks(np.arange(len(y)) + 0.5, [f"{v:.3g}" for v in y])
+            ax.set_yticks(np.arange(len(x)) + 0.5, [f"{v:.3g}" for v in x])
+            ax.set_xlabel(symbol(names[1]))
+            ax.set_ylabel(symbol(names[0]))
+            third = ""
+            if len(names) == 3:
+                v3 = family.axes[names[2]][k]
+                shown = f"{v3 / 1e3:.3g} kN" if names[2] == "F_s" else f"{v3:.3g}"
+                third = f", {symbol(names[2])} = {shown}"
+            ax.set_title(f"{name}: disk margin{third}", fontsize=8)
+        fig.colorbar(im, ax=list(axs[row]))
     if title:
         fig.suptitle(title)
     return Plot(fig, axs, artists)
@@ -116,11 +130,14 @@ def plot_robustness_maps(family: PlantFamily, maps: Mapping[str, RobustnessMap],
 
 @styled
 def plot_closed_loop(runs: Sequence[ClosedLoopResult], title: str = "",
+                     predictions: Mapping[str, LoopPrediction] | None = None,
                      ax: Any = None) -> Plot:
-    """Slip, ratio and clamping force over time for closed-loop runs (one colour per run,
-    references dashed)."""
-    fig, axs = new_axes(ax, 3, 1, size=(11, 7.5), sharex=True)
+    """Slip, ratio, clamping force and servo torques over time for closed-loop runs (one
+    colour per run, references dash-dot, the linear loop model's prediction dotted where
+    given, by scenario name; the secondary servo's torque limit as thin grey lines)."""
+    fig, axs = new_axes(ax, 4, 1, size=(11, 9.5), sharex=True)
     artists = []
+    predictions = predictions or {}
     for c, run in enumerate(runs):
         res = run.result
         lbl = run.scenario.name + ("" if res.complete else " [stopped]")
@@ -131,12 +148,57 @@ def plot_closed_loop(runs: Sequence[ClosedLoopResult], title: str = "",
         if "r_g" in run.references:
             axs[1, 0].plot(res.t, run.references["r_g"], color=f"C{c}", ls=STYLES[1])
         artists += axs[2, 0].plot(res.t, res.output("F_s") / 1e3, color=f"C{c}")
+        artists += axs[3, 0].plot(res.t, res.output("T_ms_act"), color=f"C{c}")
+        artists += axs[3, 0].plot(res.t, res.output("T_mp_act"), color=f"C{c}", lw=0.8,
+                                  ls=STYLES[2])
+        pred = predictions.get(run.scenario.name)
+        if pred is not None:
+            axs[0, 0].plot(pred.t, 100 * pred.output("nu"), color=f"C{c}", ls=":", lw=1.2)
+            axs[1, 0].plot(pred.t, pred.output("r_g"), color=f"C{c}", ls=":", lw=1.2)
+            axs[2, 0].plot(pred.t, pred.output("F_s") / 1e3, color=f"C{c}", ls=":", lw=1.2)
+        lim = run.law.config.limits if run.law is not None else None
+        if lim is not None and c == 0:
+            for v in (lim.T_ms_max, -lim.T_ms_max):
+                axs[3, 0].axhline(v, color="0.6", lw=0.6)
     axs[0, 0].set_ylabel("slip ν [%]")
-    axs[0, 0].set_yscale("symlog", linthresh=1.0)
     axs[1, 0].set_ylabel("ratio $r_g$ [-]")
     axs[2, 0].set_ylabel("$F_s$ [kN]")
-    axs[2, 0].set_xlabel("time [s]")
-    axs[0, 0].legend(fontsize=7, loc="best")
+    axs[3, 0].set_ylabel("servo torque [N m]\n(T_ms solid, T_mp dash-dot)")
+    axs[3, 0].set_xlabel("time [s]")
+    axs[0, 0].legend(fontsize=7, loc="best",
+                     title="dash-dot: reference; dotted: linear prediction" if predictions
+                     else None, title_fontsize=7)
+    if title:
+        fig.suptitle(title)
+    return Plot(fig, axs, artists)
+
+
+@styled
+def plot_shift_envelope(envelope: ShiftEnvelope, runs: Sequence[ClosedLoopResult] = (),
+                        title: str = "", ax: Any = None) -> Plot:
+    """The shift-rate envelope over the ratio (`empact.control.shifting`), coloured by the
+    limit that binds, with the ratio rate the runs reached (|dr_g/dt| against r_g)."""
+    fig, axs = new_axes(ax, 1, 1, size=(8, 4.2))
+    a = axs[0, 0]
+    artists = []
+    for c, kind in enumerate(sorted(set(envelope.binding))):
+        sel = envelope.binding == kind
+        artists += a.plot(envelope.r_g[sel], envelope.rate[sel], "o", color=f"C{c + 3}",
+                          label=f"envelope: {kind} limit binds")
+    artists += a.plot(envelope.r_g, envelope.rate, color="0.4", lw=0.8)
+    for c, run in enumerate(runs):
+        res = run.result
+        r, t = res.output("r_g"), res.t
+        rate = np.gradient(r, t)
+        artists += a.plot(r, rate, color=f"C{c}", lw=1.0, label=f"{run.scenario.name}: reached")
+    a.axhline(1.0, color="k", lw=0.6, ls=STYLES[1], label="goal 1 /s")
+    a.set_xscale("log")
+    a.set_xlabel("ratio $r_g$ [-]")
+    a.set_ylabel("ratio rate [1/s]")
+    a.set_title(f"upshift rate the servo limits allow at {envelope.omega_p:g} rad/s, "
+                f"{envelope.T_l:g} N m, tau = {envelope.tau:g}", fontsize=8)
+    a.grid(True, which="both")
+    a.legend(fontsize=7, loc="best")
     if title:
         fig.suptitle(title)
     return Plot(fig, axs, artists)

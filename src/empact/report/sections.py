@@ -47,6 +47,9 @@ SECTIONS: tuple[Section, ...] = (
             identification.fig14, cost=2.7),
     Section("Beyond the paper: the machine sheet (traction, creep, thrust ratio, torque "
             "reserve)", "machine", rmach.machine, machine.machine, cost=1.5),
-    Section("Beyond the paper: plant family, robust slip and ratio control, closed loop on "
-            "the machine", "control", rctl.control, control.control, cost=6.3),
+    Section("Beyond the paper: slip and ratio control on the machine (family, loop, closed "
+            "loop)", "control", rctl.control, control.control, cost=15.0),
+    Section("Beyond the paper: control studies (traction estimate, Monte Carlo, the "
+            "clamping saving)", "control-studies", rctl.control_studies, control.studies,
+            cost=45.0),
 )

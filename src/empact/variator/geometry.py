@@ -115,6 +115,24 @@ def radii(r_g: ArrayLike, L_belt: float, a: float, *, tol: float = 1e-13,
     return r * R_s, R_s
 
 
+def secondary_radius(r_g: float, L_belt: float, a: float, guess: float | None = None,
+                     tol: float = 1e-13) -> float:
+    """`radii`'s ``R_s`` [m] for one ratio in plain floats (a sampled controller calls it at
+    every sample): the same Newton iteration, started at `guess` (the last sample's radius)
+    or at the exact solution for ``phi = 0``."""
+    R_s = (L_belt - 2 * a) / (math.pi * (1 + r_g)) if guess is None else guess
+    for _ in range(50):
+        R_p = r_g * R_s
+        phi = math.asin((R_p - R_s) / a)
+        f = 2 * a * math.cos(phi) + (math.pi + 2 * phi) * R_p + (math.pi - 2 * phi) * R_s \
+            - L_belt
+        step = f / (r_g * (math.pi + 2 * phi) + (math.pi - 2 * phi))
+        R_s -= step
+        if abs(step) <= tol * L_belt:
+            return R_s
+    raise ParameterError(f"r_g = {r_g:g}: no belt geometry at this ratio")
+
+
 def stretched_radii(r_g: ArrayLike, F: ArrayLike, L_belt: float, a: float, beta: float,
                     k_belt: float, *, tol: float = 1e-15, max_iter: int = 30
                     ) -> tuple[NDArray[np.float64], ...]:

@@ -1,0 +1,422 @@
+"""The linear model of the loop that runs: the machine linearised at an operating point,
+held and sampled at the loop's rate, with the loop law's sensors, feedforwards and
+controller (`empact.control.law`), limits inactive.
+
+The law is split where the controller sits.  Its pre-processing (sensor delay and counting
+window, slip from the speeds, errors, clamping and shift feedforwards, holding torques) is
+linearised by central differences of `LoopLaw.preprocess` itself, the function every sample
+of a run calls; the controller enters with its own discrete matrices.  With the machine
+discretised exactly under the zero-order hold (``Phi = e^(A dt)``, ``Gamma = int e^(A s) ds
+B``) the pre-processing and the machine form the *augmented plant* from the controller's
+output ``du`` to its input ``e`` (the feedforward loops closed inside it), and the loop is
+``du = K(z) e``.  Disk margins are taken at both places the controller meets the plant
+(``L = K G`` at the servo torques, ``L = G K`` at the errors; `empact.control.robustness`),
+closed-loop stability from the eigenvalues of the closed loop's state matrix (``|z| < 1``).
+
+`loop_model` builds it for one closed-loop scenario (its trimmed start, model options, law)
+and `LoopModel.predict` gives the linear prediction of the scenario's run; `family_loops`
+builds it at every point of a plant family for a controller and a loop configuration.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any, Mapping
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._lazy import lazy_module
+from ..errors import ParameterError
+from ..nonlinear.linearization import linearize
+from ..nonlinear.model import EmpactModel, nonlinear_model
+from ..nonlinear.scenario import Scenario
+from ..nonlinear.simulation import scenario_model, scenario_signals
+from ..params import Params
+from .closed_loop import build_law
+from .controller import Controller
+from .family import LOOP_FAMILY_OUTPUTS, PlantFamily
+from .law import RAW_SIGNALS, LoopConfig, LoopLaw, reference_table
+from .robustness import disk_margin
+
+linalg = lazy_module("scipy.linalg")
+
+__all__ = ["LoopModel", "loop_model", "predict_scenario", "family_loops", "LoopPrediction",
+           "PERFORMANCE", "LOOP_FAMILY_OUTPUTS", "linear_preprocess", "zoh", "default_omega"]
+
+#: the machine's signals a loop model predicts (with the servo torques ``T_mp``, ``T_ms``)
+PERFORMANCE = ("r_g", "nu", "nu_r", "F_s", "T_ds", "tau")
+
+
+#: central-difference steps of the pre-processing's linearisation, per raw signal (SI)
+_H_RAW = np.array([1e-6, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4])
+_H_REF = np.array([1e-6, 1e-8, 1e-7, 1e-6])
+
+
+def zoh(A: NDArray, B: NDArray, dt: float) -> tuple[NDArray, NDArray]:
+    """Exact zero-order-hold discretisation of stacked systems ``(..., n, n)``,
+    ``(..., n, m)``: ``Phi = e^(A dt)``, ``Gamma = int_0^dt e^(A s) ds B`` (one matrix
+    exponential of the block ``[[A, B], [0, 0]] dt``, `scipy.linalg.expm`)."""
+    A, B = np.asarray(A, float), np.asarray(B, float)
+    n, m = A.shape[-1], B.shape[-1]
+    M = np.zeros(A.shape[:-2] + (n + m, n + m))
+    M[..., :n, :n] = A * dt
+    M[..., :n, n:] = B * dt
+    E = linalg.expm(M)
+    return E[..., :n, :n], E[..., :n, n:]
+
+
+def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
+    """The law's pre-processing (`LoopLaw.preprocess`, ideal sensors) linearised at its
+    starting point by central differences: ``s' = Sz s + Sy y + Sr r``, ``e = Ez s + Ey y +
+    Er r``, ``u_ff = Fz s + Fy y + Fr r`` in deviations of the state ``s``, the raw
+    measurements ``y`` (`RAW_SIGNALS`) and the references ``r`` (``r_g, slip, mu,
+    dr_g/dt``)."""
+    s0 = law.z0[:law.n_pre]
+    y0 = law.raw0
+    r0 = np.array([law.refs.r_g[0], law.refs.slip[0], law.refs.mu[0], 0.0])
+    n_buf = (law.n_pre - 2) // len(RAW_SIGNALS)
+    h_s = np.concatenate([np.repeat(_H_RAW, n_buf), [1e-3, 1e-6]])
+
+    def f(s, y, r):
+        s1, e, u, _ = law.preprocess(s, y, 0, r, ideal=True)
+        return s1, e, u
+
+    out: dict[str, list] = {k: [] for k in ("Sz", "Ez", "Fz", "Sy", "Ey", "Fy", "Sr", "Er",
+                                            "Fr")}
+    for which, x0, h in (("z", s0, h_s), ("y", y0, _H_RAW), ("r", r0, _H_REF)):
+        for i in range(len(x0)):
+            xp, xm = x0.copy(), x0.copy()
+            xp[i] += h[i]
+            xm[i] -= h[i]
+            args_p = [s0, y0, r0]
+            args_m = [s0, y0, r0]
+            k = {"z": 0, "y": 1, "r": 2}[which]
+            args_p[k], args_m[k] = xp, xm
+            fp, fm = f(*args_p), f(*args_m)
+            for name, a, b in zip(("S", "E", "F"), fp, fm):
+                d = (a - b) / (2 * h[i])
+                # differences at the rounding level of the values are no derivative
+                floor = 64 * np.finfo(float).eps * np.maximum(np.abs(a), np.abs(b)) / (2 * h[i])
+                out[name + which].append(np.where(np.abs(d) > floor, d, 0.0))
+    return {k: np.array(v).T for k, v in out.items()}
+
+
+@dataclass(frozen=True, eq=False)
+class LoopPrediction:
+    """A linear prediction of a closed-loop run: the signals at the loop's samples.
+
+    Attributes
+    ----------
+    t : array (n,)
+        Sample times [s].
+    signals : dict name -> array (n,)
+        `PERFORMANCE` and ``T_mp``, ``T_ms`` (absolute: trim plus deviation).
+    """
+
+    t: NDArray[np.float64]
+    signals: dict[str, NDArray[np.float64]]
+
+    def output(self, name: str) -> NDArray[np.float64]:
+        """One predicted signal by name."""
+        if name not in self.signals:
+            raise ParameterError(f"no predicted signal {name!r} (choose from "
+                                 f"{', '.join(self.signals)})")
+        return self.signals[name]
+
+
+@dataclass(frozen=True, eq=False)
+class LoopModel:
+    """The linear closed loop of a law around the machine (one point, or stacked over a
+    family's grid: leading dimensions ``shape``), discrete at the law's sample time.
+
+    Augmented plant (state ``xi = [x; s]``: the machine's, the pre-processing's)::
+
+        xi' = Aa xi + Bu du + Bw w + Br r
+        e   = Ce xi + Dew w + Der r           (the controller's input)
+        y   = Cy xi + Dyu du + Dyw w + Dyr r  (`PERFORMANCE`, T_mp, T_ms)
+
+    with ``du = mask * K(z) e`` (`controller`, discrete).  ``w`` are the machine's other
+    inputs (`disturbances`), held over each sample, and ``r`` the references (``r_g``,
+    slip, mu, dr_g/dt).
+    """
+
+    Aa: NDArray[np.float64]
+    Bu: NDArray[np.float64]
+    Bw: NDArray[np.float64]
+    Br: NDArray[np.float64]
+    Ce: NDArray[np.float64]
+    Dew: NDArray[np.float64]
+    Der: NDArray[np.float64]
+    Cy: NDArray[np.float64]
+    Dyu: NDArray[np.float64]
+    Dyw: NDArray[np.float64]
+    Dyr: NDArray[np.float64]
+    controller: Controller
+    mask: NDArray[np.float64]
+    dt: float
+    disturbances: tuple[str, ...]
+    outputs: tuple[str, ...]
+    y0: NDArray[np.float64]
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def with_controller(self, controller: Controller) -> "LoopModel":
+        """The same loop with another controller (continuous: discretised by Tustin at the
+        loop's rate); the augmented plant and its cached responses are shared.  Its
+        schedule, if any, must be the one the model was built with (the schedule acts in
+        the pre-processing)."""
+        c = controller.discretize(self.dt) if not controller.dt else controller
+        return LoopModel(**{f: getattr(self, f) for f in (
+            "Aa", "Bu", "Bw", "Br", "Ce", "Dew", "Der", "Cy", "Dyu", "Dyw", "Dyr")},
+            controller=c, mask=self.mask, dt=self.dt, disturbances=self.disturbances,
+            outputs=self.outputs, y0=self.y0, _cache=self._cache)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Grid shape (``()`` for one point)."""
+        return self.Aa.shape[:-2]
+
+    def closed_loop(self) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """``(A, B, C, D)`` of the closed loop, state ``[xi; x_c]``, inputs ``[w; r]``,
+        outputs `outputs`."""
+        c = self.controller
+        Bu = self.Bu * self.mask
+        Dyu = self.Dyu * self.mask
+        n, nc = self.Aa.shape[-1], c.n
+        lead = self.shape
+        A = np.zeros(lead + (n + nc, n + nc))
+        A[..., :n, :n] = self.Aa + Bu @ c.D @ self.Ce
+        A[..., :n, n:] = Bu @ c.C
+        A[..., n:, :n] = c.B @ self.Ce
+        A[..., n:, n:] = c.A
+        Bwr = np.concatenate([self.Bw, self.Br], -1)
+        Dewr = np.concatenate([self.Dew, self.Der], -1)
+        B = np.concatenate([Bwr + Bu @ c.D @ Dewr,
+                            np.broadcast_to(c.B @ Dewr, lead + (nc, Bwr.shape[-1]))], -2)
+        C = np.concatenate([self.Cy + Dyu @ c.D @ self.Ce, Dyu @ c.C], -1)
+        D = np.concatenate([self.Dyw, self.Dyr], -1) + Dyu @ c.D @ Dewr
+        return A, B, C, D
+
+    def poles(self) -> NDArray[np.complex128]:
+        """Closed-loop eigenvalues (``z``-plane), shape ``shape + (n,)``."""
+        return np.linalg.eigvals(self.closed_loop()[0])
+
+    def spectral_radius(self) -> NDArray[np.float64]:
+        """Largest ``|z|`` of the closed loop (< 1: stable), shape `shape`."""
+        return np.abs(self.poles()).max(axis=-1)
+
+    def plant_response(self, omega: NDArray) -> NDArray[np.complex128]:
+        """The augmented plant ``G = -(e / du)`` at ``z = e^(j w dt)``: shape ``shape +
+        (n_w, 2, 2)`` (the sign makes ``L = K G`` the loop gain of negative feedback)."""
+        key = ("G", np.asarray(omega, float).tobytes())
+        if key in self._cache:
+            return self._cache[key]
+        z = np.exp(1j * np.asarray(omega, float) * self.dt)
+        n = self.Aa.shape[-1]
+        M = z[:, None, None] * np.eye(n) - self.Aa[..., None, :, :]
+        Bu = np.broadcast_to((self.Bu * self.mask)[..., None, :, :], M.shape[:-1] + (2,))
+        X = np.linalg.solve(M, Bu)
+        G = -(self.Ce[..., None, :, :] @ X)
+        self._cache[key] = G
+        return G
+
+    def controller_response(self, omega: NDArray) -> NDArray[np.complex128]:
+        """``K(e^(j w dt))``, shape ``(n_w, 2, 2)``."""
+        c = self.controller
+        z = np.exp(1j * np.asarray(omega, float) * self.dt)
+        if c.n == 0:
+            return np.broadcast_to(c.D, z.shape + c.D.shape).astype(complex)
+        M = z[:, None, None] * np.eye(c.n) - c.A
+        return c.C @ np.linalg.solve(M, np.broadcast_to(c.B, z.shape + c.B.shape)) + c.D
+
+    def disk_margins(self, omega: NDArray | None = None) -> dict[str, NDArray[np.float64]]:
+        """Multiloop balanced disk margins at the servo torques (``input``: ``L = K G``) and
+        at the errors (``output``: ``L = G K``), and their minimum (``alpha``, 0 where the
+        loop is unstable), each of shape `shape`; over `omega` [rad/s] up to the Nyquist
+        frequency (default 300 points from 0.01 Hz)."""
+        w = default_omega(self.dt) if omega is None else np.asarray(omega, float)
+        G = self.plant_response(w)
+        K = self.controller_response(w) * self.mask[None, :, None]
+        a_in = disk_margin(K @ G)
+        a_out = disk_margin(G @ K)
+        stable = self.spectral_radius() < 1
+        return {"input": a_in, "output": a_out,
+                "alpha": np.where(stable, np.minimum(a_in, a_out), 0.0)}
+
+    def predict(self, w: NDArray, r: NDArray) -> NDArray[np.float64]:
+        """Outputs (deviations, ``(n_k, n_y)``) for input deviations ``w`` ``(n_k, n_w)``
+        and ``r`` ``(n_k, 4)`` at the samples (one point only)."""
+        if self.shape:
+            raise ParameterError("predict: one operating point, not a grid")
+        A, B, C, D = self.closed_loop()
+        v = np.concatenate([w, r], axis=1)
+        x = np.zeros(A.shape[0])
+        y = np.empty((len(v), C.shape[0]))
+        for k in range(len(v)):
+            y[k] = C @ x + D @ v[k]
+            x = A @ x + B @ v[k]
+        return y
+
+
+def default_omega(dt: float) -> NDArray[np.float64]:
+    """300 frequencies [rad/s], log-spaced from 0.01 Hz to just below the Nyquist
+    frequency."""
+    return 2 * np.pi * np.logspace(-2, np.log10(0.49 / dt), 300)
+
+
+def _assemble(Phi, Gam_u, Gam_w, C_raw, D_raw_w, C_perf, D_perf_u, D_perf_w, pre):
+    """The augmented plant's matrices from the discretised machine and the linearised
+    pre-processing (see `LoopModel`): the servo torques are ``u_ff + du``."""
+    Sz, Sy, Sr = pre["Sz"], pre["Sy"], pre["Sr"]
+    Ez, Ey, Er = pre["Ez"], pre["Ey"], pre["Er"]
+    Fz, Fy, Fr = pre["Fz"], pre["Fy"], pre["Fr"]
+    lead = Phi.shape[:-2]
+    n, ns = Phi.shape[-1], Sz.shape[-1]
+    Aa = np.zeros(lead + (n + ns, n + ns))
+    Aa[..., :n, :n] = Phi + Gam_u @ Fy @ C_raw
+    Aa[..., :n, n:] = Gam_u @ Fz
+    Aa[..., n:, :n] = Sy @ C_raw
+    Aa[..., n:, n:] = Sz
+    Bu = np.concatenate([Gam_u, np.zeros(lead + (ns, 2))], -2)
+    Bw = np.concatenate([Gam_w + Gam_u @ Fy @ D_raw_w, Sy @ D_raw_w], -2)
+    Br = np.concatenate([Gam_u @ Fr, Sr], -2)
+    Ce = np.concatenate([Ey @ C_raw, Ez], -1)
+    Dew = Ey @ D_raw_w
+    Der = Er
+    # performance outputs and the servo torques u = u_ff + du
+    n_p = C_perf.shape[-2]
+    Cy = np.zeros(lead + (n_p + 2, n + ns))
+    Cy[..., :n_p, :n] = C_perf + D_perf_u @ Fy @ C_raw
+    Cy[..., :n_p, n:] = D_perf_u @ Fz
+    Cy[..., n_p:, :n] = Fy @ C_raw
+    Cy[..., n_p:, n:] = Fz
+    eye2 = np.broadcast_to(np.eye(2), lead + (2, 2))
+    Dyu = np.concatenate([D_perf_u, eye2], -2)
+    Dyw = np.concatenate([D_perf_w + D_perf_u @ Fy @ D_raw_w, Fy @ D_raw_w], -2)
+    Dyr = np.concatenate([D_perf_u @ Fr, np.broadcast_to(Fr, lead + Fr.shape[-2:])], -2)
+    return _prune(dict(Aa=Aa, Bu=Bu, Bw=Bw, Br=Br, Ce=Ce, Dew=Dew, Der=Der, Cy=Cy, Dyu=Dyu,
+                       Dyw=Dyw, Dyr=Dyr))
+
+
+def _prune(mats: dict[str, NDArray]) -> dict[str, NDArray]:
+    """Drop the augmented plant's states that no output sees (structurally: no path through
+    ``Aa`` to ``Ce`` or ``Cy``, at any grid point), e.g. the sensor buffers' entries beyond a
+    signal's delay; the loop's responses and the eigenvalues that matter are unchanged (the
+    dropped states are unobservable; their eigenvalues are the buffers' zeros)."""
+    Aa = mats["Aa"]
+    n = Aa.shape[-1]
+    flat = lambda M: np.abs(M).reshape(-1, *M.shape[-2:]).max(axis=0) > 0  # noqa: E731
+    A_nz = flat(Aa)
+    seen = flat(mats["Ce"]).any(axis=0) | flat(mats["Cy"]).any(axis=0)
+    while True:
+        more = seen | A_nz[seen].any(axis=0)
+        if more.sum() == seen.sum():
+            break
+        seen = more
+    keep = np.flatnonzero(seen)
+    if keep.size == n:
+        return mats
+    out = dict(mats)
+    out["Aa"] = Aa[..., keep[:, None], keep]
+    for k in ("Bu", "Bw", "Br"):
+        out[k] = mats[k][..., keep, :]
+    for k in ("Ce", "Cy"):
+        out[k] = mats[k][..., :, keep]
+    return out
+
+
+def _check_no_feedthrough(D_raw_u: NDArray) -> None:
+    if np.abs(D_raw_u).max(initial=0.0) > 1e-9:
+        raise ParameterError("the loop law's measurements depend directly on the servo "
+                             "torques (feedthrough): the sampled loop would be algebraic")
+
+
+def loop_model(scenario: Scenario, params: Params,
+               controller: Controller | None = None) -> tuple[LoopModel, LoopLaw]:
+    """The linear model of a closed-loop scenario's loop at its trimmed start, and the
+    (ideal) law it linearises."""
+    model, op = scenario_model(scenario, params)
+    law = build_law(scenario, params, controller, model, op)
+    ideal = LoopLaw(law.controller, model, law.point, law.u0, law.config.ideal(),
+                    scenario.references, scenario.duration)
+    dist = tuple(n for n in model.inputs if n not in LoopLaw.commands)
+    outs = RAW_SIGNALS + PERFORMANCE
+    sys = linearize(op, LoopLaw.commands + dist, outs)
+    A, B, C, D = (np.asarray(M) for M in (sys.A, sys.B, sys.C, sys.D))
+    Phi, Gam = zoh(A, B, ideal.dt)
+    nr = len(RAW_SIGNALS)
+    _check_no_feedthrough(D[:nr, :2])
+    mats = _assemble(Phi, Gam[:, :2], Gam[:, 2:], C[:nr], D[:nr, 2:], C[nr:], D[nr:, :2],
+                     D[nr:, 2:], linear_preprocess(ideal))
+    y_trim = model.evaluate(op.x, op.u)[1]
+    y0 = np.concatenate([[y_trim[model.output_index(n)] for n in PERFORMANCE], op.u[:2]])
+    return LoopModel(**mats, controller=ideal.controller, mask=ideal.output_mask,
+                     dt=ideal.dt, disturbances=dist, outputs=PERFORMANCE + LoopLaw.commands,
+                     y0=y0), ideal
+
+
+def predict_scenario(scenario: Scenario, params: Params,
+                     controller: Controller | None = None) -> LoopPrediction:
+    """The linear prediction of a closed-loop scenario's run (`loop_model` driven by the
+    scenario's inputs and references, sampled at the loop's rate)."""
+    lm, law = loop_model(scenario, params, controller)
+    model, op = scenario_model(scenario, params)
+    n_k = int(round(scenario.duration / lm.dt)) + 1
+    t = np.arange(n_k) * lm.dt
+    sig = scenario_signals(scenario, model, op)
+    w = np.zeros((n_k, len(lm.disturbances)))
+    for j, name in enumerate(lm.disturbances):
+        if name in sig:
+            arr = sig[name]
+            # right-continuous piecewise-linear value at the samples, less the trim's
+            w[:, j] = reference_table({name: arr}, t)[name] - op.u[model.input_index(name)]
+    r = np.zeros((n_k, 4))
+    refs = law.refs
+    r[:, 0] = refs.r_g[:n_k] - refs.r_g[0]
+    r[:, 1] = refs.slip[:n_k] - refs.slip[0]
+    r[:, 2] = refs.mu[:n_k] - refs.mu[0]
+    r[:, 3] = refs.rdot[:n_k]
+    y = lm.predict(w, r) + lm.y0
+    return LoopPrediction(t=t, signals={n: y[:, i] for i, n in enumerate(lm.outputs)})
+
+
+def family_loops(family: PlantFamily, controller: Controller, config: LoopConfig,
+                 params: Params, model: EmpactModel | None = None) -> LoopModel:
+    """The loop model at every point of `family` (which must hold the `RAW_SIGNALS` and
+    `PERFORMANCE` outputs: ``plant_family(..., outputs=LOOP_FAMILY_OUTPUTS)``) for
+    `controller` under `config` (its ideal version), references held at each point."""
+    missing = [n for n in RAW_SIGNALS + PERFORMANCE if n not in family.outputs]
+    if missing:
+        raise ParameterError(f"the family lacks the outputs {', '.join(missing)} the loop "
+                             "needs: build it with plant_family(..., outputs="
+                             "LOOP_FAMILY_OUTPUTS)")
+    if not np.all(family.ok):
+        raise ParameterError("the family has points that did not trim")
+    if model is None:
+        model = nonlinear_model(params, **family.options)
+    cfg = config.ideal()
+    dt = cfg.dt
+    ii = [family.inputs.index(n) for n in LoopLaw.commands]
+    dist = tuple(n for n in family.inputs if n not in LoopLaw.commands)
+    jj = [family.inputs.index(n) for n in dist]
+    ro = [family.outputs.index(n) for n in RAW_SIGNALS]
+    po = [family.outputs.index(n) for n in PERFORMANCE]
+    Phi, Gam = zoh(family.A, family.B[..., ii + jj], dt)
+    shape = family.shape
+    C, D = family.C, family.D
+    _check_no_feedthrough(D[..., ro, :][..., :, ii])
+    pre: dict[str, NDArray] = {}
+    ctrl = None
+    mask = None
+    for idx in np.ndindex(*shape):
+        point = {k: float(family.operating[k][idx]) for k in ("r_g", "nu", "omega_p", "T_l",
+                                                            "F_s")}
+        law = LoopLaw(controller, model, point, np.zeros(2), cfg)
+        p = linear_preprocess(law)
+        for k, v in p.items():
+            pre.setdefault(k, np.empty(shape + v.shape))[idx] = v
+        ctrl, mask = law.controller, law.output_mask
+    mats = _assemble(Phi, Gam[..., :2], Gam[..., 2:], C[..., ro, :],
+                     D[..., ro, :][..., :, jj], C[..., po, :], D[..., po, :][..., :, ii],
+                     D[..., po, :][..., :, jj], pre)
+    return LoopModel(**mats, controller=ctrl, mask=mask, dt=dt, disturbances=dist,
+                     outputs=PERFORMANCE + LoopLaw.commands, y0=np.zeros(0))

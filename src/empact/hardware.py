@@ -1,0 +1,71 @@
+"""The machine's servo drives and sensors as a controller sees them: torque and speed limits of
+the two servos, and the instruments the loop measures with.
+
+Two parameter sections (``[servo]``, ``[sensors]`` of a parameter file; a closed-loop
+scenario's ``[limits]`` and ``[sensors]`` tables override them key by key):
+
+``[servo]``
+    ``T_mp_max``, ``T_ms_max`` [N m]: the largest torque each servo drive delivers (its
+    current limit); ``omega_mp_max``, ``omega_ms_max`` [rad/s]: the largest speed (above
+    ``1 - SPEED_BAND`` of it the torque that would drive the servo faster falls linearly to
+    zero, a drive's speed limiter).
+``[sensors]``
+    ``delay`` [samples]: every measurement reaches the controller this many samples late;
+    ``speed_counts`` [counts/rev] and ``speed_window`` [s]: the primary and secondary shaft
+    speeds come from counting encoders, i.e. the mean speed over the window, quantised to
+    ``2 pi / (speed_counts * speed_window)``; ``speed_noise`` [rad/s]: added white noise;
+    ``ratio_quantum`` [-]: resolution of the ratio (sheave-position sensor);
+    ``torque_noise`` [N m]: white noise of the driveshaft torque sensor.  The slip the
+    controller uses is computed from these (``1 - omega_s / (r_g omega_p)``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ._section import Section, param
+from .errors import ParameterError
+
+__all__ = ["ServoLimits", "SensorParams", "SPEED_BAND"]
+
+#: the share of the speed range over which a drive's speed limiter takes the torque to zero
+SPEED_BAND = 0.05
+
+
+@dataclass(frozen=True)
+class ServoLimits(Section):
+    """Torque and speed limits of the primary (shift) and secondary (clamping) servo drives."""
+
+    _name = "servo"
+
+    T_mp_max: float = param("N m", "largest primary servo torque", 0.0, 1e3, default=3.0)
+    T_ms_max: float = param("N m", "largest secondary servo torque", 0.0, 1e3, default=15.0)
+    omega_mp_max: float = param("rad/s", "largest primary servo speed", 0.0, 1e5,
+                                default=630.0)
+    omega_ms_max: float = param("rad/s", "largest secondary servo speed", 0.0, 1e5,
+                                default=630.0)
+
+
+@dataclass(frozen=True)
+class SensorParams(Section):
+    """The loop's instruments: delay, encoder quantisation and noise."""
+
+    _name = "sensors"
+
+    delay: float = param("samples", "measurement delay (whole samples)", 0.0, 100.0,
+                         lo_open=False, default=1.0, note="a whole number of samples")
+    speed_counts: float = param("counts/rev", "shaft encoder counts per revolution", 0.0,
+                                1e9, default=8192.0)
+    speed_window: float = param("s", "counting window of the shaft speeds", 0.0, 1.0,
+                                default=0.01)
+    speed_noise: float = param("rad/s", "white noise on each shaft speed (standard "
+                               "deviation)", 0.0, 1e3, lo_open=False, default=0.0)
+    ratio_quantum: float = param("-", "resolution of the measured ratio", 0.0, 0.1,
+                                 lo_open=False, default=2e-4)
+    torque_noise: float = param("N m", "white noise on the driveshaft torque (standard "
+                                "deviation)", 0.0, 1e3, lo_open=False, default=0.25)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.delay != int(self.delay):
+            raise ParameterError(f"sensors.delay = {self.delay!r}: must be a whole number of "
+                                 "samples (0-100)")

@@ -1,0 +1,265 @@
+"""The loop that runs (issue 21): its law, its linear model, limits and anti-windup,
+set-points by torque reserve, the shift envelope, schedules, targets and discrete export."""
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.io import loadmat
+from scipy.signal import cont2discrete
+
+from empact.control.closed_loop import (check_targets, control_example_path, run_closed_loop,
+                                        safety_factor_twin)
+from empact.control.controller import Controller, Schedule, load_controller
+from empact.control.family import DESIGN_GRID, design_family
+from empact.control.law import SHIPPED_LOOP, LoopConfig, LoopLaw
+from empact.control.loop import linear_preprocess, loop_model, predict_scenario, zoh
+from empact.control.pi import _crossover_gains, pi_controller
+from empact.control.shifting import CREEP_SHARE, shift_envelope, shift_reference
+from empact.errors import ParameterError
+from empact.nonlinear.equilibrium import slip_at_torque_ratio
+from empact.nonlinear.model import nonlinear_model
+from empact.nonlinear.scenario import load_scenario, scenario_from_dict
+from empact.reproduction.control import SHIPPED_DESIGNS, shipped_controller
+from empact.variator.geometry import radii
+
+
+@pytest.fixture(scope="module")
+def bench(params):
+    return nonlinear_model(params, drive="speed", load="torque")
+
+
+def test_zoh_equals_scipy(params):
+    """The stacked zero-order hold equals scipy.signal.cont2discrete (an independent
+    implementation) to 1e-12 relative on a lightly damped two-mass system."""
+    A = np.array([[0, 1, 0, 0], [-400, -0.4, 400, 0], [0, 0, 0, 1], [100, 0, -100, -0.1]])
+    B = np.array([[0.0], [1.0], [0.0], [0.0]])
+    Phi, Gam = zoh(np.stack([A, 2 * A]), np.stack([B, B]), 1e-3)
+    for k, s in enumerate((1, 2)):
+        Ad, Bd, *_ = cont2discrete((s * A, B, np.eye(4), np.zeros((4, 1))), 1e-3, "zoh")
+        np.testing.assert_allclose(Phi[k], Ad, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(Gam[k], Bd, rtol=1e-12, atol=1e-16)
+
+
+def test_feedforward_linearisation_is_the_closed_form(params, bench):
+    """The pre-processing's derivative of the secondary servo torque with respect to the
+    measured driveshaft torque (delay one sample: through the buffer) equals the closed form
+    ``(i_e s / i_c) g cos(beta) / (2 mu* R_s) (1 - a)`` of the feedforward with gain ``g`` and
+    filter pole ``a`` (to 1e-7 relative: central differences of an affine map)."""
+    point = {"r_g": 1.0, "nu": 0.0144, "omega_p": 300.0, "T_l": 100.0, "F_s": 1e4}
+    ctrl = pi_controller([-1.0, 100.0], [1.0, 1.0], [10.0, 10.0])
+    law = LoopLaw(ctrl, bench, point, np.zeros(2), LoopConfig.of(params, **SHIPPED_LOOP).ideal())
+    pre = linear_preprocess(law)
+    a, v = params.actuation, params.variator
+    tpf = a.i_e * a.s * bench.constants.sheave_sense / a.i_c
+    R_s = float(radii(1.0, v.L_belt, v.a)[1])
+    alpha = np.exp(-2 * np.pi * SHIPPED_LOOP["feedforward_filter_hz"] * law.dt)
+    expected = tpf * 0.9 * np.cos(v.beta) / (2 * law.refs.mu[0] * R_s) * (1 - alpha)
+    col = 3 * law._n_buf + law._delay - 1  # T_ds's buffer entry the next sample reads
+    got = pre["Fz"][1, col] if law._delay else pre["Fy"][1, 3]
+    assert got == pytest.approx(expected, rel=1e-7)
+
+
+def test_linear_prediction_matches_the_nonlinear_run_for_a_small_step(params):
+    """For a load step of 2 % of the torque capacity the nonlinear closed loop (the same law
+    without limits, quantisation and noise) and its linear model agree: the slip's and the
+    clamping force's excursions differ by at most 5 % of the nonlinear excursion at r_g =
+    0.5, 1, 2 (measured 0.3-2.5 %; the reference is the integrated nonlinear machine)."""
+    for r in ("0.5", "1", "2"):
+        sc = replace(load_scenario(control_example_path(f"slip-small-step-r{r}")),
+                     load_step=0.02)
+        res = run_closed_loop(sc, params, ideal=True).result
+        pred = predict_scenario(sc, params)
+        for name in ("nu", "F_s"):
+            yn = res.output(name) - res.output(name)[0]
+            yl = np.interp(res.t, pred.t, pred.output(name)) - pred.output(name)[0]
+            assert np.abs(yn - yl).max() <= 0.05 * np.abs(yn).max(), (r, name)
+
+
+def test_loop_at_rest_stays_at_the_trim(params):
+    """No step: the law (delay and counting window, no quantisation or noise) holds the
+    trim: slip and clamping force within 1e-9 relative over the run (bookkeeping of the
+    holding torques, the feedforward's bias and the buffers)."""
+    sc = replace(load_scenario(control_example_path("slip-small-step-r1")), load_step=0.0,
+                 duration=0.5)
+    res = run_closed_loop(sc, params, ideal=True).result
+    for name in ("nu", "F_s", "r_g"):
+        y = res.output(name)
+        assert np.abs(y - y[0]).max() <= 1e-9 * abs(y[0]), name
+
+
+def test_loop_model_is_stable_where_the_run_settles(params):
+    """The loop model of the shipped load step at r_g = 1 is stable (|z| < 1) and the
+    nonlinear run settles: the slip 0.3 s after the step is within its target."""
+    sc = load_scenario(control_example_path("slip-load-step-r1"))
+    lm, _ = loop_model(sc, params)
+    assert lm.spectral_radius() < 1
+    run = run_closed_loop(sc, params)
+    assert run.metrics["slip_error_pp"] < sc.targets["slip_error_pp"][1]
+
+
+def test_saturated_step_recovers_without_windup(params):
+    """A ratio step 1 -> 1.1 with the primary servo limited to 0.32 N m (0.07 above its
+    holding torque): the servo saturates, and with anti-windup the ratio overshoots its
+    reference by less than 20 % of the step; without it the overshoot is larger (the
+    integrator winds up while the torque is held)."""
+    base = load_scenario(control_example_path("slip-small-step-r1"))
+    sc = replace(base, load_step=None, load_step_time=None, duration=6.0,
+                 references={**base.references, "r_g": np.array([[0.0, 1.0], [0.5, 1.0],
+                                                                   [0.5, 1.1]])},
+                 limits={"T_mp_max": 0.32})
+    over = {}
+    for aw in (True, False):
+        s = replace(sc, controller=replace(sc.controller, anti_windup=aw))
+        run = run_closed_loop(s, params)
+        r = run.result.output("r_g")
+        assert run.metrics["saturated"] > 0.01  # the limit is reached
+        assert run.metrics["peak_T_mp"] <= 0.32 + 1e-12
+        over[aw] = (r.max() - 1.1) / 0.1
+    assert over[True] < 0.2
+    assert over[False] > over[True]
+
+
+def test_shift_keeps_its_clamping(params):
+    """LOW -> OD (the shipped coordinated shift): the torque ratio tau = mu / mu_max stays
+    below 0.97 throughout (the clamping force never falls below 1.03 times what the belt
+    torque needs: no macro slip), and the slip within 0.5 pp of its set-point."""
+    sc = load_scenario(control_example_path("shift-low-od"))
+    run = run_closed_loop(sc, params)
+    res = run.result
+    assert res.complete
+    assert res.output("tau").max() < 0.97
+    assert run.metrics["peak_slip_error_pp"] <= 0.5
+
+
+def test_set_point_by_torque_reserve(params, bench):
+    """references.tau gives the slip where mu = tau mu_max at the reference ratio (against
+    the model's own traction curve, to 1e-9), along a ratio reference."""
+    point = {"r_g": 1.0, "nu": 0.0144, "omega_p": 300.0, "T_l": 100.0, "F_s": 1e4}
+    ctrl = pi_controller([-1.0, 100.0], [1.0, 1.0], [10.0, 10.0])
+    refs = {"tau": np.array([[0.0, 0.9]]), "r_g": np.array([[0.0, 1.0], [1.0, 1.5]])}
+    law = LoopLaw(ctrl, bench, point, np.zeros(2), LoopConfig.of(params), refs, 1.0)
+    mu = bench.traction(law.refs.slip, law.refs.r_g)
+    np.testing.assert_allclose(mu / bench.mu_max(law.refs.r_g), 0.9, rtol=1e-9)
+    assert law.refs.slip[0] == pytest.approx(float(slip_at_torque_ratio(bench, 0.9, 1.0)))
+
+
+def test_shift_envelope_binds_where_it_says(params, bench):
+    """At each ratio the envelope's rate puts exactly one demand at its limit: the clamping
+    force at the secondary servo's (T_ms_max i_c / (i_e s)), the primary servo torque at
+    T_mp_max, or the creep law at CREEP_SHARE of its saturation (to 1e-6 relative:
+    bisection)."""
+    r = np.geomspace(0.5, 2, 9)
+    e = shift_envelope(bench, r, 300.0, 120.0, 0.9, params.servo)
+    a = params.actuation
+    F_max = params.servo.T_ms_max * a.i_c / (a.i_e * a.s)
+    for k in range(len(r)):
+        if e.binding[k] == "clamping":
+            assert e.F_s[k] == pytest.approx(F_max, rel=1e-6)
+        elif e.binding[k] == "primary":
+            assert e.T_mp[k] == pytest.approx(params.servo.T_mp_max, rel=1e-6)
+    assert {"clamping", "creep"} <= set(e.binding)  # both bind on this bench (issue 21)
+    ref = shift_reference(e, 0.5, 2.0, 0.5, share=0.8, acceleration=1.0)
+    rate = np.diff(ref[:, 1]) / np.diff(ref[:, 0])
+    mid = np.sqrt(ref[:-1, 1] * ref[1:, 1])
+    assert np.all(rate <= 0.8 * e.rate_at(mid) * (1 + 1e-9))
+    assert CREEP_SHARE == 0.5
+
+
+def test_shipped_shift_reference_is_the_generator_s(params, bench):
+    """The shipped shift's ratio reference is `shift_reference` on the shipped parameters
+    (as its header says), to 1e-5 s and 1e-6 in ratio."""
+    sc = load_scenario(control_example_path("shift-low-od"))
+    e = shift_envelope(bench, np.geomspace(0.5, 2, 25), 300.0, 120.0, 0.9, params.servo)
+    ref = shift_reference(e, 0.5, 2.0, 0.5, share=0.8, acceleration=1.0)
+    np.testing.assert_allclose(sc.references["r_g"], ref, atol=1e-5)
+
+
+def test_schedule_interpolates_in_log_gain_and_roundtrips(tmp_path):
+    """A schedule returns its grid gains at the grid points, the geometric mean halfway (in
+    ln r_g), holds beyond the edges, and survives the JSON and .mat files."""
+    s = Schedule(axes={"r_g": [0.5, 2.0], "F_s": [1e4]}, gains=[[[-1.0, 4.0]], [[-4.0, 1.0]]])
+    np.testing.assert_allclose(s({"r_g": 0.5, "F_s": 1e4}), [-1.0, 4.0], rtol=1e-15)
+    np.testing.assert_allclose(s({"r_g": 1.0, "F_s": 3e4}), [-2.0, 2.0], rtol=1e-12)
+    np.testing.assert_allclose(s({"r_g": 9.0, "F_s": 1e4}), [-4.0, 1.0], rtol=1e-15)
+    c = pi_controller([1.0, 1.0], [0.1, 0.2], [5.0, 5.0])
+    c = Controller(c.A, c.B, c.C, c.D, c.measured, c.outputs, schedule=s)
+    back = load_controller(c.save(tmp_path / "c.json"))
+    np.testing.assert_array_equal(back.schedule.gains, s.gains)
+    m = loadmat(c.save(tmp_path / "c.mat"))
+    np.testing.assert_array_equal(m["schedule_gains"], s.gains)
+    with pytest.raises(ParameterError, match="one sign"):
+        Schedule(axes={"r_g": [0.5, 2.0]}, gains=[[1.0], [-1.0]])
+
+
+def test_discrete_export(tmp_path):
+    """A controller discretised at its rate is written with dt (JSON and .mat) and equals
+    scipy's Tustin discretisation."""
+    c = pi_controller([2.0, 3.0], [0.5, 0.5], [10.0, 10.0])
+    d = c.discretize(1e-3)
+    Ad, Bd, Cd, Dd, _ = cont2discrete((c.A, c.B, c.C, c.D), 1e-3, "tustin")
+    np.testing.assert_allclose(d.A, Ad, rtol=1e-12)
+    m = loadmat(d.save(tmp_path / "d.mat"))
+    assert float(m["dt"].item()) == 1e-3
+    assert load_controller(d.save(tmp_path / "d.json")).dt == 1e-3
+
+
+def test_targets(params):
+    """check_targets: upper bounds, bands and booleans; an unknown metric is one line."""
+    m = {"complete": True, "peak_slip_error_pp": 0.4, "ratio_rate": 0.3, "macro_slip": False}
+    checks = check_targets(m, {"peak_slip_error_pp": (-np.inf, 0.6), "ratio_rate": (1.0, np.inf),
+                               "macro_slip": False})
+    assert [c.met for c in checks] == [True, False, True]
+    with pytest.raises(ParameterError, match="targets.slip_eror: no such metric"):
+        check_targets(m, {"slip_eror": (0, 1)})
+
+
+def test_safety_factor_twin_starts_at_its_own_clamping(params):
+    """The safety-factor twin of a load step starts at rest at its own clamping (F_s within
+    1e-6 relative over the first 0.4 s) and steps the same load torque."""
+    sc = load_scenario(control_example_path("slip-load-step-r1"))
+    tw = replace(safety_factor_twin(sc, params), duration=0.4)
+    res = run_closed_loop(tw, params, ideal=True).result
+    F = res.output("F_s")
+    assert np.abs(F - F[0]).max() <= 1e-6 * F[0]
+    assert tw.inputs["T_l"][1, 1] > tw.inputs["T_l"][0, 1]
+
+
+def test_shipped_pi_is_the_documented_design(params):
+    """The shipped PI's schedule is the crossover gains of the design family at its stored
+    crossovers (`_crossover_gains`, to 1e-9), on the design family's axes, with the shipped
+    recipe (SHIPPED_DESIGNS) recorded in its design data."""
+    c = shipped_controller("pi")
+    fam = design_family(params)
+    wc = 2 * np.pi * np.array(c.design["crossover_hz"])
+    np.testing.assert_allclose(c.schedule.gains, _crossover_gains(fam, c.measured, wc),
+                               rtol=1e-9)
+    for k, v in DESIGN_GRID.items():
+        np.testing.assert_allclose(c.schedule.axes[k], v)
+    assert c.design["alpha_min"] == SHIPPED_DESIGNS["pi"]["alpha_min"]
+    assert c.design["worst"]["disk_margin"] >= SHIPPED_DESIGNS["pi"]["alpha_min"]
+
+
+@pytest.mark.parametrize("table, key, message", [
+    ({"controller": {"file": "shipped:pi", "feedforward_gian": 1}}, None,
+     "unknown key controller.feedforward_gian"),
+    ({"controller": {"file": "shipped:pi", "feedforward_filter_hz": 900.0}}, None,
+     "controller.feedforward_filter_hz = 900"),
+    ({"controller": {"file": "shipped:pi"}, "references": {"tau": [[0.0, 1.2]]}}, None,
+     "references.tau"),
+    ({"controller": {"file": "shipped:pi"}, "targets": {"macro_slip": "no"}}, None,
+     "targets.macro_slip"),
+    ({"controller": {"file": "shipped:pi"}, "sensors": {"delay": 1.5}}, None,
+     "sensors.delay = 1.5"),
+    ({"controller": {"file": "shipped:pi"}, "limits": {"T_ms_max": -1.0}}, None,
+     "servo.T_ms_max = -1"),
+    ({"scenario": {"duration": 1.0, "load_step": 0.5}}, None, "load_step needs"),
+])
+def test_bad_loop_input_is_one_line(table, key, message):
+    data = {"scenario": {"duration": 1.0}, "model": {"drive": "speed", "load": "torque"},
+            "initial": {"r_g": 1.0, "omega_p": 300.0, "tau": 0.9, "F_s": 1e4}}
+    for k, v in table.items():
+        data[k] = {**data.get(k, {}), **v}
+    with pytest.raises(ParameterError) as err:
+        scenario_from_dict(data, "s.toml")
+    text = str(err.value)
+    assert message in text and "\n" not in text
