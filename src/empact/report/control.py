@@ -53,7 +53,7 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
     small = [r for n, r in res.runs.items() if n.startswith("slip-small-step")]
     steps = [r for n, r in res.runs.items() if n.startswith("slip-load-step")]
     shifts = [r for n, r in res.runs.items() if n.startswith("shift")]
-    preds = {n: p.prediction for n, p in res.predictions.items()}
+    preds = {n: p.prediction for n, p in res.predictions.items() if n.startswith("slip-")}
     return (
         f"<p>The machine trimmed and exactly linearised on the design family ({axes}; speed "
         "of [operating]; test bench: drive speed-, load torque-controlled). The loop that "
@@ -97,8 +97,9 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
                                         "nonlinear", "verdict", "peak |T_mp| / limit [N m]",
                                         "peak |T_ms| / limit [N m]"], target_rows,
                     "Every shipped closed-loop scenario against its targets ([targets] of "
-                    "its file); the linear prediction is the loop model's (limits inactive, "
-                    "no noise)")
+                    "its file); the linear prediction is the loop model's at the scenario's "
+                    "start (limits inactive, no noise): close for the load steps, far off for "
+                    "the shifts, which leave the operating point the model is linearised at")
         + ctx.table("control_envelope", ["r_g", "largest rate [1/s]", "limit that binds",
                                          "F_s at it [kN]", "|T_mp| at it [N m]"], env_rows,
                     "The shift-rate envelope (quasi-static; empact.control.shifting)")
