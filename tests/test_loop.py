@@ -263,3 +263,30 @@ def test_bad_loop_input_is_one_line(table, key, message):
         scenario_from_dict(data, "s.toml")
     text = str(err.value)
     assert message in text and "\n" not in text
+
+
+def test_log_slip_errors(params, bench):
+    """A controller measuring ln_nu gets ln(nu*) - ln(nu) as its slip error (the design
+    option for the slip's gain varying along the traction curve); ideal sensors (no delay),
+    to 1e-12."""
+    point = {"r_g": 1.0, "nu": 0.0144, "omega_p": 300.0, "T_l": 100.0, "F_s": 1e4}
+    c = pi_controller([-1.0, 100.0], [1.0, 1.0], [10.0, 10.0], measured=("r_g", "ln_nu"))
+    law = LoopLaw(c, bench, point, np.zeros(2), LoopConfig.of(params, sensors=False))
+    raw = law.raw0.copy()
+    raw[2] = 1.0 * 300.0 * (1 - 0.02)  # the secondary speed of 2 % slip
+    _, e, _, _ = law.preprocess(law.z0[:law.n_pre], raw, 0, ideal=True)
+    assert e[1] == pytest.approx(np.log(law.refs.slip[0]) - np.log(0.02), rel=1e-12)
+
+
+def test_bad_design_input_is_one_line(params):
+    """A schedule without the loop it runs in, and a schedule over a variable a loop cannot
+    measure, are refused with one line."""
+    from empact.control.pi import design_pi
+    from empact.control.family import plant_family
+
+    fam = plant_family(params, r_g=np.array([0.8, 1.2]))
+    with pytest.raises(ParameterError, match="schedule = True needs the loop"):
+        design_pi(fam, (0.5, 1.0), schedule=True)
+    fam = plant_family(params, r_g=np.array([0.8, 1.2]), omega_p=np.array([200.0, 300.0]))
+    with pytest.raises(ParameterError, match="a schedule runs over r_g, tau, F_s"):
+        design_pi(fam, (0.5, 1.0), schedule=True, loop=LoopConfig.of(params), params=params)
