@@ -290,3 +290,21 @@ def test_bad_design_input_is_one_line(params):
     fam = plant_family(params, r_g=np.array([0.8, 1.2]), omega_p=np.array([200.0, 300.0]))
     with pytest.raises(ParameterError, match="a schedule runs over r_g, tau, F_s"):
         design_pi(fam, (0.5, 1.0), schedule=True, loop=LoopConfig.of(params), params=params)
+
+
+def test_the_controller_knows_the_nominal_machine(params):
+    """In a Monte Carlo run the machine differs from what the controller knows: with
+    `nominal`, the law's set-point comes from the nominal traction curve (to 1e-12), while
+    the machine starts at its own trim."""
+    from empact.control.closed_loop import build_law
+    from empact.nonlinear.simulation import scenario_model
+
+    sc = load_scenario(control_example_path("slip-load-step-r1"))
+    machine = params.from_dotted({"traction.D_med": 1.1 * params.traction.D_med,
+                                  "traction.B_med": 0.9 * params.traction.B_med})
+    law = build_law(sc, machine, nominal=params)
+    nominal_model = scenario_model(sc, params)[0]
+    assert law.refs.slip[0] == pytest.approx(
+        float(slip_at_torque_ratio(nominal_model, 0.9, 1.0)), rel=1e-12)
+    assert law.point["nu"] == pytest.approx(scenario_model(sc, machine)[1].nu, rel=1e-12)
+    assert abs(law.point["nu"] - law.refs.slip[0]) > 1e-4  # the two curves differ

@@ -89,10 +89,13 @@ class ClosedLoopResult:
 
 def build_law(scenario: Scenario, params: Params, controller: Controller | None = None,
               model: EmpactModel | None = None, op: TrimResult | None = None,
-              ideal: bool = False) -> LoopLaw:
+              ideal: bool = False, nominal: Params | None = None) -> LoopLaw:
     """The loop law of a closed-loop scenario on a parameter set (its trimmed start and
     model unless given); `ideal`: without servo limits, quantisation and noise
-    (`LoopConfig.ideal`: what the linear loop model linearises)."""
+    (`LoopConfig.ideal`: what the linear loop model linearises); `nominal`: the parameter
+    set the controller knows (its traction curve for the set-points and the feedforward,
+    its geometry, holding torques and creep law), when the machine's differ (a Monte Carlo
+    run); default: the machine's own."""
     if scenario.controller is None:
         raise ParameterError(f"scenario {scenario.name!r} has no [controller] table: run it "
                              "with empact.run_scenario")
@@ -100,13 +103,15 @@ def build_law(scenario: Scenario, params: Params, controller: Controller | None 
     if model is None or op is None:
         model, op = scenario_model(scenario, params)
     point = {"r_g": op.r_g, "nu": op.nu, "omega_p": op.omega_p, "T_l": op.T_l, "F_s": op.F_s}
-    cfg = LoopConfig.for_scenario(scenario, params)
-    return LoopLaw(ctrl, model, point, op.u[:2], cfg.ideal() if ideal else cfg,
+    knows = model if nominal is None else scenario_model(scenario, nominal)[0]
+    cfg = LoopConfig.for_scenario(scenario, params if nominal is None else nominal)
+    return LoopLaw(ctrl, knows, point, op.u[:2], cfg.ideal() if ideal else cfg,
                    scenario.references, scenario.duration)
 
 
 def run_closed_loop(scenario: Scenario, params: Params, controller: Controller | None = None,
-                    *, progress: bool = False, ideal: bool = False) -> ClosedLoopResult:
+                    *, progress: bool = False, ideal: bool = False,
+                    nominal: Params | None = None) -> ClosedLoopResult:
     """Trim the scenario's start and simulate the machine with its loop law in the loop.
 
     Parameters
@@ -121,13 +126,15 @@ def run_closed_loop(scenario: Scenario, params: Params, controller: Controller |
     ideal : bool
         Run the law without servo limits, quantisation and noise (the loop the linear model
         `empact.control.loop` describes).
+    nominal : Params, optional
+        What the controller knows, when the machine (`params`) differs from it (`build_law`).
 
     Returns
     -------
     ClosedLoopResult
     """
     model, op = scenario_model(scenario, params)
-    law = build_law(scenario, params, controller, model, op, ideal)
+    law = build_law(scenario, params, controller, model, op, ideal, nominal)
     res = run_scenario(scenario, params, controller=law, progress=progress)
     refs = {"r_g": np.interp(res.t, law.t_k, law.refs.r_g),
             law.slip_signal: np.interp(res.t, law.t_k, law.refs.slip)}
@@ -181,7 +188,7 @@ def metrics(run: ClosedLoopResult) -> dict[str, Any]:
     out["peak_slip_error_pp"] = float(100 * np.max(err[after]))
     out["peak_slip_pp"] = float(100 * np.max(nu))
     out["slip_setpoint_pp"] = float(100 * np.max(nu_ref))
-    model = run.law.model if run.law is not None else None
+    model = run.op.model  # the machine's own traction curve (not the controller's knowledge)
     if model is not None:
         nu_pk, _ = traction_peak(model, np.clip(r, 0.3, 3.0))
         res_pp = 100 * (np.asarray(nu_pk) - res.output("nu"))

@@ -75,11 +75,14 @@ class AnalysisContext:
     kind : one of `ANALYSES`
     scenario : a closed-loop `empact.nonlinear.scenario.Scenario` (closed loop only)
     controller : `empact.control.controller.Controller` (closed loop only)
+    nominal : the nominal `empact.params.Params` the controller knows (closed loop: its
+        traction curve, geometry and holding torques; each run's machine differs from it)
     """
 
     kind: str
     scenario: Any = None
     controller: Any = None
+    nominal: Any = None
 
     def __post_init__(self) -> None:
         if self.kind not in ANALYSES:
@@ -120,7 +123,8 @@ def _slip(params: Params, context: AnalysisContext) -> dict[str, float]:
 
 
 def _closed_loop(params: Params, context: AnalysisContext) -> dict[str, float]:
-    run = run_closed_loop(context.scenario, params, context.controller)
+    run = run_closed_loop(context.scenario, params, context.controller,
+                          nominal=context.nominal)
     if not run.metrics["complete"]:
         raise RunFailed(run.metrics["message"])
     m = run.metrics  # slips as fractions (the metrics give them in % and percentage points)

@@ -201,7 +201,9 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
     seed = check_int("seed", seed, 0, 2**63 - 1)
     if analysis == "closed-loop" and controller is None and scenario is not None:
         controller = resolve_controller(scenario.controller.file)
-    context = AnalysisContext(analysis, scenario, controller)
+    # the controller knows the nominal machine; each run's differs
+    context = AnalysisContext(analysis, scenario, controller,
+                              params if analysis == "closed-loop" else None)
     tasks = [(params, spread, context, seed, s.start, s.stop)
              for s in plan_chunks(runs, SECONDS_PER_RUN[analysis], sweep)]
     parts = run_chunks(_run_chunk, tasks, sweep, desc=f"monte carlo ({analysis})")
