@@ -115,6 +115,12 @@ class _Tour:
 _TOUR: list = []
 
 
+def pytest_collection_modifyitems(session, config, items):
+    """The tests that read the full report run last (stable order otherwise): the rest of the
+    suite runs while the report builds in the background, instead of waiting for it."""
+    items.sort(key=lambda item: "full_report" in getattr(item, "fixturenames", ()))
+
+
 def pytest_collection_finish(session):
     """Start the full report build and the README tour in the background as soon as the
     session knows it will run their tests (the rest of the suite overlaps them)."""
