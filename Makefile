@@ -12,6 +12,8 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test,dask]'
+	# numba's cache, built once here: the first command after install is as fast as the second
+	$(BIN)/python -m empact.nonlinear._compile
 	touch $(STAMP)
 
 reproduce: $(STAMP)

@@ -13,16 +13,69 @@ def params():
 
 
 @pytest.fixture(scope="session")
-def full_report(tmp_path_factory):
+def cluster():
+    """The suite's one local Dask cluster (2 worker processes), shared by the sweep tests
+    that use an address: its scheduler's address."""
+    import distributed  # the 'dask' extra: the Makefile installs it, so a missing one fails
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0", silence_logs=50) as c:
+        yield c.scheduler_address
+
+
+#: the figures the tests read from the full report (png and svg); the background build draws
+#: only these (`report_build.py`): every section, table, claim and the page are written
+REPORT_FIGURES = ("fig4_actuation_modes", "fig5_actuation_energy", "fig6_actuation_frf",
+                  "fig8_driveline_modes", "fig8_driveline_energy", "fig9_root_locus_cb",
+                  "slip_stability_map", "fig2_identified_plant", "fig14_rig_T_mp")
+
+
+class _Report:
+    """The suite's one full build of the report (`empact reproduce`), run in the background
+    by `report_build.py` from the start of the session (it overlaps the rest of the suite)."""
+
+    def __init__(self) -> None:
+        import subprocess
+        import sys
+        import tempfile
+        from pathlib import Path
+
+        self.folder = Path(tempfile.mkdtemp(prefix="empact-full-report-"))
+        self.out = self.folder / "full" / "rep"
+        self.out.parent.mkdir()
+        self.results = self.folder / "results.json"
+        self.proc = subprocess.Popen(
+            [sys.executable, str(Path(__file__).with_name("report_build.py")), str(self.out),
+             str(self.results), *REPORT_FIGURES],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+    def result(self, timeout: float = 900.0):
+        """(the CLI result: exit_code and output, the report folder), once built."""
+        import json
+        from types import SimpleNamespace
+
+        self.proc.wait(timeout=timeout)
+        return SimpleNamespace(**json.loads(self.results.read_text())), self.out
+
+    def close(self) -> None:
+        import shutil
+
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+_REPORT: list = []
+
+
+@pytest.fixture(scope="session")
+def full_report():
     """The suite's one full build of the report (`empact reproduce`), shared by the tests of
-    the command and of the claims: (the CLI result, the report folder)."""
-    from click.testing import CliRunner
-
-    from empact.cli import main
-
-    out = tmp_path_factory.mktemp("full") / "rep"
-    res = CliRunner().invoke(main, ["reproduce", "--out", str(out), "--quiet"])
-    return res, out
+    the command and of the claims: (the CLI result, the report folder).  Only the figures the
+    tests read are drawn (`REPORT_FIGURES`)."""
+    if not _REPORT:
+        _REPORT.append(_Report())
+    return _REPORT[0].result()
 
 
 class _Tour:
@@ -62,11 +115,19 @@ class _Tour:
 _TOUR: list = []
 
 
+def pytest_collection_modifyitems(session, config, items):
+    """The tests that read the full report run last (stable order otherwise): the rest of the
+    suite runs while the report builds in the background, instead of waiting for it."""
+    items.sort(key=lambda item: "full_report" in getattr(item, "fixturenames", ()))
+
+
 def pytest_collection_finish(session):
-    """Start the README tour in the background as soon as the session knows it will run its
-    test (it is mostly process start-up, which the rest of the suite overlaps)."""
+    """Start the full report build and the README tour in the background as soon as the
+    session knows it will run their tests (the rest of the suite overlaps them)."""
     if session.config.option.collectonly:
         return
+    if any("full_report" in getattr(item, "fixturenames", ()) for item in session.items):
+        _REPORT.append(_Report())
     if any(getattr(item, "originalname", "") == "test_the_readme_tour_runs_as_written"
            for item in session.items):
         _TOUR.append(_Tour())
@@ -75,6 +136,8 @@ def pytest_collection_finish(session):
 def pytest_sessionfinish(session):
     while _TOUR:
         _TOUR.pop().close()
+    while _REPORT:
+        _REPORT.pop().close()
 
 
 @pytest.fixture(scope="session")

@@ -210,6 +210,19 @@ def test_estimate_matches_known_filter(records, tmp_path):
     assert plot.stat().st_size > 1000
 
 
+def test_identify_draws_its_figure_only_when_asked(tmp_path):
+    """`identify --out` writes the step responses and models, no figure; --plot FILE draws
+    Fig. 2 (format from the suffix)."""
+    res = run("identify", "--ratios", "1", "--out", tmp_path / "a", "--quiet")
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in (tmp_path / "a").iterdir()) == ["models.json",
+                                                                  "steps_rg_1.csv"]
+    res = run("identify", "--ratios", "1", "--quiet", "--plot", tmp_path / "fig2.svg")
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "fig2.svg").read_text().lstrip().startswith("<?xml")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "fig2.svg"]
+
+
 def test_reproduce_writes_complete_report(full_report):
     """The one full build of the suite: every section, figure and table, and the claims."""
     res, out = full_report

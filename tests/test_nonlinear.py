@@ -423,3 +423,17 @@ def test_one_scenario_format_for_both_loops(tmp_path, params):
     with pytest.raises(ParameterError, match=r"unknown input 'T_ms' for this model \(the "
                                              r"\[controller\] drives the servos\)"):
         load_scenario(path)
+
+
+def test_compiled_traction_peak_is_bitwise_the_vectorised_search(params):
+    """The compiled golden-section search of the traction peak returns to the last bit what
+    the vectorised NumPy search returns, at random and shipped ratios, arrays and scalars."""
+    from empact.nonlinear.equilibrium import _traction_peak_numpy, traction_peak
+    model = nonlinear_model(params)
+    r = np.concatenate([np.random.default_rng(7).uniform(0.3, 3.0, 500), [0.5, 1.0, 2.0]])
+    for got, want in zip(traction_peak(model, r), _traction_peak_numpy(model, r)):
+        np.testing.assert_array_equal(got, want)
+    assert traction_peak(model, 1.0) == _traction_peak_numpy(model, 1.0)
+    assert traction_peak(model, r[:502].reshape(2, -1))[0].shape == (2, 251)
+    with pytest.raises(ValueError, match="must be positive"):
+        traction_peak(model, [1.0, 0.0])

@@ -14,7 +14,6 @@ import signal
 import socket
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -22,10 +21,12 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from empact import sweep as sweep_mod
 from empact.cli import main
 from empact.control import family as family_mod
 from empact.control.family import plant_family
 from empact.montecarlo import monte_carlo, spread_from_dict
+from empact.montecarlo.analyses import SECONDS_PER_RUN
 from empact.montecarlo.spread import Distribution
 from empact.params import default_params
 from empact.slip.stability import stability_map
@@ -38,15 +39,6 @@ P = default_params()
 FAILING = {"spread": {"actuation.k_w": {"distribution": "normal", "mean": 10.0, "std": 12.0},
                       "operating.nu": {"distribution": "uniform", "lower": 0.003,
                                        "upper": 0.008}}}
-
-
-@pytest.fixture(scope="module")
-def cluster():
-    """A local Dask cluster (2 worker processes) shared by the tests that use an address."""
-    import distributed  # the 'dask' extra: the Makefile installs it, so a missing one fails
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=":0", silence_logs=50) as c:
-        yield c.scheduler_address
 
 
 def family_arrays(fam):
@@ -254,34 +246,49 @@ def test_plant_analysis_slowest_mode_is_the_slowest_resonance():
 
 # -- faults ----------------------------------------------------------------------------------
 @pytest.mark.timeout(240)
-def test_a_worker_killed_mid_sweep_is_survived():
-    """Kill one of two worker processes while a 1,500-run sweep is running: Dask reruns its
-    chunks elsewhere and the table equals the serial one."""
+def test_a_worker_killed_mid_sweep_is_survived(cluster, monkeypatch):
+    """Kill one of two worker processes while a 1,500-run sweep is running (when its first
+    chunk has completed): Dask reruns its chunks elsewhere and the table equals the serial
+    one."""
     import distributed
     spread = spread_from_dict(FAILING, P)
     serial = monte_carlo(P, spread, 1500, "slip", seed=3)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=":0", silence_logs=50) as c, \
-            distributed.Client(c) as client:
-        opts = SweepOptions(scheduler=c.scheduler_address)
-        monte_carlo(P, spread, 4, "slip", seed=3, sweep=opts)  # workers have imported empact
+    opts = SweepOptions(scheduler=cluster)
+    monte_carlo(P, spread, 4, "slip", seed=3, sweep=opts)  # workers have imported empact
+    with distributed.Client(cluster) as client:  # (closed: one client at a time here)
         pids = sorted(client.run(os.getpid).values())
-        killed: dict[str, float] = {}
+    killed: dict[str, float] = {}
+    bar = sweep_mod.progress_bar
 
-        def kill() -> None:
-            os.kill(pids[0], signal.SIGKILL)
-            killed["t"] = time.perf_counter()
+    class KillAtFirstChunk:  # the sweep's progress: told as each chunk completes
+        def __init__(self, *args, **kwargs):
+            self.inner = bar(*args, **kwargs)
 
-        timer = threading.Timer(0.5, kill)
-        t_start = time.perf_counter()
-        timer.start()
-        res = monte_carlo(P, spread, 1500, "slip", seed=3, sweep=opts)
-        t_end = time.perf_counter()
-        timer.join()
-        print(f"sweep {t_end - t_start:.2f} s, kill at {killed.get('t', 0) - t_start:.2f} s")
-        assert "t" in killed and killed["t"] < t_end  # the kill came while the sweep ran
-        with pytest.raises(ProcessLookupError):
-            os.kill(pids[0], 0)  # that worker is gone
+        def __enter__(self):
+            self.inner.__enter__()
+            return self
+
+        def __exit__(self, *exc):
+            return self.inner.__exit__(*exc)
+
+        def update(self, n=1):
+            if not killed:  # the first chunk is back, the others are still to come
+                os.kill(pids[0], signal.SIGKILL)
+                killed["t"] = time.perf_counter()
+            self.inner.update(n)
+
+    monkeypatch.setattr(sweep_mod, "progress_bar", KillAtFirstChunk)
+    t_start = time.perf_counter()
+    res = monte_carlo(P, spread, 1500, "slip", seed=3, sweep=opts)
+    t_end = time.perf_counter()
+    n_chunks = len(plan_chunks(1500, SECONDS_PER_RUN["slip"], opts))
+    print(f"sweep {t_end - t_start:.2f} s, kill at {killed.get('t', 0) - t_start:.2f} s")
+    assert "t" in killed and killed["t"] < t_end  # the kill came while the sweep ran
+    assert n_chunks > 2  # ... with chunks still to run on both workers
+    with pytest.raises(ProcessLookupError):
+        os.kill(pids[0], 0)  # that worker is gone
+    with distributed.Client(cluster) as client:  # its nanny restarts it (a shared cluster)
+        client.wait_for_workers(2, timeout=60)
     np.testing.assert_array_equal(serial.values, res.values)
     np.testing.assert_array_equal(serial.ok, res.ok)
     assert serial.reasons == res.reasons

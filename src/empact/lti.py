@@ -34,11 +34,12 @@ from typing import Callable, Literal, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals as generalized_eigvals
-from scipy.optimize import linear_sum_assignment
 
 from ._lazy import lazy_module
 
 control = lazy_module("control")
+#: one call (`match_branches`): imported on first use, not by every command that imports lti
+optimize = lazy_module("scipy.optimize")
 
 __all__ = ["FrequencyResponse", "frequency_response", "system_response", "transmission_zeros",
            "channel_zeros",
@@ -248,7 +249,7 @@ def match_branches(previous: ArrayLike, current: ArrayLike) -> NDArray[np.comple
         raise ValueError(f"eigenvalue vectors of shapes {prev.shape} and {cur.shape}: need two "
                          "equal 1-d shapes")
     cost = np.abs(prev[:, None] - cur[None, :])
-    rows, cols = linear_sum_assignment(cost)
+    rows, cols = optimize.linear_sum_assignment(cost)
     out = np.empty_like(cur)
     out[rows] = cur[cols]
     return out

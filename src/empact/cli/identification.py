@@ -102,13 +102,15 @@ def _ratios(text: str) -> list[float]:
 @params_option
 @json_options
 @click.option("--out", type=click.Path(file_okay=False), default=None,
-              help="Folder for the step responses (CSV), models (JSON) and the Fig. 2 plot; "
-                   "new or empty unless --force.")
+              help="Folder for the step responses (CSV) and models (JSON); new or empty "
+                   "unless --force.")
+@plot_option
 @force_option
 @quiet_option
 def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | None,
              order: int | None, step: float, params_file: str | None, as_json: bool,
-             json_out: str | None, out: str | None, force: bool, quiet: bool) -> None:
+             json_out: str | None, out: str | None, plot: str | None, force: bool,
+             quiet: bool) -> None:
     """Identify (T_mp, T_ms) -> (r_g, nu) from step responses of the nonlinear model (Fig 2)."""
     from .._io import atomic_folder
     from ..experiments.plant_id import identify_plant
@@ -135,8 +137,6 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
     if dest is not None:
         import json
 
-        from ..plotting import plot_identified_plant, save_figure
-
         with atomic_folder(dest) as tmp:
             for res in results:
                 e = res.experiment
@@ -146,8 +146,10 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
                                   "nu/T_mp [1/(N m)],nu/T_ms [1/(N m)]")
             (tmp / "models.json").write_text(json.dumps(to_jsonable(
                 {"schema": {"name": "empact.identify", "version": 1}, **data}), indent=1))
-            save_figure(plot_identified_plant(results, np.logspace(-1, np.log10(200), 400))
-                        .figure, tmp / "fig2_identified_plant")
+    if plot:  # the figure only when asked (matplotlib and its drawing are most of the wait)
+        from ..plotting import plot_identified_plant
+
+        plot_identified_plant(results, np.logspace(-1, np.log10(200), 400)).save(plot)
     if as_json or json_out:
         emit_json(data, "identify", json_out)
     else:

@@ -38,12 +38,16 @@ from dataclasses import dataclass, field, fields
 from typing import Any, Sequence
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from .actuation import KINEMATICS, actuation_model
 from .driveline import driveline_model, uncoupled_frequencies
 from ..params import _SECTIONS, DampingLevel, Params, read_toml
 from ..errors import ParameterError
+from .._lazy import lazy_module
+
+#: `calibrate`'s solver, imported when it runs (not by every command that imports the linear
+#: models: scipy.optimize is a third of `empact modes`' start-up)
+optimize = lazy_module("scipy.optimize")
 
 __all__ = ["Target", "CalibrationResult", "load_targets", "calibrate", "model_frequencies"]
 
@@ -260,7 +264,7 @@ def calibrate(params: Params, targets: Sequence[Target], free: Sequence[str],
     def residual(x: np.ndarray) -> np.ndarray:
         return w * (model_frequencies(build(x), targets) / f_t - 1)
 
-    sol = least_squares(residual, x0, bounds=(lo, hi), x_scale=1.0, xtol=1e-12, ftol=1e-12,
+    sol = optimize.least_squares(residual, x0, bounds=(lo, hi), x_scale=1.0, xtol=1e-12, ftol=1e-12,
                         gtol=1e-12, max_nfev=2000)
     fitted = build(sol.x)
     achieved = model_frequencies(fitted, targets)

@@ -578,6 +578,33 @@ def traction_many(nu, r_g, p, out):
 
 
 @njit(cache=True)
+def traction_peak_many(r_g, g, p, nu_out, mu_out):
+    """Golden-section search of the traction curve's peak on slip [0, 0.99] at each ratio
+    ``r_g[k]`` (90 steps, ratio `g`): ``nu_out[k], mu_out[k]``.  Step for step the search of
+    `empact.nonlinear.equilibrium.traction_peak` (the same operations in the same order,
+    each point's value reused where the search keeps it), so bitwise the same."""
+    for k in range(r_g.shape[0]):
+        r = r_g[k]
+        a, b = 0.0, 0.99
+        c, d = b - g * (b - a), a + g * (b - a)
+        fc, fd = traction_mu(c, r, p), traction_mu(d, r, p)
+        for _ in range(90):
+            if fc > fd:  # the peak lies in [a, d]
+                b = d
+                d, fd = c, fc
+                c = b - g * (b - a)
+                fc = traction_mu(c, r, p)
+            else:
+                a = c
+                c, fc = d, fd
+                d = a + g * (b - a)
+                fd = traction_mu(d, r, p)
+        nu = 0.5 * (a + b)
+        nu_out[k] = nu
+        mu_out[k] = traction_mu(nu, r, p)
+
+
+@njit(cache=True)
 def mu_max_many(r_g, p, out):
     """Peak traction coefficient D(r_g) (the magic formula's) for a 1-D array of ratios."""
     for k in range(r_g.shape[0]):

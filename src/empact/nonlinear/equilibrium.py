@@ -26,6 +26,7 @@ from ..errors import ParameterError, TrimError
 from ..params import OperatingPoint
 from ..variator.geometry import check_ratio, radii, ratio_range, stretched_radii
 from ..variator.traction import traction_from_params
+from . import _kernel as K
 from .model import EmpactModel
 
 __all__ = ["TrimError", "TrimResult", "TrimGrid", "trim", "trim_grid", "traction_peak",
@@ -141,7 +142,26 @@ class TrimGrid:
 def traction_peak(model: EmpactModel, r_g: ArrayLike) -> tuple[NDArray, NDArray]:
     """Slip at the peak of the kernel's traction curve and the peak value ``(nu_peak,
     mu_peak)`` at ratio(s) `r_g` (golden-section search on [0, 0.99], to rounding; the
-    curve is unimodal in slip)."""
+    curve is unimodal in slip; compiled: `_kernel.traction_peak_many`, bitwise the
+    vectorised search `_traction_peak_numpy`)."""
+    r = np.atleast_1d(np.asarray(r_g, float))
+    if np.any(r <= 0):
+        raise ValueError(f"r_g = {r[r <= 0].flat[0]:g}: must be positive")
+    flat = np.ascontiguousarray(r.ravel())
+    nu, mu = np.empty(flat.size), np.empty(flat.size)
+    K.traction_peak_many(flat, _GOLDEN, model.p, nu, mu)
+    if np.ndim(r_g) == 0:
+        return float(nu[0]), float(mu[0])
+    return nu.reshape(r.shape), mu.reshape(r.shape)
+
+
+#: the golden section's ratio
+_GOLDEN = float((np.sqrt(5) - 1) / 2)
+
+
+def _traction_peak_numpy(model: EmpactModel, r_g: ArrayLike) -> tuple[NDArray, NDArray]:
+    """`traction_peak` as a vectorised NumPy search (the reference its compiled search is
+    checked against)."""
     r = np.atleast_1d(np.asarray(r_g, float))
     g = (np.sqrt(5) - 1) / 2
     a, b = np.zeros(r.shape), np.full(r.shape, 0.99)
