@@ -7,8 +7,12 @@ import pytest
 from scipy.io import loadmat
 from scipy.signal import cont2discrete
 
-from empact.control.closed_loop import (check_targets, control_example_path, run_closed_loop,
-                                        safety_factor_twin)
+from empact.control.closed_loop import (
+    check_targets,
+    control_example_path,
+    run_closed_loop,
+    safety_factor_twin,
+)
 from empact.control.controller import Controller, Schedule, load_controller
 from empact.control.family import DESIGN_GRID, design_family
 from empact.control.law import SHIPPED_LOOP, LoopConfig, LoopLaw

@@ -4,9 +4,18 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from empact.lti import (channel_zeros, damping_ratio, frequency_response, oscillatory,
-                        root_locus, statespace, system_response, track_branches,
-                        transmission_zeros, unwrapped_phase_deg)
+from empact.lti import (
+    channel_zeros,
+    damping_ratio,
+    frequency_response,
+    oscillatory,
+    root_locus,
+    statespace,
+    system_response,
+    track_branches,
+    transmission_zeros,
+    unwrapped_phase_deg,
+)
 
 
 def by_imag(p):

@@ -6,13 +6,13 @@ from scipy.integrate import odeint, solve_ivp
 from empact import paper
 from empact.linear.actuation import actuation_model
 from empact.linear.driveline import driveline_model
-from empact.nonlinear.nmp import belt_length_change, nmp_analysis
-from empact.nonlinear.model import ModelOptions, nonlinear_model, rhs
-from empact.params import OperatingPoint, ParameterError
-from empact.nonlinear.scenario import example_path, load_scenario
-from empact.nonlinear.simulation import run_scenario, simulate
 from empact.nonlinear.equilibrium import TrimError, trim
 from empact.nonlinear.linearization import linearize
+from empact.nonlinear.model import ModelOptions, nonlinear_model, rhs
+from empact.nonlinear.nmp import belt_length_change, nmp_analysis
+from empact.nonlinear.scenario import example_path, load_scenario
+from empact.nonlinear.simulation import run_scenario, simulate
+from empact.params import OperatingPoint, ParameterError
 
 OP = dict(nu=0.004, F_s=10e3)  # on the rising branch of the default traction curve
 

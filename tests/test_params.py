@@ -2,6 +2,7 @@
 import math
 
 import pytest
+
 from empact.params import ParameterError, Params, load_params, save_params
 
 

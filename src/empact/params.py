@@ -62,7 +62,8 @@ class ActuationParams(Section):
     """Linear actuation model (paper Sec. 2.1, Fig. 3)."""
 
     _name = "actuation"
-    J_mp: float = param("kg m^2", "primary servo inertia (rotor and worm), coordinate q1", 1e-8, 1.0)
+    J_mp: float = param("kg m^2", "primary servo inertia (rotor and worm), coordinate q1",
+                        1e-8, 1.0)
     J_ms: float = param("kg m^2", "secondary servo inertia (rotor and chain sprocket), "
                      "coordinate q2", 1e-8, 1.0)
     J_sp: float = param("kg m^2", "primary sun gear with screw, ring/carrier/planets lumped, q3",
@@ -474,7 +475,8 @@ def _schema() -> dict[str, Any]:
     """Nested dict of the allowed keys (values None) of a parameter file."""
     names = lambda kind: {f.name: None for f in fields(kind)}  # noqa: E731
     schema: dict[str, Any] = {name: names(kind) for name, kind in _SECTIONS.items()}
-    schema["damping"] = {"omega_pulley": None, **{lvl: names(DampingLevel) for lvl in DAMPING_LEVELS}}
+    schema["damping"] = {"omega_pulley": None,
+                         **{lvl: names(DampingLevel) for lvl in DAMPING_LEVELS}}
     return schema
 
 

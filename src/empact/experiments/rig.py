@@ -27,9 +27,9 @@ from .._validate import check_choice, check_int, check_number
 from ..errors import ParameterError
 from ..identification.frf_estimation import FRFEstimate, estimate_frf
 from ..identification.records import header_cell
+from ..nonlinear.equilibrium import trim
 from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, nonlinear_model
 from ..nonlinear.simulation import METHODS, simulate
-from ..nonlinear.equilibrium import trim
 from ..params import OperatingPoint
 
 sig = lazy_module("scipy.signal")

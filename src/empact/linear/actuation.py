@@ -67,11 +67,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..variator.geometry import variator_state
-from .lumped import LumpedModel, element_matrix
 from .._validate import check_choice, check_number
 from ..params import Params
+from ..variator.geometry import variator_state
 from ..variator.shift_law import creep_damping
+from .lumped import LumpedModel, element_matrix
 
 __all__ = ["COORDINATES", "SPRINGS", "INPUTS", "KINEMATICS", "actuation_model"]
 

@@ -40,10 +40,10 @@ from typing import Any, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..errors import ParameterError
+from ..params import _SECTIONS, DampingLevel, Params, read_toml
 from .actuation import KINEMATICS, actuation_model
 from .driveline import driveline_model, uncoupled_frequencies
-from ..params import _SECTIONS, DampingLevel, Params, read_toml
-from ..errors import ParameterError
 
 __all__ = ["Target", "CalibrationResult", "load_targets", "calibrate", "model_frequencies"]
 

@@ -27,9 +27,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..params import Params
 from ..variator.geometry import variator_state
 from .lumped import LumpedModel
-from ..params import Params
 
 __all__ = ["COORDINATES", "SPRINGS", "INPUTS", "driveline_model", "uncoupled_frequencies"]
 

@@ -25,10 +25,10 @@ from numpy.typing import NDArray
 from .._io import atomic_folder
 from .._validate import check_int
 from ..control.closed_loop import resolve_controller
+from ..errors import ParameterError, TrimError
 from ..export import jsonable
 from ..params import Params
 from ..sweep import SweepOptions, plan_chunks, run_chunks
-from ..errors import ParameterError, TrimError
 from .analyses import OUTPUTS, SECONDS_PER_RUN, AnalysisContext, RunFailed, evaluate
 from .spread import Spread
 

@@ -27,9 +27,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validate import check_choice, check_number
-from ..variator.geometry import belt_length, check_ratio, radii, wrap_angle
 from ..lti import channel_zeros
 from ..params import OperatingPoint, Params
+from ..variator.geometry import belt_length, check_ratio, radii, wrap_angle
 from .linearization import plant
 from .model import nonlinear_model
 

@@ -8,8 +8,9 @@ The integrator is a compiled, L-stable Rosenbrock method with an exact Jacobian:
 default the order-4 Rodas4 of `empact.nonlinear._rodas` (``method="rodas4"``), or the
 order-5 Rodas5P (``"rodas5p"``) or the order-2 method of `empact.nonlinear._rosenbrock`
 (``"ros2"``, the default up to 0.1); see `METHODS`.  It stops - keeping everything computed
-so far, marked incomplete - when omega_p reaches ``omega_min`` (the slip of eq. 2 is undefined at a standing
-primary), the belt goes slack, a radius leaves the variator's range, or the solver fails.
+so far, marked incomplete - when omega_p reaches ``omega_min`` (the slip of eq. 2 is undefined
+at a standing primary), the belt goes slack, a radius leaves the variator's range, or the solver
+fails.
 """
 from __future__ import annotations
 
@@ -32,9 +33,9 @@ from ..params import Params
 from . import _kernel as K
 from . import _rodas
 from ._rosenbrock import STATUS, integrate
+from .equilibrium import TrimResult, trim
 from .model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
 from .scenario import DEFAULT_METHOD, METHODS, Scenario
-from .equilibrium import TrimResult, trim
 
 __all__ = ["SimulationResult", "SampledController", "simulate", "run_scenario",
            "scenario_model", "scenario_signals", "csv_text", "write_csv", "state_tolerances",

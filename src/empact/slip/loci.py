@@ -15,14 +15,21 @@ from typing import Literal, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import eigvals as generalized_eigvals, null_space
+from scipy.linalg import eigvals as generalized_eigvals
+from scipy.linalg import null_space
 
 from .._validate import check_choice, check_number
 from ..errors import ParameterError
-from ..variator.geometry import variator_state
-from ..lti import (FrequencyResponse, RootLocus, damping_ratio, oscillatory, root_locus,
-                   track_branches)
+from ..lti import (
+    FrequencyResponse,
+    RootLocus,
+    damping_ratio,
+    oscillatory,
+    root_locus,
+    track_branches,
+)
 from ..params import OperatingPoint, Params
+from ..variator.geometry import variator_state
 from ..variator.traction import TractionModel
 from .coupling import VARIABLES, check_slip, linearisation_terms
 from .model import assemble_A, assemble_reduced, mass_stiffness, slip_model

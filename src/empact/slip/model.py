@@ -162,7 +162,7 @@ def state_matrices(params: Params, r_g: ArrayLike, nu: ArrayLike, F_s: ArrayLike
     J, K = mass_stiffness(params)
     flat = {k: np.ravel(v) for k, v in t.items()}
     mats = _assemble(J, K, flat["r_g"], flat["rho"], flat["c_s"], flat["g_F"], flat["omega_p"])
-    return tuple(m.reshape(shape + m.shape[1:]) for m in mats)  # type: ignore[return-value]
+    return tuple(m.reshape(shape + m.shape[1:]) for m in mats)
 
 
 def reduced_matrices(params: Params, r_g: ArrayLike, nu: ArrayLike, F_s: ArrayLike,

@@ -101,8 +101,10 @@ class ShiftParams(Section):
 class _HasShift(Protocol):
     """A parameter set (`empact.params.Params`): what the creep law reads of it."""
 
-    variator: VariatorParams
-    shift: ShiftParams
+    @property
+    def variator(self) -> VariatorParams: ...
+    @property
+    def shift(self) -> ShiftParams: ...
 
 #: shift laws of the nonlinear model
 SHIFT_LAWS = ("carbone", "ide", "shafai")

@@ -31,8 +31,8 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from typing import Callable, Protocol
 from pathlib import Path
+from typing import Callable, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -73,8 +73,10 @@ class ThrustRatioParams(Section):
 class _HasThrustRatio(Protocol):
     """A parameter set (`empact.params.Params`): what the analytic map reads of it."""
 
-    variator: VariatorParams
-    thrust_ratio: ThrustRatioParams
+    @property
+    def variator(self) -> VariatorParams: ...
+    @property
+    def thrust_ratio(self) -> ThrustRatioParams: ...
 
 
 def kappa_geo(r_g: ArrayLike, variator: VariatorParams) -> NDArray[np.float64]:

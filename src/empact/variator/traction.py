@@ -99,7 +99,8 @@ class TractionParams(Section):
 
 
 class _HasTraction(Protocol):
-    traction: TractionParams
+    @property
+    def traction(self) -> TractionParams: ...
 
 #: Slip range [-] in which the magic formula is used: beyond 20 % slip a pushbelt is destroyed
 #: (gross slip); the formula would be pure extrapolation there.
