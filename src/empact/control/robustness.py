@@ -169,8 +169,9 @@ def plant_responses(family: PlantFamily, inputs, outputs, omega) -> NDArray[np.c
 
 def robustness_map(family: PlantFamily, controller, channels=None,
                    omega: NDArray | None = None, G: NDArray | None = None) -> RobustnessMap:
-    """Closed-loop poles and disk margins of `controller` (an `empact.control.controller.
-    Controller`, continuous) against every plant of `family`; `G` are the family's
+    """Closed-loop poles and disk margins of `controller` against every plant of `family`.
+
+    `controller` is a continuous `empact.control.controller.Controller`; `G` are the family's
     responses at `omega` (`plant_responses`) when already computed."""
     if controller.dt:
         raise ValueError("robustness_map needs the continuous controller (dt = 0)")
