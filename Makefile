@@ -36,7 +36,7 @@ chromium:
 
 # ruff: pyflakes, pycodestyle errors and import order (configured in pyproject.toml)
 lint: $(STAMP)
-	$(BIN)/ruff check src tests bench
+	$(BIN)/ruff check src tests bench examples docs
 
 # mypy over the package (configured in pyproject.toml; every ignore there says why); run by
 # .ci/run (a cold run takes about a minute, so make test leaves it to CI and to you)
