@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 OUT ?= report
 DOCS_OUT ?= docs/_build/html
 
-.PHONY: reproduce test lint typecheck docs bench clean chromium
+.PHONY: reproduce test lint typecheck docs docs-check bench clean chromium
 
 # The install must build without a warning (a deprecated pyproject key is next year's broken
 # build): the backend's output is kept and searched. The only lines let through are pip's
@@ -52,9 +52,13 @@ docs: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/sphinx-build -W --keep-going -q -b html docs $(DOCS_OUT)
 	@echo "docs: $(DOCS_OUT)/index.html"
 
+# The built site in headless Chromium: links, anchors, images (.ci/run runs it after docs)
+docs-check: docs chromium
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m docs_site tests/test_docs_site.py
+
 bench: $(STAMP)
 	$(BIN)/python -m pip install --quiet -e '.[bench]' || echo "scikit-sundae not installed: bench_integrators skips CVODE"
 	for f in bench/bench_*.py; do MPLBACKEND=Agg $(BIN)/python $$f || exit 1; done
 
 clean:
-	rm -rf $(VENV) $(OUT) build src/*.egg-info .pytest_cache docs/_build docs/api/generated docs/gallery
+	rm -rf $(VENV) $(OUT) build src/*.egg-info .pytest_cache .mypy_cache docs/_build docs/api docs/gallery
