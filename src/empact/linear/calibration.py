@@ -240,6 +240,23 @@ def calibrate(params: Params, targets: Sequence[Target], free: Sequence[str],
     logarithms of the free parameters; bounds are the parameters' allowed ranges.  `ties`
     ``{dependent: source}`` set a parameter equal to a free one throughout (e.g.
     ``{"actuation.k_ts": "actuation.k_tp"}``).
+
+    Parameters
+    ----------
+    params : Params
+        The starting parameter set.
+    targets : sequence of Target
+        Target eigenfrequencies [Hz] by model, ratio and mode (`load_targets`).
+    free : sequence of str
+        Dotted names of the fitted parameters (``"actuation.k_w"``).
+    ties : dict, optional
+        ``{dependent: source}`` dotted names held equal.
+
+    Returns
+    -------
+    CalibrationResult
+        ``params`` (the fitted set), ``achieved_hz`` and ``relative_error`` per target,
+        ``initial`` and ``final`` values of the free parameters, ``success`` and ``message``.
     """
     targets, free, ties = tuple(targets), tuple(free), dict(ties or {})
     check_ties(ties, free)

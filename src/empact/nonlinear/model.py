@@ -569,6 +569,13 @@ def nonlinear_model(params: Params, options: ModelOptions | None = None, **kwarg
     **kwargs
         The `ModelOptions` fields as keywords (instead of `options`).
 
+    Returns
+    -------
+    EmpactModel
+        The compiled right-hand side with its names: 18 base states (the module notes'
+        ordering; more with options), inputs ``T_mp, T_ms`` [N m] and the drive and load
+        inputs of the chosen bench, outputs by name (``r_g``, ``nu``, ``F_s``, ...).
+
     Examples
     --------
     >>> from empact.params import default_params

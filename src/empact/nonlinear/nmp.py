@@ -145,6 +145,12 @@ def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
     **options
         `empact.nonlinear.model.ModelOptions` (default: moderate damping, torque-controlled
         drive and load, the machine's kinematics and shift law).
+
+    Returns
+    -------
+    NmpResult
+        ``zeros`` and ``rhp_zeros`` [rad/s] per ratio, ``n_rhp`` and ``n_rhp_real`` (shape
+        (n_r,)), the Sec. 2.3 ``geometry`` and the ``operating`` point.
     """
     check_choice("slip", slip, SLIPS)
     if f_max is not None:

@@ -206,6 +206,23 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     -------
     SimulationResult
         ``u`` holds the inputs as applied (commands with their hold).
+
+    Examples
+    --------
+    A step of 0.5 N m on the secondary servo torque at 0.1 s, from a trimmed point:
+
+    >>> import numpy as np
+    >>> import empact
+    >>> params = empact.load_params()
+    >>> m = empact.nonlinear_model(params)
+    >>> op = empact.trim(m, empact.OperatingPoint(r_g=1.0, tau=0.9, F_s=10e3, omega_p=300.0))
+    >>> T = op.u[1]
+    >>> steps = {"T_ms": np.array([[0, T], [0.1, T], [0.1001, T + 0.5], [0.5, T + 0.5]])}
+    >>> res = empact.simulate(m, op.x, steps, 0.5, u0=op.u)
+    >>> res.complete, res.t.shape                      # 1 kHz samples
+    (True, (501,))
+    >>> res.output("nu")[[0, -1]].round(4)             # the slip [-] before and after
+    array([0.0144, 0.0242])
     """
     step = _integrator(method)
     x = np.array(x0, dtype=float)
@@ -410,7 +427,24 @@ def run_scenario(scenario: Scenario, params: Params, *,
     """Trim the scenario's initial point and simulate it (see `simulate`).
 
     A closed-loop scenario (one with a ``[controller]`` table) needs its `controller` built
-    (`empact.control.closed_loop.run_closed_loop` does that)."""
+    (`empact.control.closed_loop.run_closed_loop` does that).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        An open-loop scenario (`load_scenario`).
+    params : Params
+    controller : SampledController, optional
+        The sampled law of a closed-loop scenario.
+    progress : bool
+        A progress bar on stderr.
+
+    Returns
+    -------
+    SimulationResult
+        ``t`` [s], shape (n_t,), states ``x`` (n_t, n), outputs ``y`` and inputs ``u`` by name
+        (``output(name)``), ``complete`` and ``message``.
+    """
     if scenario.closed_loop and controller is None:
         raise ParameterError(f"scenario {scenario.name!r} has a [controller] table: run it "
                              "with empact.run_closed_loop (or 'empact control simulate')")

@@ -262,6 +262,25 @@ def slip_model(params: Params, op: OperatingPoint | None = None,
     op : operating point (r_g, nu, F_s, omega_p; one given by a torque ratio or a load is
         resolved, `OperatingPoint.resolve`)
     traction : traction model (default `traction_from_params(params)`)
+
+    Returns
+    -------
+    SlipModel
+        States ``theta_d, theta_p, theta_s, theta_l`` [rad] and their speeds [rad/s];
+        inputs ``F_s`` [N], ``T_d, T_l`` [N m]; outputs ``nu`` [-], ``omega_p, omega_s``
+        [rad/s], ``T_b`` [N m]: ``poles()``, ``zeros()``, ``frequency_response`` and
+        ``state_space()``.
+
+    Examples
+    --------
+    On the falling side of the traction curve (4 % slip at r_g = 1) the driveline's two
+    oscillatory pairs are unstable (Fig. 11):
+
+    >>> import empact
+    >>> op = empact.OperatingPoint(r_g=1.0, nu=0.04, F_s=10e3, omega_p=300.0)
+    >>> p = empact.slip_model(empact.load_params(), op).poles()
+    >>> int(((p.real > 0) & (p.imag > 1.0)).sum())     # pairs with a growing oscillation
+    2
     """
     op = (params.operating if op is None else op).resolve(params, traction)
     belt = linearize_belt(params, op, traction)
