@@ -146,7 +146,7 @@ def test_disk_margin_agrees_with_python_control():
     assert ours == pytest.approx(ref, rel=1e-6)
 
 
-def test_shipped_hinf_is_the_documented_design(params, design_family):
+def test_regression_shipped_hinf_is_the_documented_design(params, design_family):
     """Regression guard: data/control/hinf.json is what `design_hinf` gives on the design
     family with the shipped recipe (`SHIPPED_DESIGNS`), compared by frequency response (a
     state space is unique only up to its coordinates; H-infinity synthesis moves them
