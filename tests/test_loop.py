@@ -229,9 +229,10 @@ def test_safety_factor_twin_starts_at_its_own_clamping(params):
 
 
 def test_regression_shipped_pi_is_the_documented_design(params):
-    """Regression guard (data/control/pi.json): the shipped PI's schedule is the crossover gains of the design family at its stored
-    crossovers (`_crossover_gains`, to 1e-9), on the design family's axes, with the shipped
-    recipe (SHIPPED_DESIGNS) recorded in its design data."""
+    """Regression guard (data/control/pi.json): the shipped PI's schedule is the crossover
+    gains of the design family at its stored crossovers (`_crossover_gains`, to 1e-9), on the
+    design family's axes, with the shipped recipe (SHIPPED_DESIGNS) recorded in its design
+    data."""
     c = shipped_controller("pi")
     fam = design_family(params)
     wc = 2 * np.pi * np.array(c.design["crossover_hz"])
