@@ -6,20 +6,23 @@ import numpy as np
 import pytest
 from scipy.io import loadmat
 
-from empact.nonlinear.scenario import load_scenario
-from empact.control.closed_loop import (control_example_path,
-                                        run_closed_loop)
+from empact.control.closed_loop import control_example_path, run_closed_loop
 from empact.control.controller import load_controller
 from empact.control.family import PlantFamily, load_family, plant_family, save_family
 from empact.control.hinf import check_wellposed, design_hinf, mixed_sensitivity_plant
-from empact.control.pi import design_pi, pi_controller
-from empact.control.robustness import (closed_loop_matrix, disk_margin, frequency_responses,
-                                       robustness_map)
+from empact.control.pi import pi_controller
+from empact.control.robustness import (
+    closed_loop_matrix,
+    disk_margin,
+    frequency_responses,
+    robustness_map,
+)
 from empact.errors import ParameterError
 from empact.lti import system_response
 from empact.nonlinear.linearization import plant
 from empact.nonlinear.model import nonlinear_model
-from empact.reproduction.control import DESIGN_GRID, SHIPPED_DESIGNS, shipped_controller
+from empact.nonlinear.scenario import load_scenario
+from empact.reproduction.control import SHIPPED_DESIGNS, shipped_controller
 
 
 @pytest.fixture(scope="module")
@@ -143,7 +146,7 @@ def test_disk_margin_agrees_with_python_control():
     assert ours == pytest.approx(ref, rel=1e-6)
 
 
-def test_shipped_hinf_is_the_documented_design(params, design_family):
+def test_regression_shipped_hinf_is_the_documented_design(params, design_family):
     """Regression guard: data/control/hinf.json is what `design_hinf` gives on the design
     family with the shipped recipe (`SHIPPED_DESIGNS`), compared by frequency response (a
     state space is unique only up to its coordinates; H-infinity synthesis moves them

@@ -18,7 +18,8 @@ P = default_params()
 
 
 @pytest.mark.parametrize("old, new", [
-    ("empact.geometry", "empact.variator.geometry"), ("empact.traction", "empact.variator.traction"),
+    ("empact.geometry", "empact.variator.geometry"),
+    ("empact.traction", "empact.variator.traction"),
     ("empact.shift_law", "empact.variator.shift_law"),
     ("empact.thrust_ratio", "empact.variator.thrust_ratio")])
 def test_old_module_paths_warn_and_re_export(old, new):
@@ -73,8 +74,8 @@ def test_renamed_options_and_fields_warn():
     with pytest.warns(DeprecationWarning, match="use PlantFamily.interpolate"):
         A = fam.at(r_g=1.0)[0]
     assert np.array_equal(A, fam.interpolate(r_g=1.0).A)
-    from empact.plotting import plot_bode
     from empact.linear.actuation import actuation_model
+    from empact.plotting import plot_bode
     frf = actuation_model(P, 1.0).frequency_response(2 * np.pi * np.logspace(0, 2, 20),
                                                      ["T_mp"], ["theta_mp"])
     a = plot_bode([frf], [("theta_mp", "T_mp")])

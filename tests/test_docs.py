@@ -1,9 +1,13 @@
 """Documentation habits (python-control's): every public name documented, and a numpydoc
 "Parameters" section names every parameter of its function."""
+import doctest
 import importlib
 import inspect
+import io
 import pkgutil
 import re
+
+import pytest
 
 import empact
 
@@ -46,3 +50,83 @@ def test_parameters_sections_are_complete():
             if not re.search(rf"(^|[\s,]){re.escape(name)}\b", section, re.M):
                 bad.append(f"{mod_name}.{obj.__name__}: {name}")
     assert bad == []
+
+
+# --- numpydoc coverage and doctests (issue 24, item 3) ----------------------------------------
+
+#: the main entry points: their Examples run as doctests here
+DOCTESTED = ("load_params", "actuation_model", "driveline_model", "slip_model",
+             "nonlinear_model", "plant", "plant_family", "design_pi", "design_hinf",
+             "simulate", "run_closed_loop", "monte_carlo")
+
+
+def _sections(obj) -> set[str]:
+    return set(re.findall(r"^([A-Z][A-Za-z ]+)\n-{3,}\s*$", inspect.getdoc(obj) or "", re.M))
+
+
+def _needs(obj) -> set[str]:
+    """The numpydoc sections `obj` must have: Parameters when it takes any, Returns when a
+    function returns something (a class's Attributes count as its Parameters)."""
+    try:
+        sig = inspect.signature(obj)
+    except (TypeError, ValueError):
+        return set()
+    need = {"Parameters"} if [p for p in sig.parameters if p not in ("self", "cls")] else set()
+    if inspect.isfunction(obj) and sig.return_annotation not in (None, "None"):
+        need.add("Returns")
+    return need
+
+
+def _complete(obj) -> bool:
+    have = _sections(obj)
+    if inspect.isclass(obj) and "Attributes" in have:
+        have.add("Parameters")
+    if "Yields" in have:
+        have.add("Returns")
+    return _needs(obj) <= have
+
+
+def _public_objects():
+    """Every public function and class once, under the module that defines it."""
+    seen = {}
+    for _, mod, obj in _public():
+        if (inspect.isfunction(obj) or inspect.isclass(obj)) \
+                and getattr(obj, "__module__", "").startswith("empact"):
+            seen.setdefault(id(obj), (f"{obj.__module__}.{obj.__qualname__}", obj))
+    return sorted(seen.values(), key=lambda t: t[0])
+
+
+#: the share of public functions and classes (331) with the numpydoc Parameters / Returns
+#: sections they need: 24 % before issue 24 (80; of the 235 functions 14, 6 %), 35 % after
+#: it (115; functions 48, 20 %; the curated namespace complete). Raise it as you document
+#: more, never lower it.
+COVERAGE_FLOOR = 0.34
+
+
+def test_numpydoc_coverage_does_not_fall():
+    objs = _public_objects()
+    done = [q for q, o in objs if _complete(o)]
+    share = len(done) / len(objs)
+    assert share >= COVERAGE_FLOOR, f"{len(done)} of {len(objs)} complete ({share:.0%})"
+
+
+def test_the_curated_namespace_is_fully_documented():
+    """Every name of ``import empact`` has its Parameters and Returns sections."""
+    missing = [n for n in empact.__all__
+               if (inspect.isfunction(getattr(empact, n)) or inspect.isclass(getattr(empact, n)))
+               and not _complete(getattr(empact, n))]
+    assert missing == []
+
+
+@pytest.mark.parametrize("name", DOCTESTED)
+def test_entry_point_examples_run_as_doctests(name):
+    obj = getattr(empact, name)
+    assert {"Parameters", "Returns", "Examples"} <= _sections(obj), _sections(obj)
+    module = inspect.getmodule(obj)
+    tests = doctest.DocTestFinder(recurse=False).find(obj, name, module, globs=vars(module).copy())
+    assert tests and tests[0].examples, f"{name}: no example"
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    out = io.StringIO()
+    for test in tests:
+        runner.run(test, out=out.write)
+    assert runner.failures == 0, out.getvalue()

@@ -8,10 +8,9 @@ written."""
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from test_cli import LEAKS, PROGRESS
 
 from empact.cli import main
-
-from test_cli import LEAKS, PROGRESS
 
 #: command (cheap with any acceptable value) -> the options fuzzed
 TARGETS = {

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from empact.variator.geometry import belt_length, radii, ratio_range, variator_state, wrap_angle
 from empact.params import ParameterError
+from empact.variator.geometry import belt_length, radii, ratio_range, variator_state, wrap_angle
 
 RATIOS = np.array([0.43, 0.5, 0.8, 1.0, 1.6, 2.0, 2.25])
 

@@ -7,8 +7,7 @@ import pytest
 import scipy.signal as sg
 from scipy.optimize import linear_sum_assignment
 
-from empact.identification import (FRFEstimate, RealizationResult, estimate_frf,
-                                   realize_steps)
+from empact.identification import FRFEstimate, RealizationResult, estimate_frf, realize_steps
 
 FS_STEP = 500.0      # step-response sample rate [Hz]
 N_STEP = 1500        # step-response samples (3 s)

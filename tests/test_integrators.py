@@ -19,8 +19,7 @@ from empact.nonlinear import _rodas
 from empact.nonlinear.equilibrium import trim
 from empact.nonlinear.model import nonlinear_model
 from empact.nonlinear.scenario import example_path, load_scenario, scenario_from_dict
-from empact.nonlinear.simulation import (METHODS, STATUS, scenario_model, scenario_signals,
-                                         simulate)
+from empact.nonlinear.simulation import METHODS, STATUS, scenario_model, scenario_signals, simulate
 from empact.params import OperatingPoint
 
 NEW = ("rodas5p", "rodas4")
@@ -222,7 +221,8 @@ def test_stops_give_the_same_status_codes(params):
     accepted step past the event: the slack stop of each method lies in [t*, t* + 2 ms], t* from
     ros2 with steps of at most 5 us (rtol 1e-8); the standstill stops lie within 5 ms of each
     other (0.6 % of the time to the stop; measured 2.7 ms on the shipped parameters, whose
-    test-bench inertias (issue 20) make the deceleration slow).  The samples kept end at the stop and are finite."""
+    test-bench inertias (issue 20) make the deceleration slow).  The samples kept end at the stop
+    and are finite."""
     t_star = _slack_run(params, "ros2", rtol=1e-8, max_step=5e-6).stats["t_end"]
     m = nonlinear_model(params)  # torque-controlled drive: a big load brakes it to a stop
     op = trim(m, OperatingPoint(r_g=1.0, omega_p=50.0, F_s=20e3, T_l=10.0))

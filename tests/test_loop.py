@@ -7,8 +7,12 @@ import pytest
 from scipy.io import loadmat
 from scipy.signal import cont2discrete
 
-from empact.control.closed_loop import (check_targets, control_example_path, run_closed_loop,
-                                        safety_factor_twin)
+from empact.control.closed_loop import (
+    check_targets,
+    control_example_path,
+    run_closed_loop,
+    safety_factor_twin,
+)
 from empact.control.controller import Controller, Schedule, load_controller
 from empact.control.family import DESIGN_GRID, design_family
 from empact.control.law import SHIPPED_LOOP, LoopConfig, LoopLaw
@@ -224,17 +228,18 @@ def test_safety_factor_twin_starts_at_its_own_clamping(params):
     assert tw.inputs["T_l"][1, 1] > tw.inputs["T_l"][0, 1]
 
 
-def test_shipped_pi_is_the_documented_design(params):
-    """The shipped PI's schedule is the crossover gains of the design family at its stored
-    crossovers (`_crossover_gains`, to 1e-9), on the design family's axes, with the shipped
-    recipe (SHIPPED_DESIGNS) recorded in its design data."""
+def test_regression_shipped_pi_is_the_documented_design(params):
+    """Regression guard (data/control/pi.json): the shipped PI's schedule is the crossover
+    gains of the design family at its stored crossovers (`_crossover_gains`, to 1e-9), on the
+    design family's axes, with the shipped recipe (SHIPPED_DESIGNS) recorded in its design
+    data."""
     c = shipped_controller("pi")
     fam = design_family(params)
     wc = 2 * np.pi * np.array(c.design["crossover_hz"])
     np.testing.assert_allclose(c.schedule.gains, _crossover_gains(fam, c.measured, wc),
                                rtol=1e-9)
     for k, v in DESIGN_GRID.items():
-        np.testing.assert_allclose(c.schedule.axes[k], v)
+        np.testing.assert_allclose(c.schedule.axes[k], v, rtol=0, atol=0)  # the grid, copied
     assert c.design["alpha_min"] == SHIPPED_DESIGNS["pi"]["alpha_min"]
     assert c.design["worst"]["disk_margin"] >= SHIPPED_DESIGNS["pi"]["alpha_min"]
 

@@ -1,8 +1,10 @@
 """Parameter files: loading, saving, validation (issue 2, item 2)."""
 import math
+import re
 
 import pytest
-from empact.params import ParameterError, Params, load_params, save_params
+
+from empact.params import ParameterError, load_params, save_params
 
 
 def write(tmp_path, text, name="p.toml"):
@@ -67,17 +69,23 @@ def test_bad_targets_are_refused(tmp_path, text, match):
         load_targets(str(write(tmp_path, text, "t.toml")))
 
 
-def test_describe_lists_units(params):
-    rows = type(params.driveline).describe()
-    assert ("J_d", "kg m^2") == rows[0][:2]
-    assert all(not math.isnan(0) for _ in rows)
-    assert isinstance(params, Params)
+def test_describe_lists_every_field_with_unit_interval_and_text(params):
+    """`describe` has one row per field, in field order, each with a unit, the allowed
+    interval the validator uses and a description (the old version asserted
+    ``not math.isnan(0)`` over the rows, which could not fail)."""
+    from dataclasses import fields
+
+    section = type(params.driveline)
+    rows = section.describe()
+    assert [r[0] for r in rows] == [f.name for f in fields(section)]
+    assert rows[0][:3] == ("J_d", "kg m^2", "(1e-06, 1000]")
+    assert all(unit and re.fullmatch(r"[(\[].+, .+[)\]]", interval) and text
+               for _, unit, interval, text in rows), rows
 
 
 def test_every_shipped_parameter_has_a_source_and_a_plausible_band():
     """Issue 20: `params show --describe` gives every shipped value its source (or rationale)
     and a plausible band; the value lies in its band and the band inside the allowed range."""
-    import math
 
     from empact.params import describe_parameters
 

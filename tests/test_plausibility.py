@@ -9,12 +9,12 @@ import pytest
 import tomli_w
 
 from empact.errors import ParameterError
-from empact.variator.geometry import ratio_range
 from empact.linear.actuation import actuation_model
 from empact.linear.driveline import driveline_model
 from empact.params import dumps_params, load_params
 from empact.plausibility import EXPECTED_RIGID_MODES, check_plausible
 from empact.slip import slip_model
+from empact.variator.geometry import ratio_range
 
 N_FUZZ = 600
 

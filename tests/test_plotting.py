@@ -12,8 +12,13 @@ from empact.nonlinear.nmp import nmp_analysis
 from empact.nonlinear.scenario import example_path, load_scenario
 from empact.nonlinear.simulation import run_scenario
 from empact.params import OperatingPoint
-from empact.slip import belt_root_locus, pole_sweep, slip_frequency_responses, stability_map, \
-    zero_locus
+from empact.slip import (
+    belt_root_locus,
+    pole_sweep,
+    slip_frequency_responses,
+    stability_map,
+    zero_locus,
+)
 from empact.variator.traction import traction_curves, traction_from_params
 
 
@@ -121,6 +126,7 @@ def test_log_value_axes_over_four_decades_lose_minor_ticks(tmp_path):
     """Minor ticks thinned on log value axes spanning > 4 decades; frequency axes keep them
     (with labels off beyond two decades)."""
     import matplotlib.ticker as mt
+
     from empact.plotting._common import save_figure
     fig, axes = _bode_like_figure()
     save_figure(fig, tmp_path / "b", formats=("png",))

@@ -5,7 +5,6 @@ interpreter and the figure call its prose shows (``empact.plotting.plot_bode(...
 background from the start of the session (`conftest.py`, `readme_tour.py`); its test reads
 the records."""
 import pytest
-
 from readme_tour import README, WRITTEN, _strip_comment, python_examples, tour_commands
 
 

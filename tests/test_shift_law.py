@@ -6,15 +6,20 @@ from scipy.integrate import solve_ivp, trapezoid
 from scipy.linalg import eigh, null_space
 
 from empact.errors import ParameterError
-from empact.params import OperatingPoint
 from empact.linear.actuation import actuation_model
 from empact.nonlinear import _kernel as K
 from empact.nonlinear.equilibrium import trim
 from empact.nonlinear.model import nonlinear_model
 from empact.nonlinear.simulation import simulate
+from empact.params import OperatingPoint
 from empact.variator.shift_law import creep_coefficient, creep_damping, shift_rate
-from empact.variator.thrust_ratio import (AnalyticThrustRatio, TabulatedThrustRatio, kappa_geo,
-                                 load_thrust_ratio, zero_torque_difference)
+from empact.variator.thrust_ratio import (
+    AnalyticThrustRatio,
+    TabulatedThrustRatio,
+    kappa_geo,
+    load_thrust_ratio,
+    zero_torque_difference,
+)
 
 
 def creep_run(params, omega_p, dT, duration=0.5):

@@ -4,8 +4,13 @@ import pytest
 from numpy.testing import assert_allclose
 
 from empact.params import ParameterError
-from empact.variator.traction import (MagicFormulaTraction, TabulatedTraction, load_traction,
-                             traction_curves, traction_from_params)
+from empact.variator.traction import (
+    MagicFormulaTraction,
+    TabulatedTraction,
+    load_traction,
+    traction_curves,
+    traction_from_params,
+)
 
 RATIOS = (0.43, 1.0, 2.25)  # paper Fig. 10: LOW, MED, OD
 

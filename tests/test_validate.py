@@ -4,8 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from empact._validate import (check_bool, check_choice, check_int, check_number, check_values,
-                              fmt)
+from empact._validate import check_bool, check_choice, check_int, check_number, check_values, fmt
 from empact.errors import ParameterError
 
 

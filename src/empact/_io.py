@@ -48,7 +48,7 @@ def atomic_file(path: str | os.PathLike[str]) -> Iterator[Path]:
         raise
 
 
-def _write(path: str | os.PathLike[str], write: Callable[[Path], None]) -> Path:
+def _write(path: str | os.PathLike[str], write: Callable[[Path], object]) -> Path:
     with atomic_file(path) as tmp:
         write(tmp)
     return Path(path)

@@ -116,6 +116,12 @@ def frequency_response(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike,
     omega : frequencies [rad/s], shape (n_f,); none may be a pole on the imaginary axis
     inputs, outputs : signal names (m and p of them)
     label : free text for the result
+
+    Returns
+    -------
+    FrequencyResponse
+        ``H``, shape (p, m, n_f) (complex, the units of output / input), with `omega`,
+        `inputs`, `outputs` and `label`.
     """
     A, B, C, D = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C, D))
     w = np.atleast_1d(np.asarray(omega, float))
@@ -145,6 +151,21 @@ def transmission_zeros(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, *
     [0, 0]]``, after a diagonal state scaling ``x = S x~`` (`scale`, for states of very
     different units) and a normalisation of B and C; zeros above `max_abs` [rad/s] count as
     infinite.
+
+    Parameters
+    ----------
+    A, B, C, D : array_like
+        State-space matrices, shapes (n, n), (n, m), (m, n), (m, m) (square: as many outputs
+        as inputs).
+    scale : array_like, optional
+        Diagonal state scaling ``S``, shape (n,) (default: none, ``S = 1``).
+    max_abs : float
+        Zeros larger than this [rad/s] count as infinite.
+
+    Returns
+    -------
+    ndarray of complex
+        The finite zeros [rad/s], shape (n_z,), sorted by magnitude.
     """
     A, B, C, D = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C, D))
     n, m, p = A.shape[0], B.shape[1], C.shape[0]

@@ -62,7 +62,8 @@ class ActuationParams(Section):
     """Linear actuation model (paper Sec. 2.1, Fig. 3)."""
 
     _name = "actuation"
-    J_mp: float = param("kg m^2", "primary servo inertia (rotor and worm), coordinate q1", 1e-8, 1.0)
+    J_mp: float = param("kg m^2", "primary servo inertia (rotor and worm), coordinate q1",
+                        1e-8, 1.0)
     J_ms: float = param("kg m^2", "secondary servo inertia (rotor and chain sprocket), "
                      "coordinate q2", 1e-8, 1.0)
     J_sp: float = param("kg m^2", "primary sun gear with screw, ring/carrier/planets lumped, q3",
@@ -348,7 +349,19 @@ _OPTIONAL_SECTIONS = ("servo", "sensors")
 
 @dataclass(frozen=True)
 class Params:
-    """A complete, validated parameter set.  Immutable: `from_dotted` returns a changed copy."""
+    """A complete, validated parameter set.  Immutable: `from_dotted` returns a changed copy.
+
+    Attributes
+    ----------
+    variator, actuation, damping, driveline, traction, shift : Section
+        The frozen, validated blocks of the parameter file's tables (``[variator]``, ...;
+        SI units, each field's unit and range in ``empact params show --describe``).
+    thrust_ratio, paper_sec21, servo, sensors : Section
+        The same, for the ``[thrust_ratio]``, ``[paper_sec21]``, ``[servo]`` and
+        ``[sensors]`` tables.
+    operating : OperatingPoint
+        The default operating point (``[operating]``).
+    """
 
     variator: VariatorParams
     actuation: ActuationParams
@@ -474,7 +487,8 @@ def _schema() -> dict[str, Any]:
     """Nested dict of the allowed keys (values None) of a parameter file."""
     names = lambda kind: {f.name: None for f in fields(kind)}  # noqa: E731
     schema: dict[str, Any] = {name: names(kind) for name, kind in _SECTIONS.items()}
-    schema["damping"] = {"omega_pulley": None, **{lvl: names(DampingLevel) for lvl in DAMPING_LEVELS}}
+    schema["damping"] = {"omega_pulley": None,
+                         **{lvl: names(DampingLevel) for lvl in DAMPING_LEVELS}}
     return schema
 
 
@@ -517,7 +531,13 @@ _DEFAULT: Params | None = None
 
 
 def default_params() -> Params:
-    """The shipped parameter set (``empact/data/default.toml``), calibrated to the paper."""
+    """The shipped parameter set (``empact/data/default.toml``), calibrated to the paper.
+
+    Returns
+    -------
+    Params
+        The shipped set (cached: every call returns the same frozen object).
+    """
     global _DEFAULT
     if _DEFAULT is None:
         text = resources.files("empact.data").joinpath("default.toml").read_text()
@@ -588,7 +608,31 @@ def describe_parameters(params: Params | None = None) -> list[ParameterInfo]:
 
 
 def load_params(path: str | os.PathLike[str] | None = None) -> Params:
-    """Load a TOML parameter file over the shipped defaults (`None`: the defaults)."""
+    """Load a TOML parameter file over the shipped defaults.
+
+    Parameters
+    ----------
+    path : str or path-like, optional
+        A TOML parameter file with any subset of the shipped keys (``[section] key = value``,
+        SI units); the other keys keep their shipped values. `None`: the shipped set.
+
+    Returns
+    -------
+    Params
+        The frozen, validated parameter set.
+
+    Raises
+    ------
+    ParameterError
+        One line naming the file, the bad field, its value and the allowed range.
+
+    Examples
+    --------
+    >>> import empact
+    >>> params = empact.load_params()
+    >>> params.operating.r_g, params.operating.F_s, params.operating.tau   # [-], [N], [-]
+    (1.0, 10000.0, 0.9)
+    """
     if path is None:
         return default_params()
     return Params.from_dict(read_toml(path), base=default_params(), source=str(path))
@@ -601,5 +645,15 @@ def dumps_params(params: Params, header: str = "") -> str:
 
 
 def save_params(params: Params, path: str | os.PathLike[str], header: str = "") -> None:
-    """Write a parameter set to TOML atomically (temporary file, then rename)."""
+    """Write a parameter set to TOML atomically (temporary file, then rename).
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set to write (every key, SI units).
+    path : str or path-like
+        The TOML file written.
+    header : str
+        Comment lines written at the top of the file (without ``#``).
+    """
     atomic_write_text(path, dumps_params(params, header))

@@ -20,10 +20,10 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import ParameterError
-from .variator.geometry import ratio_range
 from .linear.actuation import actuation_model
 from .linear.driveline import driveline_model
 from .params import Params
+from .variator.geometry import ratio_range
 from .variator.traction import traction_from_params
 
 __all__ = ["check_plausible", "EXPECTED_RIGID_MODES"]

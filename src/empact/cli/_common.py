@@ -28,8 +28,8 @@ from .._io import atomic_write_text
 from .._validate import check_int, check_number, check_values
 from ..errors import ParameterError
 from ..export import jsonable as to_jsonable
-from ..variator.geometry import check_ratio
 from ..params import OperatingPoint, Params, load_params
+from ..variator.geometry import check_ratio
 from ..variator.traction import traction_from_params
 
 __all__ = ["sweep_options", "sweep_from_options",

@@ -9,10 +9,24 @@ import numpy as np
 
 from .._progress import progress as progress_bar
 from .._validate import check_number
-from ._common import (UNITS, ErrorGroup, Failed, InputError, OutputFile, check_references,
-                      emit_json, force_option, fraction_metrics, get_params, json_options,
-                      operating_values, params_option, quiet_option, sweep_from_options,
-                      sweep_options)
+from ._common import (
+    UNITS,
+    ErrorGroup,
+    Failed,
+    InputError,
+    OutputFile,
+    check_references,
+    emit_json,
+    force_option,
+    fraction_metrics,
+    get_params,
+    json_options,
+    operating_values,
+    params_option,
+    quiet_option,
+    sweep_from_options,
+    sweep_options,
+)
 from .slip import parse_values
 
 #: the grid options of `plants` and `control design`: option -> (variable, unit, help)
@@ -364,8 +378,12 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, params_fil
                  json_out, force, quiet) -> None:
     """Closed loop on the nonlinear machine: print the scenario's metrics and its targets
     (exit 1 when the run stops early, or with --strict when a target is missed)."""
-    from ..control.closed_loop import (check_targets, control_example_path, control_examples,
-                                       run_closed_loop)
+    from ..control.closed_loop import (
+        check_targets,
+        control_example_path,
+        control_examples,
+        run_closed_loop,
+    )
     from ..nonlinear.scenario import load_scenario
     from ..nonlinear.simulation import write_csv
 

@@ -8,12 +8,23 @@ import numpy as np
 from .._progress import progress as progress_bar
 from .._validate import check_int, check_number
 from ..experiments.rig import EXCITATIONS
-from ..variator.geometry import check_ratio
 from ..identification import METHODS, estimate_frf
 from ..identification.records import load_records, sample_rate
-from ._common import (InputError, OutputFile, emit_json, force_option, get_params,
-                      json_options, operating_point, output_folder, params_option, parse_list,
-                      quiet_option, to_jsonable)
+from ..variator.geometry import check_ratio
+from ._common import (
+    InputError,
+    OutputFile,
+    emit_json,
+    force_option,
+    get_params,
+    json_options,
+    operating_point,
+    output_folder,
+    params_option,
+    parse_list,
+    quiet_option,
+    to_jsonable,
+)
 from .linear import plot_option
 
 #: Most samples of a virtual rig record (duration x sample rate).

@@ -6,13 +6,22 @@ import click
 import numpy as np
 
 from .._validate import check_int, check_number
-from ..variator.geometry import check_ratio
 from ..linear.actuation import actuation_model
 from ..linear.calibration import calibrate, load_targets
 from ..linear.driveline import driveline_model, uncoupled_frequencies
 from ..params import DAMPING_LEVELS, save_params
-from ._common import (PLOT_SUFFIXES, Failed, InputError, OutputFile, emit_json, force_option,
-                      get_params, json_options, params_option)
+from ..variator.geometry import check_ratio
+from ._common import (
+    PLOT_SUFFIXES,
+    Failed,
+    InputError,
+    OutputFile,
+    emit_json,
+    force_option,
+    get_params,
+    json_options,
+    params_option,
+)
 
 MODELS = {"actuation": actuation_model, "driveline": driveline_model}
 #: Most frequencies one response may have.

@@ -3,9 +3,20 @@ from __future__ import annotations
 
 import click
 
-from ._common import (Failed, InputError, check_references, emit_json, force_option,
-                      get_params, json_options, output_folder, params_option, quiet_option,
-                      sweep_from_options, sweep_options)
+from ._common import (
+    Failed,
+    InputError,
+    check_references,
+    emit_json,
+    force_option,
+    get_params,
+    json_options,
+    output_folder,
+    params_option,
+    quiet_option,
+    sweep_from_options,
+    sweep_options,
+)
 
 
 @click.command("montecarlo")

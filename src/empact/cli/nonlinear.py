@@ -6,9 +6,20 @@ import numpy as np
 
 from .._validate import check_number
 from ..variator.geometry import check_ratio
-from ._common import (Failed, InputError, OutputFile, check_references, emit_json,
-                      force_option, get_params, json_options, operating_point, output_folder,
-                      params_option, parse_list)
+from ._common import (
+    Failed,
+    InputError,
+    OutputFile,
+    check_references,
+    emit_json,
+    force_option,
+    get_params,
+    json_options,
+    operating_point,
+    output_folder,
+    params_option,
+    parse_list,
+)
 from .linear import plot_option
 
 #: Most output samples (duration x sample rate) one simulation may write.
@@ -173,8 +184,7 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, dr
     """
     from ..export import format_of, save_system, system_dict
     from ..nonlinear.equilibrium import trim
-    from ..nonlinear.linearization import (PLANT_INPUTS, PLANT_OUTPUTS, disturbance_input,
-                                           linearize)
+    from ..nonlinear.linearization import PLANT_INPUTS, PLANT_OUTPUTS, disturbance_input, linearize
     from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, nonlinear_model
 
     if out is None and fmt not in (None, "json"):

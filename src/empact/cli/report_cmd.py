@@ -5,8 +5,8 @@ import click
 
 from .. import paper
 from .._validate import check_choice
-from ..variator.geometry import ratio_range
 from ..report import SECTIONS, build_report
+from ..variator.geometry import ratio_range
 from ._common import InputError, force_option, get_params, output_folder, params_option
 
 #: the ratios the report evaluates: the paper's LOW and OD (Fig. 10) and Tables 1-2

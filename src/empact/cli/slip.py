@@ -17,12 +17,33 @@ import numpy as np
 
 from .._validate import check_int, check_number
 from ..params import OperatingPoint, Params
-from ..slip import (INPUTS, OUTPUTS, VARIABLES, belt_root_locus, pole_sweep,
-                    slip_frequency_responses, slip_model, stability_map, zero_locus)
+from ..slip import (
+    INPUTS,
+    OUTPUTS,
+    VARIABLES,
+    belt_root_locus,
+    pole_sweep,
+    slip_frequency_responses,
+    slip_model,
+    stability_map,
+    zero_locus,
+)
 from ..variator.traction import TractionModel, load_traction, traction_curves, traction_from_params
-from ._common import (LINEAR_OPTIONS, OPTION_VARIABLE, ErrorGroup, InputError, emit_json,
-                      force_option, get_params, json_options, operating_values,
-                      params_option, quiet_option, sweep_from_options, sweep_options)
+from ._common import (
+    LINEAR_OPTIONS,
+    OPTION_VARIABLE,
+    ErrorGroup,
+    InputError,
+    emit_json,
+    force_option,
+    get_params,
+    json_options,
+    operating_values,
+    params_option,
+    quiet_option,
+    sweep_from_options,
+    sweep_options,
+)
 from .linear import frequency_grid, plot_option
 
 VARIABLE_OPTION = {OPTION_VARIABLE[k]: k for k in LINEAR_OPTIONS}

@@ -52,7 +52,17 @@ def control_example_path(name: str) -> Path:
 
 def load_control_scenario(path) -> Scenario:
     """Deprecated: `empact.nonlinear.scenario.load_scenario` reads every scenario; this
-    checks that the file has a ``[controller]`` table."""
+    checks that the file has a ``[controller]`` table.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A closed-loop scenario (TOML).
+
+    Returns
+    -------
+    Scenario
+    """
     warnings.warn("load_control_scenario is deprecated; use load_scenario (one scenario "
                   "format)", DeprecationWarning, stacklevel=2)
     sc = load_scenario(path)
@@ -132,6 +142,22 @@ def run_closed_loop(scenario: Scenario, params: Params, controller: Controller |
     Returns
     -------
     ClosedLoopResult
+        The simulation (``result``), the references at its sample times, the trimmed start,
+        the law that ran and the ``metrics`` (`metrics`: slip errors in percentage points,
+        forces [N], powers [W]).
+
+    Examples
+    --------
+    The shipped load step at r_g = 1 (50 % of the torque capacity at 0.5 s) with the
+    shipped PI:
+
+    >>> import empact
+    >>> from empact.control.closed_loop import control_example_path
+    >>> from empact.nonlinear.scenario import load_scenario
+    >>> run = empact.run_closed_loop(load_scenario(control_example_path("slip-load-step-r1")),
+    ...                              empact.load_params())
+    >>> run.metrics["macro_slip"], bool(run.metrics["peak_slip_error_pp"] < 0.6)
+    (False, True)
     """
     model, op = scenario_model(scenario, params)
     law = build_law(scenario, params, controller, model, op, ideal, nominal)

@@ -208,8 +208,8 @@ class Controller:
         return self.state_space()
 
     def discretize(self, dt: float, method: str = "tustin") -> "Controller":
-        """The controller at sample time `dt` [s] (Tustin by default; ``scipy.signal.
-        cont2discrete``)."""
+        """The controller at sample time `dt` [s] (Tustin by default; by
+        ``scipy.signal.cont2discrete``)."""
         if self.dt:
             raise ParameterError(f"controller is already discrete (dt = {self.dt:g} s)")
         dt = check_number("dt", dt, 0.0, 1.0, lo_open=True, unit="s")

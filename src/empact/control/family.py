@@ -258,6 +258,19 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
     Returns
     -------
     PlantFamily
+        The plants on the grid (``family.shape``: one axis per array argument, in the order
+        ``r_g, nu, tau, F_s, omega_p, T_l``), each with inputs ``T_mp, T_ms, T_l`` [N m] and
+        outputs ``r_g, nu, nu_r`` [-]; ``family.plant(index)`` is one `Plant`.
+
+    Examples
+    --------
+    >>> import empact
+    >>> family = empact.plant_family(empact.load_params(), r_g=[0.5, 1.0, 2.0],
+    ...                              tau=[0.85, 0.95])
+    >>> family.shape, list(family.axes)
+    ((3, 2), ['r_g', 'tau'])
+    >>> family.plant((1, 0)).outputs
+    ('r_g', 'nu', 'nu_r')
     """
     if model is None:
         model = nonlinear_model(params, **{**BENCH_OPTIONS, **options})

@@ -185,6 +185,21 @@ def design_hinf(family: PlantFamily, bandwidth_hz=(0.5, 0.2), *, slip: str = "nu
         Servo torque regarded as large [N m] (scales W2).
     f_keep : float, optional
         Deprecated name of `f_keep_hz`.
+
+    Returns
+    -------
+    Controller
+        Continuous, measured ``(r_g, slip)`` errors -> ``(T_mp, T_ms)`` [N m]; ``design``
+        holds ``gamma`` (the achieved S/KS norm) and the robustness over the family.
+
+    Examples
+    --------
+    >>> import empact
+    >>> family = empact.plant_family(empact.load_params(), r_g=[0.5, 1.0, 2.0],
+    ...                              tau=[0.85, 0.95])
+    >>> k = empact.design_hinf(family, bandwidth_hz=(0.1, 0.05))
+    >>> bool((empact.robustness_map(family, k).max_real_pole < 0).all())
+    True
     """
     if f_keep is not None:
         warnings.warn("design_hinf(f_keep=) is deprecated; use f_keep_hz [Hz]",

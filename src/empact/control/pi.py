@@ -92,6 +92,30 @@ def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float 
         ``F_s``; with `loop`): each loop's crossover is the requested one at every grid
         point (``|k_p(sigma) G_ii(j w_c; sigma)| = 1``), interpolated between them
         (`empact.control.controller.Schedule`).
+
+    Returns
+    -------
+    Controller
+        Continuous (``dt = 0``), measured ``(r_g, slip)`` errors -> ``(T_mp, T_ms)`` [N m];
+        its ``design`` dict records the gains and the margins reached.
+
+    Raises
+    ------
+    ParameterError
+        When no PI keeps every plant stable with disk margin `alpha_min` at the requested
+        crossovers (one line naming what to relax).
+
+    Examples
+    --------
+    >>> import empact
+    >>> family = empact.plant_family(empact.load_params(), r_g=[0.5, 1.0, 2.0],
+    ...                              tau=[0.85, 0.95])
+    >>> pi = empact.design_pi(family, bandwidth_hz=(0.1, 0.25), alpha_min=0.3)
+    >>> pi.measured, pi.outputs
+    (('r_g', 'nu'), ('T_mp', 'T_ms'))
+    >>> check = empact.robustness_map(family, pi)
+    >>> bool((check.max_real_pole < 0).all()), bool(check.disk_margin.min() >= 0.3)
+    (True, True)
     """
     if loop is not None:
         return _design_pi_loop(family, bandwidth_hz, alpha_min, slip, nominal, loop, params,

@@ -169,9 +169,29 @@ def plant_responses(family: PlantFamily, inputs, outputs, omega) -> NDArray[np.c
 
 def robustness_map(family: PlantFamily, controller, channels=None,
                    omega: NDArray | None = None, G: NDArray | None = None) -> RobustnessMap:
-    """Closed-loop poles and disk margins of `controller` (an `empact.control.controller.
-    Controller`, continuous) against every plant of `family`; `G` are the family's
-    responses at `omega` (`plant_responses`) when already computed."""
+    """Closed-loop poles and disk margins of `controller` against every plant of `family`.
+
+    `controller` is a continuous `empact.control.controller.Controller`; `G` are the family's
+    responses at `omega` (`plant_responses`) when already computed.
+
+    Parameters
+    ----------
+    family : PlantFamily
+    controller : Controller
+        Continuous.
+    channels : optional
+        Not used: the measured channels are ``controller.measured``.
+    omega : ndarray, optional
+        Frequencies [rad/s] of the margin computation, shape (n_f,) (default `OMEGA`).
+    G : ndarray, optional
+        The family's responses at `omega` (`plant_responses`).
+
+    Returns
+    -------
+    RobustnessMap
+        ``max_real_pole`` [1/s], ``disk_margin`` [-], ``gain_margin_db`` [dB] and
+        ``phase_margin_deg`` [deg], each of shape ``family.shape``.
+    """
     if controller.dt:
         raise ValueError("robustness_map needs the continuous controller (dt = 0)")
     ii = [family.inputs.index(n) for n in controller.outputs]

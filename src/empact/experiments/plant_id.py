@@ -140,6 +140,12 @@ def identify_plant(params, op: OperatingPoint | None = None, *, order: int | Non
     min_fit : worst-channel step fit to reach [%] when `order` is None
     n_block_rows, n_block_cols : Hankel size
     **experiment : passed to `step_experiment`
+
+    Returns
+    -------
+    PlantIdentification
+        The step ``experiment``, the ``realization`` (its ``sys``: the identified model, a
+        named ``control.StateSpace``) and, computed on first use, the ``exact`` linearisation.
     """
     op = params.operating if op is None else op
     exp = step_experiment(params, op, **experiment)

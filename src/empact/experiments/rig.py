@@ -27,9 +27,9 @@ from .._validate import check_choice, check_int, check_number
 from ..errors import ParameterError
 from ..identification.frf_estimation import FRFEstimate, estimate_frf
 from ..identification.records import header_cell
+from ..nonlinear.equilibrium import trim
 from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, nonlinear_model
 from ..nonlinear.simulation import METHODS, simulate
-from ..nonlinear.equilibrium import trim
 from ..params import OperatingPoint
 
 sig = lazy_module("scipy.signal")
@@ -191,7 +191,25 @@ class RigRecord:
 
 
 def run_rig(params, settings: RigSettings | None = None, *, progress: bool = False) -> RigRecord:
-    """Run one virtual rig experiment (nonlinear model, Coulomb friction, sensor noise)."""
+    """Run one virtual rig experiment (nonlinear model, Coulomb friction, sensor noise).
+
+    Parameters
+    ----------
+    params : Params
+    settings : RigSettings, optional
+        Ratio, slip, clamping force, speed, the excited servo, the excitation and its band
+        [Hz] and rms [N m], duration [s], sample rate [Hz], friction, noise, seed, integrator
+        (default `RigSettings()`).
+    progress : bool
+        A progress bar on stderr.
+
+    Returns
+    -------
+    RigRecord
+        ``t`` [s], shape (n_t,), and ``signals`` by name (``T_mp, T_ms`` [N m], ``theta_mp,
+        theta_ms`` [rad], ``nu`` [-]; deviations from the operating point), the settings, the
+        trimmed point; ``to_csv()`` writes it as a measurement.
+    """
     s = settings or RigSettings()
     model = nonlinear_model(params, coulomb_sp=float(s.coulomb[0]),
                             coulomb_ss=float(s.coulomb[1]))
@@ -221,6 +239,19 @@ def rig_frf(record: RigRecord, outputs=MEASURED, method: str = "H1") -> FRFEstim
     The first ``settings.settle`` seconds are left out.  A periodic multisine is analysed with
     a rectangular window over whole periods (no leakage at its lines); the other excitations
     with Hann-windowed, half-overlapping segments of ``settings.period`` samples.
+
+    Parameters
+    ----------
+    record : RigRecord
+    outputs : sequence of str
+        The measured signals [their units].
+    method : {"H1", "H2"}
+        The estimator.
+
+    Returns
+    -------
+    FRFEstimate
+        ``H`` (n_out, 1, n_f), ``coherence`` (n_out, 1, n_f) [-] at ``omega`` [rad/s].
     """
     s = record.settings
     k0 = int(round(s.settle * s.sample_rate))

@@ -67,11 +67,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..variator.geometry import variator_state
-from .lumped import LumpedModel, element_matrix
 from .._validate import check_choice, check_number
 from ..params import Params
+from ..variator.geometry import variator_state
 from ..variator.shift_law import creep_damping
+from .lumped import LumpedModel, element_matrix
 
 __all__ = ["COORDINATES", "SPRINGS", "INPUTS", "KINEMATICS", "actuation_model"]
 
@@ -108,6 +108,20 @@ def actuation_model(params: Params, r_g: float, damping: str = "none",
         (`r_g`, `omega_pulley`, `F_s`).
     F_s : float, optional
         Clamping force for the creep damping [N]; default ``params.operating.F_s``.
+
+    Returns
+    -------
+    LumpedModel
+        Coordinates ``theta_mp, theta_ms, theta_sp, theta_ss`` [rad], ``x_p, x_s`` [m] (and
+        the derived ``x_np, x_ns``), inputs ``T_mp, T_ms`` [N m]: its ``modes()``,
+        ``frequency_response(omega, inputs, outputs)`` and ``state_space()``.
+
+    Examples
+    --------
+    >>> import empact
+    >>> act = empact.actuation_model(empact.load_params(), r_g=1.0)
+    >>> act.modes().frequencies_hz[:4].round(1)        # Table 1 at r_g = 1 [Hz]
+    array([ 0. , 10.7, 17.3, 47.9])
     """
     check_choice("kinematics", kinematics, KINEMATICS)
     check_choice("pulley_damping", pulley_damping, ("shafai", "creep"))

@@ -39,10 +39,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..errors import ParameterError
+from ..params import _SECTIONS, DampingLevel, Params, read_toml
 from .actuation import KINEMATICS, actuation_model
 from .driveline import driveline_model, uncoupled_frequencies
-from ..params import _SECTIONS, DampingLevel, Params, read_toml
-from ..errors import ParameterError
 from .._lazy import lazy_module
 
 #: `calibrate`'s solver, imported when it runs (not by every command that imports the linear
@@ -244,6 +244,23 @@ def calibrate(params: Params, targets: Sequence[Target], free: Sequence[str],
     logarithms of the free parameters; bounds are the parameters' allowed ranges.  `ties`
     ``{dependent: source}`` set a parameter equal to a free one throughout (e.g.
     ``{"actuation.k_ts": "actuation.k_tp"}``).
+
+    Parameters
+    ----------
+    params : Params
+        The starting parameter set.
+    targets : sequence of Target
+        Target eigenfrequencies [Hz] by model, ratio and mode (`load_targets`).
+    free : sequence of str
+        Dotted names of the fitted parameters (``"actuation.k_w"``).
+    ties : dict, optional
+        ``{dependent: source}`` dotted names held equal.
+
+    Returns
+    -------
+    CalibrationResult
+        ``params`` (the fitted set), ``achieved_hz`` and ``relative_error`` per target,
+        ``initial`` and ``final`` values of the free parameters, ``success`` and ``message``.
     """
     targets, free, ties = tuple(targets), tuple(free), dict(ties or {})
     check_ties(ties, free)

@@ -27,9 +27,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..params import Params
 from ..variator.geometry import variator_state
 from .lumped import LumpedModel
-from ..params import Params
 
 __all__ = ["COORDINATES", "SPRINGS", "INPUTS", "driveline_model", "uncoupled_frequencies"]
 
@@ -39,7 +39,30 @@ INPUTS = ("T_d", "T_l")
 
 
 def driveline_model(params: Params, r_g: float, *, belt: bool = True) -> LumpedModel:
-    """The driveline at geometric ratio `r_g` (`belt=False`: the belt spring removed)."""
+    """The test-bench driveline (Fig. 7) at geometric ratio `r_g`.
+
+    Parameters
+    ----------
+    params : Params
+    r_g : float
+        Geometric ratio [-], inside the variator's range.
+    belt : bool
+        With the belt as a chain element (default); `False`: the belt spring removed (the
+        two uncoupled sides).
+
+    Returns
+    -------
+    LumpedModel
+        Coordinates ``theta_d, theta_p, theta_s, theta_l`` [rad], inputs ``T_d, T_l``
+        [N m]: its ``modes()``, ``frequency_response`` and ``state_space()``.
+
+    Examples
+    --------
+    >>> import empact
+    >>> dl = empact.driveline_model(empact.load_params(), r_g=0.5)
+    >>> dl.modes().frequencies_hz.round(1)             # Table 2 at r_g = 0.5 [Hz]
+    array([  0. ,   3.5,  24. , 235.6])
+    """
     d = params.driveline
     geo = variator_state(r_g, params.variator)
     R_p, R_s = float(geo.R_p), float(geo.R_s)

@@ -150,7 +150,8 @@ class LumpedModel:
             index(list(self.inputs), name, "input")
         return np.column_stack([self.inputs[name] for name in names])
 
-    def output_matrix(self, outputs: Sequence[str]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    def output_matrix(self, outputs: Sequence[str]
+                      ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """Rows ``(n_out, 2n)`` on ``[q, q']`` for named outputs.
 
         A coordinate or derived-coordinate name gives a displacement; the same name with

@@ -245,5 +245,18 @@ def spread_from_dict(data: Mapping[str, Any], params: Params, source: str = "") 
 
 
 def load_spread(path: str | os.PathLike[str], params: Params) -> Spread:
-    """Read and validate a spread TOML file; errors are one line naming file and parameter."""
+    """Read and validate a spread TOML file; errors are one line naming file and parameter.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A spread TOML file: one ``[spread."section.key"]`` table per parameter.
+    params : Params
+        The nominal set (defines each parameter's value and allowed range).
+
+    Returns
+    -------
+    Spread
+        The distributions by dotted name; ``names`` in file order.
+    """
     return spread_from_dict(read_toml(path, "spread"), params, str(path))

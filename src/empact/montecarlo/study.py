@@ -25,10 +25,10 @@ from numpy.typing import NDArray
 from .._io import atomic_folder
 from .._validate import check_int
 from ..control.closed_loop import resolve_controller
+from ..errors import ParameterError, TrimError
 from ..export import jsonable
 from ..params import Params
 from ..sweep import SweepOptions, plan_chunks, run_chunks
-from ..errors import ParameterError, TrimError
 from .analyses import OUTPUTS, SECONDS_PER_RUN, AnalysisContext, RunFailed, evaluate
 from .spread import Spread
 
@@ -196,6 +196,19 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
     Returns
     -------
     MonteCarloResult
+        ``samples`` (runs, n_parameters), ``values`` (runs, n_outputs; NaN where a run
+        failed), ``ok`` and ``reasons`` per run; ``summary()`` and ``table()``.
+
+    Examples
+    --------
+    >>> from importlib.resources import files
+    >>> import empact
+    >>> params = empact.load_params()
+    >>> spread = empact.load_spread(files("empact.data") / "montecarlo" / "example-spread.toml",
+    ...                             params)
+    >>> study = empact.monte_carlo(params, spread, 8, "plant", seed=1)
+    >>> study.values.shape, int(study.ok.sum())
+    ((8, 8), 8)
     """
     runs = check_int("runs", runs, 1, MAX_RUNS)
     seed = check_int("seed", seed, 0, 2**63 - 1)

@@ -18,8 +18,15 @@ simulation
 """
 from .equilibrium import TrimResult, traction_peak, trim
 from .linearization import PLANT_INPUTS, PLANT_OUTPUTS, linearize, plant, trim_point
-from .model import (BASE_STATES, OUTPUTS, EmpactModel, ModelOptions, nonlinear_model, rhs,
-                    shift_inertia)
+from .model import (
+    BASE_STATES,
+    OUTPUTS,
+    EmpactModel,
+    ModelOptions,
+    nonlinear_model,
+    rhs,
+    shift_inertia,
+)
 from .nmp import BeltLengthChange, NmpResult, belt_length_change, nmp_analysis
 from .scenario import Scenario, example_path, list_examples, load_scenario
 from .simulation import SimulationResult, run_scenario, simulate, write_csv

@@ -323,7 +323,6 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
     r, w, nu_, Fs, Tl, tau_ = (np.array(a, float) for a in np.broadcast_arrays(*arrays))
     N = r.size
     c = model.constants
-    tb = c.tan_beta
     cosb = c.cos_beta
     lo, hi = ratio_range(model.params.variator)
     reason = np.full(N, "", dtype=object)

@@ -18,17 +18,17 @@ with slip, and the test-bench driveline (model notes Sec. 6; the paper's ref. [4
 
 State ordering (SI), ``x``:
 
-=====  ===============  ================================================================
-0-5    q1..q6           ``theta_mp, theta_ms, theta_sp, theta_ss`` [rad], ``x_p, x_s`` [m]
-6-11   velocities       ``omega_mp, omega_ms, omega_sp, omega_ss`` [rad/s], ``v_p, v_s`` [m/s]
-12     ``twist_tc``     ``theta_d - theta_p``, lock-up clutch twist [rad]
-13     ``twist_ds``     ``theta_s - theta_l``, driveshaft twist [rad]
-14-17  shaft speeds     ``omega_d, omega_p, omega_s, omega_l`` [rad/s]
-(opt)  ``s_b``          belt stretch of the locked belt, ``d/dt s_b = R_p omega_p - R_s omega_s``
-                        [m] (only with ``belt="locked"``)
-(opt)  ``z_d``, ``z_l`` integral torques of the drive / load speed loops [N m]
-(opt)  ``z_r``          integral torque of the ratio controller [N m]
-=====  ===============  ================================================================
+=====  =================  ================================================================
+0-5    q1..q6             ``theta_mp, theta_ms, theta_sp, theta_ss`` [rad], ``x_p, x_s`` [m]
+6-11   velocities         ``omega_mp, omega_ms, omega_sp, omega_ss`` [rad/s], ``v_p, v_s`` [m/s]
+12     ``twist_tc``       ``theta_d - theta_p``, lock-up clutch twist [rad]
+13     ``twist_ds``       ``theta_s - theta_l``, driveshaft twist [rad]
+14-17  shaft speeds       ``omega_d, omega_p, omega_s, omega_l`` [rad/s]
+(opt)  ``s_b``            belt stretch of the locked belt, ``d/dt s_b = R_p omega_p - R_s omega_s``
+                          [m] (only with ``belt="locked"``)
+(opt)  ``z_d``, ``z_l``   integral torques of the drive / load speed loops [N m]
+(opt)  ``z_r``            integral torque of the ratio controller [N m]
+=====  =================  ================================================================
 
 The driveline is written in the rotating frame (twists and speeds): the shaft angles grow
 without bound at speed and only their differences store energy, so a steady operating point
@@ -568,6 +568,13 @@ def nonlinear_model(params: Params, options: ModelOptions | None = None, **kwarg
         ...; see `ModelOptions`).  Unknown keywords are an error.
     **kwargs
         The `ModelOptions` fields as keywords (instead of `options`).
+
+    Returns
+    -------
+    EmpactModel
+        The compiled right-hand side with its names: 18 base states (the module notes'
+        ordering; more with options), inputs ``T_mp, T_ms`` [N m] and the drive and load
+        inputs of the chosen bench, outputs by name (``r_g``, ``nu``, ``F_s``, ...).
 
     Examples
     --------

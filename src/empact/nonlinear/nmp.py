@@ -27,9 +27,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validate import check_choice, check_number
-from ..variator.geometry import belt_length, check_ratio, radii, wrap_angle
 from ..lti import channel_zeros
 from ..params import OperatingPoint, Params
+from ..variator.geometry import belt_length, check_ratio, radii, wrap_angle
 from .linearization import plant
 from .model import nonlinear_model
 
@@ -145,6 +145,12 @@ def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
     **options
         `empact.nonlinear.model.ModelOptions` (default: moderate damping, torque-controlled
         drive and load, the machine's kinematics and shift law).
+
+    Returns
+    -------
+    NmpResult
+        ``zeros`` and ``rhp_zeros`` [rad/s] per ratio, ``n_rhp`` and ``n_rhp_real`` (shape
+        (n_r,)), the Sec. 2.3 ``geometry`` and the ``operating`` point.
     """
     check_choice("slip", slip, SLIPS)
     if f_max is not None:

@@ -333,6 +333,17 @@ class Scenario:
 def load_scenario(path: str | os.PathLike[str]) -> Scenario:
     """Read and validate a scenario file.
 
+    Parameters
+    ----------
+    path : str or path-like
+        A scenario TOML file (open loop, or closed loop with a ``[controller]`` table).
+
+    Returns
+    -------
+    Scenario
+        Duration [s], sample rate [Hz], model options, initial point, input signals, and for a
+        closed loop the controller, references, sensors, limits and targets.
+
     Raises
     ------
     ParameterError

@@ -8,8 +8,9 @@ The integrator is a compiled, L-stable Rosenbrock method with an exact Jacobian:
 default the order-4 Rodas4 of `empact.nonlinear._rodas` (``method="rodas4"``), or the
 order-5 Rodas5P (``"rodas5p"``) or the order-2 method of `empact.nonlinear._rosenbrock`
 (``"ros2"``, the default up to 0.1); see `METHODS`.  It stops - keeping everything computed
-so far, marked incomplete - when omega_p reaches ``omega_min`` (the slip of eq. 2 is undefined at a standing
-primary), the belt goes slack, a radius leaves the variator's range, or the solver fails.
+so far, marked incomplete - when omega_p reaches ``omega_min`` (the slip of eq. 2 is undefined
+at a standing primary), the belt goes slack, a radius leaves the variator's range, or the solver
+fails.
 """
 from __future__ import annotations
 
@@ -32,9 +33,9 @@ from ..params import Params
 from . import _kernel as K
 from . import _rodas
 from ._rosenbrock import STATUS, integrate
+from .equilibrium import TrimResult, trim
 from .model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
 from .scenario import DEFAULT_METHOD, METHODS, Scenario
-from .equilibrium import TrimResult, trim
 
 __all__ = ["SimulationResult", "SampledController", "simulate", "run_scenario",
            "scenario_model", "scenario_signals", "csv_text", "write_csv", "state_tolerances",
@@ -205,6 +206,23 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     -------
     SimulationResult
         ``u`` holds the inputs as applied (commands with their hold).
+
+    Examples
+    --------
+    A step of 0.5 N m on the secondary servo torque at 0.1 s, from a trimmed point:
+
+    >>> import numpy as np
+    >>> import empact
+    >>> params = empact.load_params()
+    >>> m = empact.nonlinear_model(params)
+    >>> op = empact.trim(m, empact.OperatingPoint(r_g=1.0, tau=0.9, F_s=10e3, omega_p=300.0))
+    >>> T = op.u[1]
+    >>> steps = {"T_ms": np.array([[0, T], [0.1, T], [0.1001, T + 0.5], [0.5, T + 0.5]])}
+    >>> res = empact.simulate(m, op.x, steps, 0.5, u0=op.u)
+    >>> res.complete, res.t.shape                      # 1 kHz samples
+    (True, (501,))
+    >>> res.output("nu")[[0, -1]].round(4)             # the slip [-] before and after
+    array([0.0144, 0.0242])
     """
     step = _integrator(method)
     x = np.array(x0, dtype=float)
@@ -409,7 +427,24 @@ def run_scenario(scenario: Scenario, params: Params, *,
     """Trim the scenario's initial point and simulate it (see `simulate`).
 
     A closed-loop scenario (one with a ``[controller]`` table) needs its `controller` built
-    (`empact.control.closed_loop.run_closed_loop` does that)."""
+    (`empact.control.closed_loop.run_closed_loop` does that).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        An open-loop scenario (`load_scenario`).
+    params : Params
+    controller : SampledController, optional
+        The sampled law of a closed-loop scenario.
+    progress : bool
+        A progress bar on stderr.
+
+    Returns
+    -------
+    SimulationResult
+        ``t`` [s], shape (n_t,), states ``x`` (n_t, n), outputs ``y`` and inputs ``u`` by name
+        (``output(name)``), ``complete`` and ``message``.
+    """
     if scenario.closed_loop and controller is None:
         raise ParameterError(f"scenario {scenario.name!r} has a [controller] table: run it "
                              "with empact.run_closed_loop (or 'empact control simulate')")

@@ -3,7 +3,7 @@ the traction curves with their 90 % and peak slips, and the static stability of 
 over torque ratio and ratio."""
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any
 
 import matplotlib as mpl
 import numpy as np

@@ -54,9 +54,11 @@ _SLIP_PERCENT = re.compile(r"^(.*\bslip\b.*|\|?nu\b.*|max \|nu.*) \[(%|pp)\]$")
 
 def csv_slip_columns(header: Sequence[str], rows: Sequence[Sequence[object]]
                      ) -> list[list[object]]:
-    """Header and rows for a CSV file: a slip column in % or percentage points (a header
-    ``... slip ... [%]``, ``nu [%]``, ``max |nu - nu*| [pp]``) as a fraction ``[-]`` (one unit
-    per quantity in machine-readable output; % is for the page)."""
+    """Header and rows for a CSV file, a slip column in % or percentage points as a fraction.
+
+    A slip column has a header ``... slip ... [%]``, ``nu [%]`` or ``max |nu - nu*| [pp]``; it
+    becomes a fraction ``[-]`` (one unit per quantity in machine-readable output; % is for the
+    page)."""
     slip = [bool(_SLIP_PERCENT.match(str(h))) for h in header]
     head = [re.sub(r" \[(%|pp)\]$", " [-]", str(h)) if s else h for h, s in zip(header, slip)]
     return [head] + [[c / 100 if s and isinstance(c, (int, float, np.number))

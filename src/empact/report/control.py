@@ -3,8 +3,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plotting import (plot_closed_loop, plot_family_poles, plot_loop_shapes,
-                        plot_robustness_maps, plot_shift_envelope)
+from ..plotting import (
+    plot_closed_loop,
+    plot_family_poles,
+    plot_loop_shapes,
+    plot_robustness_maps,
+    plot_shift_envelope,
+)
 from ..reproduction import control as rep
 from .context import Context
 

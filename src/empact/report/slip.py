@@ -2,8 +2,14 @@
 from __future__ import annotations
 
 from .. import paper
-from ..plotting import (plot_belt_root_locus, plot_pole_sweep, plot_slip_bode,
-                        plot_stability_map, plot_traction, plot_zero_locus)
+from ..plotting import (
+    plot_belt_root_locus,
+    plot_pole_sweep,
+    plot_slip_bode,
+    plot_stability_map,
+    plot_traction,
+    plot_zero_locus,
+)
 from ..reproduction import slip as rep
 from .context import Context
 

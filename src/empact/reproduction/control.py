@@ -100,10 +100,12 @@ class StudiesSection:
 
     Attributes
     ----------
-    traction_error : ``{(scenario, factor): metrics}`` of the 50 % load steps
+    traction_error : dict
+        The metrics of the 50 % load steps by ``(scenario, factor)``
     montecarlo : the Monte Carlo study of `MC_SCENARIO` (`MC_RUNS` runs)
-    saving : rows ``{scenario, strategy, mean_clamping_force, mean_losses, saving, r_g,
-        macro_slip}``
+    saving : list of dict
+        Rows with the keys ``scenario, strategy, mean_clamping_force, mean_losses, saving,
+        r_g, macro_slip``
     claims : the targets checked
     """
 

@@ -177,8 +177,8 @@ def fig2(params: Params) -> Fig2:
                     "every ratio)",
               computed=f"modes 2 and 3: linear damping ratios {min(lin_z):.3f}-"
                        f"{max(lin_z):.3f}, nonlinear {min(non_z):.3f}-{max(non_z):.3f} "
-                       f"({min(n / l for n, l in zip(non_z, lin_z)):.1f}-"
-                       f"{max(n / l for n, l in zip(non_z, lin_z)):.1f} times)",
+                       f"({min(n / d for n, d in zip(non_z, lin_z)):.1f}-"
+                       f"{max(n / d for n, d in zip(non_z, lin_z)):.1f} times)",
               shown=all(more_damped[k] for k in shift),
               explanation="A shift or worm mode is not damped 1.5 times more in the nonlinear "
                           "model: the creep law's resistance does not reach it.",

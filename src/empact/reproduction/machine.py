@@ -20,9 +20,13 @@ from ..nonlinear.scenario import load_scenario
 from ..params import OperatingPoint, Params
 from ..variator.geometry import primary_radius_per_ratio, variator_state
 from ..variator.shift_law import creep_coefficient, creep_damping
-from ..variator.thrust_ratio import (RatioStabilityMap, ratio_stability,
-                                     ratio_stability_map, thrust_ratio_from_params,
-                                     zero_torque_difference)
+from ..variator.thrust_ratio import (
+    RatioStabilityMap,
+    ratio_stability,
+    ratio_stability_map,
+    thrust_ratio_from_params,
+    zero_torque_difference,
+)
 from ..variator.traction import TractionCurves, traction_curves, traction_from_params
 from .claims import Claim
 from .linear import MACHINE, READING

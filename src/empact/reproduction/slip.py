@@ -9,9 +9,19 @@ import numpy as np
 from .. import paper
 from ..lti import FrequencyResponse, oscillatory
 from ..params import OperatingPoint, Params
-from ..slip import (BeltRootLocus, PoleSweep, StabilityMap, ZeroLocus, belt_root_locus,
-                    coupled_limit, pole_sweep, slip_frequency_responses, slip_model,
-                    stability_map, zero_locus)
+from ..slip import (
+    BeltRootLocus,
+    PoleSweep,
+    StabilityMap,
+    ZeroLocus,
+    belt_root_locus,
+    coupled_limit,
+    pole_sweep,
+    slip_frequency_responses,
+    slip_model,
+    stability_map,
+    zero_locus,
+)
 from ..variator.traction import TractionCurves, traction_curves, traction_from_params
 from .claims import Claim
 

@@ -13,18 +13,43 @@ loci
 stability
     Stability maps over two operating variables.
 """
-from .coupling import (VARIABLES, BeltLinearisation, belt_torque, linearise_belt,
-                       linearize_belt, slip)
-from .loci import (BeltRootLocus, PoleSweep, ZeroLocus, belt_root_locus, coupled_limit,
-                   pole_sweep, slip_frequency_responses, zero_locus)
-from .model import (INPUTS, N_STRUCTURAL_ZEROS, OUTPUTS, REDUCED_STATES, STATES, SlipModel,
-                    reduced_matrices, slip_model, slip_state_space, state_matrices)
+from .coupling import (
+    VARIABLES,
+    BeltLinearisation,
+    belt_torque,
+    linearise_belt,
+    linearize_belt,
+    slip,
+)
+from .loci import (
+    BeltRootLocus,
+    PoleSweep,
+    ZeroLocus,
+    belt_root_locus,
+    coupled_limit,
+    pole_sweep,
+    slip_frequency_responses,
+    zero_locus,
+)
+from .model import (
+    INPUTS,
+    N_STRUCTURAL_ZEROS,
+    OUTPUTS,
+    REDUCED_STATES,
+    STATES,
+    SlipModel,
+    reduced_matrices,
+    slip_model,
+    slip_state_space,
+    state_matrices,
+)
 from .stability import StabilityMap, dynamic_poles, stability_map, stability_measures
 
 __all__ = [
     "STATES", "INPUTS", "OUTPUTS", "VARIABLES", "N_STRUCTURAL_ZEROS", "REDUCED_STATES",
     "BeltLinearisation", "SlipModel", "BeltRootLocus", "PoleSweep", "ZeroLocus", "StabilityMap",
-    "slip", "belt_torque", "linearize_belt", "linearise_belt", "slip_model", "slip_state_space", "state_matrices",
+    "slip", "belt_torque", "linearize_belt", "linearise_belt", "slip_model", "slip_state_space",
+    "state_matrices",
     "reduced_matrices", "dynamic_poles", "stability_measures", "belt_root_locus",
     "coupled_limit", "pole_sweep", "slip_frequency_responses", "zero_locus", "stability_map",
 ]

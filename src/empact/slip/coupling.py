@@ -33,8 +33,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._validate import check_values
-from ..variator.geometry import variator_state
 from ..params import OPERATING_VARIABLES, OperatingPoint, Params
+from ..variator.geometry import variator_state
 from ..variator.traction import TractionModel, traction_from_params
 
 __all__ = ["VARIABLES", "BeltLinearisation", "slip", "belt_torque", "linearize_belt",

@@ -15,14 +15,21 @@ from typing import Literal, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import eigvals as generalized_eigvals, null_space
+from scipy.linalg import eigvals as generalized_eigvals
+from scipy.linalg import null_space
 
 from .._validate import check_choice, check_number
 from ..errors import ParameterError
-from ..variator.geometry import variator_state
-from ..lti import (FrequencyResponse, RootLocus, damping_ratio, oscillatory, root_locus,
-                   track_branches)
+from ..lti import (
+    FrequencyResponse,
+    RootLocus,
+    damping_ratio,
+    oscillatory,
+    root_locus,
+    track_branches,
+)
 from ..params import OperatingPoint, Params
+from ..variator.geometry import variator_state
 from ..variator.traction import TractionModel
 from .coupling import VARIABLES, check_slip, linearisation_terms
 from .model import assemble_A, assemble_reduced, mass_stiffness, slip_model
@@ -94,6 +101,24 @@ def belt_root_locus(params: Params, r_g: float = 1.0, nu0: float = 0.0, *,
     the end points ``c_b = 0`` (uncoupled sides) and ``c_b -> inf`` (`coupled_limit`) are
     computed exactly.  The model damping is ``c_s = c_b / r_g`` (module
     docstring).  The clamping-force gain does not enter the poles.
+
+    Parameters
+    ----------
+    params : Params
+    r_g : float
+        Geometric ratio [-].
+    nu0 : float
+        Operating slip [-] of the model around which the locus is drawn.
+    c_b_range : (float, float)
+        Smallest and largest ``c_b`` [N m s/rad] of the traced locus.
+    max_move : float
+        Largest relative pole movement between two traced points (refines the steps).
+
+    Returns
+    -------
+    BeltRootLocus
+        ``locus`` (the traced branches over ``c_b``), ``start`` and ``stop`` (the exact end
+        points [rad/s]), ``uncoupled_hz`` and ``coupled_hz`` [Hz].
     """
     lo = check_number("c_b_min", c_b_range[0], 0.0, lo_open=True, unit="N m s/rad")
     hi = check_number("c_b_max", c_b_range[1], lo, lo_open=True, unit="N m s/rad")
@@ -184,6 +209,13 @@ def pole_sweep(params: Params, name: Variable, values: ArrayLike,
     values : values of that variable, shape (n,)
     base : the other variables (default: the ``[operating]`` point of `params`)
     traction : traction model (default `traction_from_params(params)`)
+
+    Returns
+    -------
+    PoleSweep
+        ``poles``, the five non-structural poles [rad/s], shape (n, 5); ``max_real`` [1/s],
+        ``min_damping`` [-] and ``natural_hz`` [Hz] per value; ``c_b`` [N m s/rad] and ``dmu``
+        [-] of each point.
     """
     v = grid_values(name, values)
     base = (params.operating if base is None else base).resolve(params, traction)
@@ -257,6 +289,24 @@ def zero_locus(params: Params, r_g: ArrayLike, base: OperatingPoint | None = Non
     """Invariant zeros of ``F_s -> nu`` at each ratio of `r_g` (shape (n,)).
 
     Zeros with ``|z| < origin_tol * max |z|`` count as zeros at the origin.
+
+    Parameters
+    ----------
+    params : Params
+    r_g : array_like
+        Geometric ratios [-], shape (n,).
+    base : OperatingPoint, optional
+        Slip, clamping force and primary speed (default ``params.operating``).
+    traction : TractionModel, optional
+        Default `traction_from_params(params)`.
+    origin_tol : float
+        Relative size below which a zero counts as at the origin [-].
+
+    Returns
+    -------
+    ZeroLocus
+        ``zeros`` [rad/s], shape (n, m), one branch per column; ``n_origin`` per ratio, shape
+        (n,); the ``coupled`` limit's poles [rad/s], shape (n, 4).
     """
     r = grid_values("r_g", r_g)
     base = (params.operating if base is None else base).resolve(params, traction)

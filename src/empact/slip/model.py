@@ -162,7 +162,7 @@ def state_matrices(params: Params, r_g: ArrayLike, nu: ArrayLike, F_s: ArrayLike
     J, K = mass_stiffness(params)
     flat = {k: np.ravel(v) for k, v in t.items()}
     mats = _assemble(J, K, flat["r_g"], flat["rho"], flat["c_s"], flat["g_F"], flat["omega_p"])
-    return tuple(m.reshape(shape + m.shape[1:]) for m in mats)  # type: ignore[return-value]
+    return tuple(m.reshape(shape + m.shape[1:]) for m in mats)
 
 
 def reduced_matrices(params: Params, r_g: ArrayLike, nu: ArrayLike, F_s: ArrayLike,
@@ -262,6 +262,25 @@ def slip_model(params: Params, op: OperatingPoint | None = None,
     op : operating point (r_g, nu, F_s, omega_p; one given by a torque ratio or a load is
         resolved, `OperatingPoint.resolve`)
     traction : traction model (default `traction_from_params(params)`)
+
+    Returns
+    -------
+    SlipModel
+        States ``theta_d, theta_p, theta_s, theta_l`` [rad] and their speeds [rad/s];
+        inputs ``F_s`` [N], ``T_d, T_l`` [N m]; outputs ``nu`` [-], ``omega_p, omega_s``
+        [rad/s], ``T_b`` [N m]: ``poles()``, ``zeros()``, ``frequency_response`` and
+        ``state_space()``.
+
+    Examples
+    --------
+    On the falling side of the traction curve (4 % slip at r_g = 1) the driveline's two
+    oscillatory pairs are unstable (Fig. 11):
+
+    >>> import empact
+    >>> op = empact.OperatingPoint(r_g=1.0, nu=0.04, F_s=10e3, omega_p=300.0)
+    >>> p = empact.slip_model(empact.load_params(), op).poles()
+    >>> int(((p.real > 0) & (p.imag > 1.0)).sum())     # pairs with a growing oscillation
+    2
     """
     op = (params.operating if op is None else op).resolve(params, traction)
     belt = linearize_belt(params, op, traction)

@@ -71,6 +71,18 @@ def belt_length(R_p: ArrayLike, R_s: ArrayLike, a: float) -> NDArray[np.float64]
     """Belt length ``L = 2 a cos(phi) + (pi + 2 phi) R_p + (pi - 2 phi) R_s`` [m] (eq. 6).
 
     The only implementation of eq. 6 outside the compiled kernel (which has a numba twin).
+
+    Parameters
+    ----------
+    R_p, R_s : array_like
+        Primary and secondary running radii [m], broadcast together.
+    a : float
+        Centre distance [m].
+
+    Returns
+    -------
+    ndarray
+        The belt length [m], the broadcast shape of `R_p` and `R_s`.
     """
     phi = wrap_angle(R_p, R_s, a)
     return 2 * a * np.cos(phi) + (np.pi + 2 * phi) * np.asarray(R_p, float) \
@@ -281,7 +293,22 @@ class VariatorState:
 
 
 def variator_state(r_g: ArrayLike, variator: VariatorParams) -> VariatorState:
-    """Geometry at ratio(s) `r_g` (checked against the geometric range)."""
+    """Geometry at ratio(s) `r_g` (checked against the geometric range).
+
+    Parameters
+    ----------
+    r_g : array_like
+        Geometric ratio(s) ``R_p / R_s`` [-], shape (n,) or scalar.
+    variator : VariatorParams
+        Centre distance, wedge angle, belt length, radius range (``params.variator``).
+
+    Returns
+    -------
+    VariatorState
+        Radii ``R_p, R_s`` [m], wrap angle term ``phi`` [rad], sheave translations ``x_p, x_s``
+        and ``delta_x`` [m], belt length ``L`` [m] and ``dL_dRp, dL_dRs`` [-], each the shape
+        of `r_g`.
+    """
     v = variator
     r = check_ratio(r_g, v)
     R_p, R_s = radii(r, v.L_belt, v.a)

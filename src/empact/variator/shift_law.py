@@ -101,8 +101,10 @@ class ShiftParams(Section):
 class _HasShift(Protocol):
     """A parameter set (`empact.params.Params`): what the creep law reads of it."""
 
-    variator: VariatorParams
-    shift: ShiftParams
+    @property
+    def variator(self) -> VariatorParams: ...
+    @property
+    def shift(self) -> ShiftParams: ...
 
 #: shift laws of the nonlinear model
 SHIFT_LAWS = ("carbone", "ide", "shafai")
@@ -214,7 +216,23 @@ def creep_coefficient(params: _HasShift, r_g: ArrayLike, F_s: ArrayLike,
 def shift_rate(params: _HasShift, r_g: ArrayLike, omega_p: ArrayLike, kappa: ArrayLike,
                kappa_eq: ArrayLike, F_s: ArrayLike, law: str = "carbone") -> NDArray[np.float64]:
     """Ratio rate ``dr_g/dt`` [1/s] of the creep law (unsaturated) for the thrust ratio
-    `kappa` against the equilibrium `kappa_eq`, at primary speed `omega_p` [rad/s]."""
+    `kappa` against the equilibrium `kappa_eq`, at primary speed `omega_p` [rad/s].
+
+    Parameters
+    ----------
+    params : Params
+        Its ``[variator]`` and ``[shift]`` blocks are read.
+    r_g, omega_p, kappa, kappa_eq, F_s : array_like
+        Ratio [-], primary speed [rad/s], thrust ratio and its equilibrium [-], clamping force
+        [N]; broadcast together.
+    law : {"carbone", "ide"}
+        The creep law.
+
+    Returns
+    -------
+    ndarray
+        ``dr_g/dt`` [1/s], the broadcast shape of the inputs.
+    """
     check_choice("law", law, SHIFT_LAWS[:2])
     w_eff = np.sqrt(np.asarray(omega_p, float) ** 2 + params.shift.omega_0 ** 2)
     err = np.log(np.asarray(kappa) / kappa_eq) if law == "carbone" \
@@ -257,6 +275,30 @@ def creep_damping(params: _HasShift, r_g: float, omega_p: float, F_s: float,
 
     Both laws (Carbone, Ide) have the same linearisation: ``d kappa / d rdot =
     kappa* / (omega_eff K_c)``; `creep_map` replaces the analytic ``K_c`` by a measured one.
+
+    Parameters
+    ----------
+    params : Params
+        Its ``[variator]`` and ``[shift]`` blocks are read.
+    r_g : float
+        Geometric ratio [-].
+    omega_p : float
+        Primary speed [rad/s].
+    F_s : float
+        Clamping force [N].
+    kinematics : {"equal-translation", "paper-sec2.1"}
+        The sheave kinematics the damping acts through.
+    kappa_eq : float, optional
+        Equilibrium thrust ratio [-].
+    creep_map : CreepMap, optional
+        A measured shift-speed map in place of the analytic ``K_c``.
+
+    Returns
+    -------
+    CreepDamping
+        ``C_lambda`` [N m s] on the ratio rate, ``grad_r`` (``dr_g/dx_p, dr_g/dx_s`` [1/m]), the
+        2 x 2 sheave damping ``matrix`` [N s/m], ``c_shift`` [N s/m] and
+        ``c_shafai_equivalent`` [N/m].
     """
     check_choice("kinematics", kinematics, ("equal-translation", "paper-sec2.1"))
     r = float(check_ratio(check_number("r_g", r_g), params.variator))

@@ -31,8 +31,8 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from typing import Callable, Protocol
 from pathlib import Path
+from typing import Callable, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -73,12 +73,26 @@ class ThrustRatioParams(Section):
 class _HasThrustRatio(Protocol):
     """A parameter set (`empact.params.Params`): what the analytic map reads of it."""
 
-    variator: VariatorParams
-    thrust_ratio: ThrustRatioParams
+    @property
+    def variator(self) -> VariatorParams: ...
+    @property
+    def thrust_ratio(self) -> ThrustRatioParams: ...
 
 
 def kappa_geo(r_g: ArrayLike, variator: VariatorParams) -> NDArray[np.float64]:
-    """Geometric thrust ratio ``(pi + 2 phi) / (pi - 2 phi)`` of the unstretched belt [-]."""
+    """Geometric thrust ratio ``(pi + 2 phi) / (pi - 2 phi)`` of the unstretched belt [-].
+
+    Parameters
+    ----------
+    r_g : array_like
+        Geometric ratio(s) [-].
+    variator : VariatorParams
+
+    Returns
+    -------
+    ndarray
+        The geometric thrust ratio [-], the shape of `r_g`.
+    """
     R_p, R_s = radii(np.asarray(r_g, float), variator.L_belt, variator.a)
     phi = wrap_angle(R_p, R_s, variator.a)
     return (np.pi + 2 * phi) / (np.pi - 2 * phi)
@@ -192,7 +206,18 @@ def _validate_curve(r: float, tau: ArrayLike, kap: ArrayLike, source: str):
 def load_thrust_ratio(path: str | os.PathLike[str]) -> TabulatedThrustRatio:
     """Read a thrust-ratio map from ``.csv`` (header ``r_g,tau,kappa``, rows with the same
     ``r_g`` form one curve) or ``.toml`` (``[[curve]]`` tables with ``r_g``, ``tau``,
-    ``kappa``).  Raises `ParameterError` naming the file, row and value."""
+    ``kappa``).  Raises `ParameterError` naming the file, row and value.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.csv`` or ``.toml`` map.
+
+    Returns
+    -------
+    TabulatedThrustRatio
+        ``kappa*(tau, r_g)`` [-] interpolated between the tabulated curves.
+    """
     curves = read_curves(path, "thrust-ratio table", "tau", "kappa")
     items = sorted(curves.items())
     return TabulatedThrustRatio(ratios=tuple(r for r, _ in items),
@@ -202,7 +227,18 @@ def load_thrust_ratio(path: str | os.PathLike[str]) -> TabulatedThrustRatio:
 
 
 def thrust_ratio_from_params(params: _HasThrustRatio) -> AnalyticThrustRatio:
-    """The analytic map of a parameter set (its ``[thrust_ratio]`` section)."""
+    """The analytic map of a parameter set (its ``[thrust_ratio]`` section).
+
+    Parameters
+    ----------
+    params : Params
+        Its ``[variator]`` and ``[thrust_ratio]`` blocks are read.
+
+    Returns
+    -------
+    AnalyticThrustRatio
+        ``kappa*(tau, r_g)`` [-] of the analytic estimate (``p0, b0, b1``).
+    """
     return AnalyticThrustRatio.from_params(params)
 
 

@@ -99,7 +99,8 @@ class TractionParams(Section):
 
 
 class _HasTraction(Protocol):
-    traction: TractionParams
+    @property
+    def traction(self) -> TractionParams: ...
 
 #: Slip range [-] in which the magic formula is used: beyond 20 % slip a pushbelt is destroyed
 #: (gross slip); the formula would be pure extrapolation there.
@@ -385,6 +386,16 @@ def load_traction(path: str | os.PathLike[str]) -> TabulatedTraction:
     TOML: ``[[curve]]`` tables, each with ``r_g = <float>``, ``nu = [...]``, ``mu = [...]``.
     Slip ``nu`` is a fraction (0.01 is 1 %).
 
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.csv`` or ``.toml`` file.
+
+    Returns
+    -------
+    TabulatedTraction
+        ``mu(nu, r_g)`` [-], the curves interpolated shape-preservingly (one per ratio).
+
     Raises
     ------
     ParameterError
@@ -396,7 +407,18 @@ def load_traction(path: str | os.PathLike[str]) -> TabulatedTraction:
 
 def traction_from_params(params: _HasTraction | TractionParams) -> MagicFormulaTraction:
     """The analytic traction model of a parameter set (its ``[traction]`` section), or of the
-    section itself."""
+    section itself.
+
+    Parameters
+    ----------
+    params : Params or TractionParams
+        A parameter set (its ``[traction]`` block is read) or the block itself.
+
+    Returns
+    -------
+    MagicFormulaTraction
+        ``mu(nu, r_g)`` [-] and its slope, by the magic formula at the block's three ratios.
+    """
     section = params if isinstance(params, TractionParams) else params.traction
     return MagicFormulaTraction.from_params(section)
 
@@ -431,7 +453,24 @@ class TractionCurves:
 
 def traction_curves(traction: TractionModel, r_g: ArrayLike, nu: ArrayLike,
                     label: str = "") -> TractionCurves:
-    """Sample `traction` at ratios `r_g` (shape (n_r,)) and slips `nu` (shape (n_nu,))."""
+    """Sample `traction` at ratios `r_g` (shape (n_r,)) and slips `nu` (shape (n_nu,)).
+
+    Parameters
+    ----------
+    traction : TractionModel
+        Analytic (`traction_from_params`) or tabulated (`load_traction`).
+    r_g : array_like
+        Ratios [-], shape (n_r,).
+    nu : array_like
+        Slips [-] (0.01 is 1 %), shape (n_nu,).
+    label : str
+        Free text for plots.
+
+    Returns
+    -------
+    TractionCurves
+        ``mu`` and ``dmu`` (d mu / d nu), shape (n_r, n_nu) [-].
+    """
     r = np.atleast_1d(np.asarray(r_g, float))
     n = np.atleast_1d(np.asarray(nu, float))
     return TractionCurves(nu=n, r_g=r, mu=traction.mu(n[None, :], r[:, None]),
