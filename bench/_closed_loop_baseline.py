@@ -11,8 +11,9 @@ Self-contained since the loop law was rewritten (issue 21: sensors, feedforwards
 frozen law to today's simulator, so both routes run one law and differ only in the loop."""
 from __future__ import annotations
 
-import numpy as np
+from typing import TYPE_CHECKING
 
+import numpy as np
 from numpy.typing import NDArray
 
 from empact.errors import ParameterError
@@ -20,6 +21,12 @@ from empact.nonlinear import _kernel as K
 from empact.nonlinear._rosenbrock import integrate
 from empact.nonlinear.simulation import scenario_signals, state_tolerances
 from empact.variator.geometry import radii
+
+if TYPE_CHECKING:
+    from empact.control.controller import Controller
+    from empact.nonlinear.equilibrium import TrimResult
+    from empact.nonlinear.model import EmpactModel
+    from empact.nonlinear.scenario import Scenario
 
 
 # -- frozen from empact/control/closed_loop.py at 84d399c (the 0.1 law) -----------------------

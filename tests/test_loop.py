@@ -286,8 +286,8 @@ def test_log_slip_errors(params, bench):
 def test_bad_design_input_is_one_line(params):
     """A schedule without the loop it runs in, and a schedule over a variable a loop cannot
     measure, are refused with one line."""
-    from empact.control.pi import design_pi
     from empact.control.family import plant_family
+    from empact.control.pi import design_pi
 
     fam = plant_family(params, r_g=np.array([0.8, 1.2]))
     with pytest.raises(ParameterError, match="schedule = True needs the loop"):

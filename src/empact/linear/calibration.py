@@ -39,11 +39,11 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from .._lazy import lazy_module
 from ..errors import ParameterError
 from ..params import _SECTIONS, DampingLevel, Params, read_toml
 from .actuation import KINEMATICS, actuation_model
 from .driveline import driveline_model, uncoupled_frequencies
-from .._lazy import lazy_module
 
 #: `calibrate`'s solver, imported when it runs (not by every command that imports the linear
 #: models: scipy.optimize is a third of `empact modes`' start-up)
