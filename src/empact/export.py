@@ -34,7 +34,21 @@ FORMATS = ("json", "mat", "npz")
 
 
 def jsonable(obj: Any) -> Any:
-    """numpy arrays and scalars to lists and floats; complex to ``[re, im]``; NaN to None."""
+    """numpy arrays and scalars to lists and floats; complex to ``[re, im]``; NaN to None.
+
+    Parameters
+    ----------
+    obj : object
+        A value to write as JSON: mappings (keys become strings), lists and tuples are
+        converted entry by entry; other objects (strings, ints, None) pass unchanged.
+
+    Returns
+    -------
+    object
+        The same structure with only JSON types: numpy arrays as nested lists, numpy
+        scalars as int, float or bool, complex numbers as ``[re, im]``, non-finite floats
+        (NaN, inf) as None.
+    """
     if isinstance(obj, Mapping):
         return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
@@ -53,7 +67,25 @@ def jsonable(obj: Any) -> Any:
 
 
 def format_of(path: str | os.PathLike[str], fmt: str | None = None) -> str:
-    """The format named, or the one of the file's suffix."""
+    """The format named, or the one of the file's suffix.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file; its suffix (case-insensitive) gives the format when `fmt` is None.
+    fmt : {"json", "mat", "npz"}, optional
+        The format named explicitly (overrides the suffix).
+
+    Returns
+    -------
+    str
+        One of `FORMATS`.
+
+    Raises
+    ------
+    ParameterError
+        When `fmt`, or without it the suffix, is not one of `FORMATS`.
+    """
     if fmt is not None:
         return check_choice("format", fmt, FORMATS)
     return check_choice(f"{path}: file suffix", Path(path).suffix.lstrip(".").lower(), FORMATS)
@@ -61,7 +93,25 @@ def format_of(path: str | os.PathLike[str], fmt: str | None = None) -> str:
 
 def system_dict(sys, units: Mapping[str, Sequence[str]] | None = None,
                 metadata: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """A named `control.StateSpace` as a plain dictionary (A, B, C, D, names, units)."""
+    """A named `control.StateSpace` as a plain dictionary (A, B, C, D, names, units).
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+        The system, n states, m inputs, p outputs.
+    units : dict str -> sequence of str, optional
+        Units per signal, e.g. ``{"inputs": [...], "outputs": [...], "states": [...]}``;
+        each entry becomes ``<key>_units``.
+    metadata : dict, optional
+        Extra entries, added as they are (after the others, so they may override them).
+
+    Returns
+    -------
+    dict
+        ``A``, ``B``, ``C``, ``D`` (ndarrays, shapes (n, n), (n, m), (p, n), (p, m)),
+        ``inputs``, ``outputs``, ``states`` (lists of names), the ``<key>_units`` lists and
+        the `metadata` entries.
+    """
     d: dict[str, Any] = {"A": np.asarray(sys.A), "B": np.asarray(sys.B),
                          "C": np.asarray(sys.C), "D": np.asarray(sys.D),
                          "inputs": list(sys.input_labels), "outputs": list(sys.output_labels),
@@ -86,6 +136,11 @@ def save_system(sys, path: str | os.PathLike[str], *, fmt: str | None = None,
     units : ``{"inputs": [...], "outputs": [...], "states": [...]}`` units per signal
     metadata : extra entries: numbers, strings, flat dictionaries of numbers (a dictionary
         becomes ``<key>_names`` / ``<key>`` arrays in ``.mat`` and ``.npz``)
+
+    Returns
+    -------
+    Path
+        The file written (`path`).
     """
     fmt = format_of(path, fmt)
     data = system_dict(sys, units, metadata)
@@ -127,6 +182,27 @@ def read_npz(path: str | os.PathLike[str], what: str, required: Sequence[str],
     One-line `ParameterError` naming the file and `what` it should be (and `hint`, how to
     write one) for a missing file, a file that is not an ``.npz`` archive (text, truncated,
     damaged), a pickled (object) array, or a missing array of `required`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.npz`` archive.
+    what : str
+        What the file should be, for the messages (e.g. ``"plant family"``).
+    required : sequence of str
+        Names of the arrays the archive must hold.
+    hint : str
+        How to write such a file, appended to the messages (default: nothing).
+
+    Returns
+    -------
+    dict str -> ndarray
+        Every array of the archive by name (not only `required`).
+
+    Raises
+    ------
+    ParameterError
+        For a missing file, a folder, an unreadable archive or a missing required array.
     """
     p = Path(path)
     how = f"; {hint}" if hint else ""

@@ -33,7 +33,22 @@ SPEED_BAND = 0.05
 
 @dataclass(frozen=True)
 class ServoLimits(Section):
-    """Torque and speed limits of the primary (shift) and secondary (clamping) servo drives."""
+    """Torque and speed limits of the primary (shift) and secondary (clamping) servo drives.
+
+    Attributes
+    ----------
+    T_mp_max : float
+        Largest primary servo torque [N m], in (0, 1000] (default 3).
+    T_ms_max : float
+        Largest secondary servo torque [N m], in (0, 1000] (default 15).
+    omega_mp_max : float
+        Largest primary servo speed [rad/s], in (0, 1e5] (default 630); above
+        ``1 - SPEED_BAND`` of it the torque that would drive the servo faster falls linearly
+        to zero.
+    omega_ms_max : float
+        Largest secondary servo speed [rad/s], in (0, 1e5] (default 630), limited the same
+        way.
+    """
 
     _name = "servo"
 
@@ -47,7 +62,27 @@ class ServoLimits(Section):
 
 @dataclass(frozen=True)
 class SensorParams(Section):
-    """The loop's instruments: delay, encoder quantisation and noise."""
+    """The loop's instruments: delay, encoder quantisation and noise.
+
+    Attributes
+    ----------
+    delay : float
+        Measurement delay [samples], a whole number in [0, 100] (default 1): every
+        measurement reaches the controller this many samples late.
+    speed_counts : float
+        Shaft encoder counts per revolution [counts/rev], in (0, 1e9] (default 8192).
+    speed_window : float
+        Counting window of the shaft speeds [s], in (0, 1] (default 0.01): a measured speed
+        is the mean over the window, quantised to ``2 pi / (speed_counts * speed_window)``.
+    speed_noise : float
+        White noise on each shaft speed (standard deviation) [rad/s], in [0, 1000]
+        (default 0).
+    ratio_quantum : float
+        Resolution of the measured ratio [-], in [0, 0.1] (default 2e-4).
+    torque_noise : float
+        White noise on the driveshaft torque (standard deviation) [N m], in [0, 1000]
+        (default 0.25).
+    """
 
     _name = "sensors"
 

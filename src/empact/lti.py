@@ -90,7 +90,19 @@ class FrequencyResponse:
 
 
 def unwrapped_phase_deg(H: ArrayLike) -> NDArray[np.float64]:
-    """Phase of `H` [deg] unwrapped along the last axis, starting in (-180, 180]."""
+    """Phase of `H` [deg] unwrapped along the last axis, starting in (-180, 180].
+
+    Parameters
+    ----------
+    H : array_like of complex, shape (..., n_f)
+        A complex response, frequency along the last axis (e.g. `FrequencyResponse.H`).
+
+    Returns
+    -------
+    ndarray, shape (..., n_f)
+        The phase [deg], unwrapped along the last axis and shifted by a multiple of 360 deg
+        so that its first entry lies in (-180, 180].
+    """
     ph = np.degrees(np.unwrap(np.angle(np.asarray(H)), axis=-1))
     first = ph[..., :1]
     shift = 360.0 * np.ceil((first - 180.0) / 360.0)
@@ -134,7 +146,24 @@ def frequency_response(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike,
 
 
 def system_response(sys, omega: ArrayLike, label: str = "") -> FrequencyResponse:
-    """`frequency_response` of a `control.StateSpace` (signal names from the system)."""
+    """`frequency_response` of a `control.StateSpace` (signal names from the system).
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+        A continuous-time system with m inputs and p outputs; its ``input_labels`` and
+        ``output_labels`` name the signals.
+    omega : array_like, shape (n_f,)
+        Frequencies [rad/s]; none may be a pole on the imaginary axis.
+    label : str
+        Free text for the result.
+
+    Returns
+    -------
+    FrequencyResponse
+        ``H``, shape (p, m, n_f) (complex, the units of output / input), with the system's
+        signal names.
+    """
     return frequency_response(sys.A, sys.B, sys.C, sys.D, omega, tuple(sys.input_labels),
                               tuple(sys.output_labels), label=label)
 
@@ -189,7 +218,26 @@ def transmission_zeros(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, *
 
 def channel_zeros(sys, input: str, output: str, *, scale: ArrayLike | None = None,
                   max_abs: float = 1e12) -> NDArray[np.complex128]:
-    """`transmission_zeros` of one named input -> output channel of a `control.StateSpace`."""
+    """`transmission_zeros` of one named input -> output channel of a `control.StateSpace`.
+
+    Parameters
+    ----------
+    sys : control.StateSpace
+        The system, n states.
+    input, output : str
+        Names of the channel's input and output (from ``sys.input_labels`` and
+        ``sys.output_labels``).
+    scale : array_like, optional
+        Diagonal state scaling ``S``, shape (n,) (default: none, ``S = 1``).
+    max_abs : float
+        Zeros larger than this [rad/s] count as infinite.
+
+    Returns
+    -------
+    ndarray of complex
+        The finite zeros of the single-input single-output channel [rad/s], shape (n_z,),
+        sorted by magnitude.
+    """
     i = index(sys.input_labels, input, "input")
     o = index(sys.output_labels, output, "output")
     return transmission_zeros(sys.A, sys.B[:, [i]], sys.C[[o]], sys.D[[o]][:, [i]],
@@ -197,7 +245,18 @@ def channel_zeros(sys, input: str, output: str, *, scale: ArrayLike | None = Non
 
 
 def damping_ratio(p: ArrayLike) -> NDArray[np.float64]:
-    """Damping ratio ``-Re(p) / |p|`` [-] of poles (or zeros) `p`; 1 for ``p = 0``."""
+    """Damping ratio ``-Re(p) / |p|`` [-] of poles (or zeros) `p`; 1 for ``p = 0``.
+
+    Parameters
+    ----------
+    p : array_like of complex
+        Poles or zeros [rad/s], any shape.
+
+    Returns
+    -------
+    ndarray
+        The damping ratios [-], the shape of `p`.
+    """
     p = np.asarray(p, complex)
     mag = np.abs(p)
     return np.where(mag > 0, -p.real / np.where(mag > 0, mag, 1.0), 1.0)
@@ -210,6 +269,21 @@ def oscillatory(poles: ArrayLike, tol: float = 1e-3) \
 
     The default `tol` (1e-3 rad/s) is far above the rounding of structural zeros and far
     below any oscillatory mode of the CVT.
+
+    Parameters
+    ----------
+    poles : array_like of complex
+        Poles or zeros [rad/s], any shape (flattened); of each complex-conjugate pair only
+        the one with positive imaginary part is kept.
+    tol : float
+        Smallest imaginary part [rad/s] that counts as oscillatory.
+
+    Returns
+    -------
+    f_n : ndarray, shape (n_osc,)
+        Natural frequencies ``|p| / (2 pi)`` [Hz], ascending.
+    zeta : ndarray, shape (n_osc,)
+        Their damping ratios ``-Re(p) / |p|`` [-].
     """
     p = np.asarray(poles, complex).ravel()
     p = p[p.imag > tol]
@@ -221,7 +295,24 @@ def statespace(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, *,
                inputs: Sequence[str], outputs: Sequence[str], states: Sequence[str],
                name: str = "sys", dt: float | None = None):
     """A named `control.StateSpace` (the name made python-control safe); `dt` [s] makes it
-    discrete-time."""
+    discrete-time.
+
+    Parameters
+    ----------
+    A, B, C, D : array_like
+        State-space matrices, shapes (n, n), (n, m), (p, n), (p, m).
+    inputs, outputs, states : sequence of str
+        Signal names (m, p and n of them).
+    name : str
+        System name; runs of characters other than letters, digits and ``_`` become ``_``.
+    dt : float, optional
+        Sample period [s] (default: continuous time).
+
+    Returns
+    -------
+    control.StateSpace
+        The named system, continuous-time or with sample period `dt`.
+    """
     args = [np.asarray(A, float), np.asarray(B, float), np.asarray(C, float),
             np.asarray(D, float)] + ([] if dt is None else [dt])
     return control.ss(*args, inputs=list(inputs), outputs=list(outputs), states=list(states),
@@ -263,6 +354,18 @@ def match_branches(previous: ArrayLike, current: ArrayLike) -> NDArray[np.comple
     """Reorder `current` eigenvalues so that entry j continues ``previous[j]`` (shape (n,)).
 
     Minimum total distance ``sum |current[perm[j]] - previous[j]|`` (Hungarian algorithm).
+
+    Parameters
+    ----------
+    previous : array_like of complex, shape (n,)
+        Eigenvalues at the previous parameter value, in branch order.
+    current : array_like of complex, shape (n,)
+        Eigenvalues at the current parameter value, in any order.
+
+    Returns
+    -------
+    ndarray of complex, shape (n,)
+        `current` reordered so that entry j continues branch j of `previous`.
     """
     prev = np.asarray(previous, complex)
     cur = np.asarray(current, complex)
@@ -277,7 +380,19 @@ def match_branches(previous: ArrayLike, current: ArrayLike) -> NDArray[np.comple
 
 
 def track_branches(eigs: ArrayLike) -> NDArray[np.complex128]:
-    """Match eigenvalues along the first axis (shape (n_steps, n)) into continuous branches."""
+    """Match eigenvalues along the first axis (shape (n_steps, n)) into continuous branches.
+
+    Parameters
+    ----------
+    eigs : array_like of complex, shape (n_steps, n)
+        Eigenvalues at successive parameter values, each row in any order.
+
+    Returns
+    -------
+    ndarray of complex, shape (n_steps, n)
+        A copy with each row reordered (`match_branches` against the row before; the first
+        row as given), so that column j is one continuous branch.
+    """
     e = np.array(eigs, dtype=complex)
     if e.ndim != 2:
         raise ValueError(f"eigenvalues of shape {e.shape}: need (n_steps, n)")
