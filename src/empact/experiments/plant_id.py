@@ -102,6 +102,19 @@ def step_experiment(params, op: OperatingPoint | None = None, *,
     sample_rate : [Hz]
     rtol : integrator tolerance (see `empact.nonlinear.simulation.simulate`)
     model : an `EmpactModel` with torque inputs (default: `nonlinear_model(params)`)
+
+    Returns
+    -------
+    StepExperiment
+        ``t`` shape (n_t,) [s]; ``steps`` shape (n_t, 3, 2), the deviations of ``(r_g, nu,
+        nu_r)`` [-] from the trimmed point divided by the step size of ``(T_mp, T_ms)``
+        [1/(N m)]; the ``amplitudes`` [N m] and the trimmed point ``op``.
+
+    Raises
+    ------
+    ParameterError
+        For amplitudes that are not two non-zero numbers, a non-positive duration or sample
+        rate, or a step simulation that does not complete.
     """
     amps = np.asarray(amplitudes, float)
     if amps.shape != (2,) or np.any(~np.isfinite(amps)) or np.any(amps == 0):

@@ -58,6 +58,20 @@ def excitation_signal(kind: str, n: int, fs: float, band_hz: tuple[float, float]
     rms : RMS value of the result (input units)
     seed : seed of the random phases / noise
     period : multisine period [samples]
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The excitation at sample times ``arange(n) / fs``, RMS `rms` (input units): a
+        random-phase multisine on the period's frequency lines in the band (repeated every
+        `period` samples), a logarithmic chirp from f_lo to f_hi, or band-pass filtered
+        white noise.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown `kind`, a band outside ``0 < f_lo < f_hi < fs / 2``, a non-positive
+        `rms`, or a band holding no multisine line.
     """
     check_choice("excitation", kind, EXCITATIONS)
     f_lo, f_hi = band_hz

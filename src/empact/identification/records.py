@@ -27,18 +27,57 @@ __all__ = ["load_records", "sample_rate", "column_name", "header_cell"]
 
 def header_cell(name: str, unit: str) -> str:
     """The one style of a CSV header cell that empact writes: ``"theta_mp [rad]"``
-    (``"nu [-]"`` for a dimensionless quantity; `column_name` reads it back)."""
+    (``"nu [-]"`` for a dimensionless quantity; `column_name` reads it back).
+
+    Parameters
+    ----------
+    name : str
+        The column (signal) name, e.g. ``"theta_mp"``.
+    unit : str
+        Its unit, e.g. ``"rad"``; ``"-"`` for a dimensionless quantity.
+
+    Returns
+    -------
+    str
+        ``"<name> [<unit>]"``.
+    """
     return f"{name} [{unit}]"
 
 
 def column_name(header: str) -> str:
-    """A header cell without its unit: ``"theta_mp [rad]"`` -> ``"theta_mp"``."""
+    """A header cell without its unit: ``"theta_mp [rad]"`` -> ``"theta_mp"``.
+
+    Parameters
+    ----------
+    header : str
+        A CSV header cell, with or without a trailing unit in brackets.
+
+    Returns
+    -------
+    str
+        The name, stripped of surrounding white space and of the bracketed unit.
+    """
     return re.sub(r"\s*\[[^\]]*\]\s*$", "", header.strip())
 
 
 def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
                  ) -> dict[str, np.ndarray]:
     """Read the named columns of a CSV file as float arrays, shape (n_t,) each.
+
+    Parameters
+    ----------
+    path : str or Path
+        A UTF-8 CSV file: optional ``#`` comment lines, a header row of column names (units
+        in brackets allowed), one row per sample.
+    columns : sequence of str
+        Names of the columns to read (without units).
+    min_rows : int
+        Fewest data rows accepted.
+
+    Returns
+    -------
+    dict str -> ndarray
+        Each of `columns` as a float array, shape (n_t,), in the file's units.
 
     Raises
     ------
@@ -96,7 +135,27 @@ def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
 
 
 def sample_rate(t: np.ndarray, name: str = "time", rtol: float = 1e-6) -> float:
-    """Sample rate [Hz] of a uniform, increasing time vector; a one-line error otherwise."""
+    """Sample rate [Hz] of a uniform, increasing time vector; a one-line error otherwise.
+
+    Parameters
+    ----------
+    t : ndarray, shape (n_t,)
+        Sample times [s], n_t >= 2.
+    name : str
+        The time column's name, for the messages.
+    rtol : float
+        Largest allowed deviation of any step from the mean step, relative to the mean [-].
+
+    Returns
+    -------
+    float
+        ``1 / mean(diff(t))`` [Hz].
+
+    Raises
+    ------
+    DataError
+        When `t` does not increase strictly or is not uniformly sampled within `rtol`.
+    """
     dt = np.diff(t)
     if np.any(dt <= 0):
         i = int(np.argmax(dt <= 0))

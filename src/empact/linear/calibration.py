@@ -164,6 +164,31 @@ def load_targets(path: str, kinematics: str | None = None,
 
     `kinematics` (if given) is the default for actuation targets that do not name theirs
     (over the file's own ``kinematics``); `ties` are added to the file's ``[ties]``.
+
+    Parameters
+    ----------
+    path : str
+        The targets file (TOML, the module notes' layout).
+    kinematics : {"equal-translation", "paper-sec2.1"}, optional
+        Default actuation rows of the targets that name none (default: the file's
+        ``kinematics``, else ``"equal-translation"``).
+    ties : dict str -> str, optional
+        ``{dependent: free}`` dotted parameter names, added to (and overriding) the file's
+        ``[ties]``.
+
+    Returns
+    -------
+    targets : tuple of Target
+        The ``[[target]]`` tables, checked, in file order.
+    free : tuple of str
+        Dotted names of the parameters to fit (the file's ``free``).
+    ties : dict str -> str
+        ``{dependent: free}``, the file's ties with `ties` added.
+
+    Raises
+    ------
+    ParameterError
+        One line naming the file, the entry and the key that is wrong.
     """
     data = read_toml(path, "targets")
     unknown = set(data) - {"free", "target", "ties", "kinematics"}
@@ -217,7 +242,27 @@ def check_ties(ties: dict[str, str], free: Sequence[str], where: str = "ties") -
 
 
 def model_frequencies(params: Params, targets: Sequence[Target]) -> np.ndarray:
-    """The model's frequency for every target [Hz], shape (n_targets,)."""
+    """The model's frequency for every target [Hz], shape (n_targets,).
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set the models are built from.
+    targets : sequence of Target
+        Mode targets (model, ratio, mode, kinematics) or uncoupled driveline targets
+        (`uncoupled_frequencies`).
+
+    Returns
+    -------
+    ndarray, shape (n_targets,)
+        The model's frequency of each target's mode [Hz] (mode numbers count rigid-body
+        modes, at 0 Hz).
+
+    Raises
+    ------
+    ParameterError
+        When a target's mode number exceeds its model's number of modes.
+    """
     cache: dict[tuple[str, float], np.ndarray] = {}
     out = np.empty(len(targets))
     for i, t in enumerate(targets):

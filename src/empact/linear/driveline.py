@@ -84,6 +84,19 @@ def uncoupled_frequencies(params: Params) -> dict[str, float]:
 
     Closed form of a two-inertia, one-spring system: ``sqrt(k (1/J_a + 1/J_b)) / (2 pi)``.
     Returns ``{"primary": ..., "secondary": ...}``.
+
+    Parameters
+    ----------
+    params : Params
+        Reads ``[driveline]``: the primary side is the drive motor ``J_d`` and the primary
+        ``J_p`` on the torque converter ``k_tc``, the secondary side the secondary ``J_s``
+        and the load motor ``J_l`` on the driveshaft ``k_ds``.
+
+    Returns
+    -------
+    dict str -> float
+        ``{"primary": f_p, "secondary": f_s}``, the flexible-mode frequency of each side
+        [Hz].
     """
     d = params.driveline
     f = lambda k, Ja, Jb: float(np.sqrt(k * (1 / Ja + 1 / Jb)) / (2 * np.pi))  # noqa: E731

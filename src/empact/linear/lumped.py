@@ -27,7 +27,22 @@ RIGID_TOL = 1e-9
 
 
 def element_matrix(rows: ArrayLike, values: ArrayLike) -> NDArray[np.float64]:
-    """``R^T diag(values) R`` for element rows ``R`` (shape (m, n)) and values (shape (m,))."""
+    """``R^T diag(values) R`` for element rows ``R`` (shape (m, n)) and values (shape (m,)).
+
+    Parameters
+    ----------
+    rows : array_like, shape (m, n)
+        Kinematic rows: the elongation of element i is ``rows[i] @ q`` (a single row may be
+        given as shape (n,)).
+    values : array_like, shape (m,)
+        The element constants, e.g. stiffnesses or damping constants (in the units of force
+        per unit elongation, or per unit elongation rate, of each element).
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        The symmetric matrix on the coordinates (e.g. ``K = B^T diag(k) B``).
+    """
     R = np.atleast_2d(np.asarray(rows, float))
     return R.T @ (np.asarray(values, float)[:, None] * R)
 
