@@ -38,12 +38,35 @@ ControlScenario = Scenario
 
 
 def control_examples() -> dict[str, str]:
-    """The shipped closed-loop scenarios: name -> description."""
+    """The shipped closed-loop scenarios: name -> description.
+
+    Returns
+    -------
+    dict str -> str
+        Each shipped scenario with a ``[controller]`` table, by name (for
+        `control_example_path`), with its ``[scenario] description``.
+    """
     return list_examples(closed_loop=True)
 
 
 def control_example_path(name: str) -> Path:
-    """Path of a shipped closed-loop scenario."""
+    """Path of a shipped closed-loop scenario.
+
+    Parameters
+    ----------
+    name : str
+        One of `control_examples` (e.g. ``"slip-load-step-r1"``).
+
+    Returns
+    -------
+    Path
+        The scenario file (TOML), for `empact.nonlinear.scenario.load_scenario`.
+
+    Raises
+    ------
+    ParameterError
+        For a name that is not a shipped closed-loop scenario (one line listing them).
+    """
     if name not in control_examples():
         raise ParameterError(f"unknown control example {name!r} (choose from "
                              f"{', '.join(control_examples())})")
@@ -72,7 +95,24 @@ def load_control_scenario(path) -> Scenario:
 
 
 def resolve_controller(ref: str) -> Controller:
-    """A controller file, or a shipped one (``shipped:NAME``)."""
+    """A controller file, or a shipped one (``shipped:NAME``).
+
+    Parameters
+    ----------
+    ref : str
+        A controller JSON file (`Controller.save`), or ``"shipped:NAME"`` for the one
+        shipped as ``empact/data/control/NAME.json`` (``"shipped:pi"``, ``"shipped:hinf"``).
+
+    Returns
+    -------
+    Controller
+        The controller read (`empact.control.controller.load_controller`).
+
+    Raises
+    ------
+    ParameterError
+        For a missing or bad file, or an unknown shipped name.
+    """
     if ref.startswith("shipped:"):
         name = ref.split(":", 1)[1]
         p = Path(str(resources.files("empact.data").joinpath("control", f"{name}.json")))
@@ -86,7 +126,27 @@ def resolve_controller(ref: str) -> Controller:
 class ClosedLoopResult:
     """A closed-loop run: the simulation (`result`), references at its sample times
     (``r_g`` and the slip set-point under the controller's slip signal), the trimmed start,
-    the law that ran (`law`: its configuration, limits and sensors) and the metrics."""
+    the law that ran (`law`: its configuration, limits and sensors) and the metrics.
+
+    Attributes
+    ----------
+    result : SimulationResult
+        The simulation of the machine with the law in the loop.
+    references : dict str -> ndarray
+        ``"r_g"`` [-] and the slip set-point under the controller's slip signal (``"nu"``
+        or ``"nu_r"``) [-] at the sample times ``result.t``, each shape (n_t,).
+    op : TrimResult
+        The trimmed start.
+    scenario : Scenario
+        The scenario that ran.
+    controller : Controller
+        The controller that ran.
+    metrics : dict str -> object
+        The run's numbers (`metrics`: slip errors in percentage points, forces [N], powers
+        [W], torques [N m]).
+    law : LoopLaw or None
+        The law that ran: its configuration, limits and sensors.
+    """
 
     result: SimulationResult
     references: dict[str, NDArray[np.float64]]
@@ -105,7 +165,36 @@ def build_law(scenario: Scenario, params: Params, controller: Controller | None 
     (`LoopConfig.ideal`: what the linear loop model linearises); `nominal`: the parameter
     set the controller knows (its traction curve for the set-points and the feedforward,
     its geometry, holding torques and creep law), when the machine's differ (a Monte Carlo
-    run); default: the machine's own."""
+    run); default: the machine's own.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        A scenario with a ``[controller]`` table.
+    params : Params
+        The machine's parameter set.
+    controller : Controller, optional
+        Replaces the scenario's controller file (`resolve_controller`).
+    model : EmpactModel, optional
+        The machine's model (with `op`; default: `scenario_model` of the scenario).
+    op : TrimResult, optional
+        The trimmed start (with `model`; both are recomputed when either is missing).
+    ideal : bool
+        Without servo limits, quantisation and noise.
+    nominal : Params, optional
+        The parameter set the controller knows (default: `params`).
+
+    Returns
+    -------
+    LoopLaw
+        The sampled law, ready for `empact.nonlinear.simulation.simulate`: measured
+        signals in, servo torques ``(T_mp, T_ms)`` [N m] out.
+
+    Raises
+    ------
+    ParameterError
+        When the scenario has no ``[controller]`` table.
+    """
     if scenario.controller is None:
         raise ParameterError(f"scenario {scenario.name!r} has no [controller] table: run it "
                              "with empact.run_scenario")
@@ -187,6 +276,17 @@ def metrics(run: ClosedLoopResult) -> dict[str, Any]:
       ``|T_mp omega_mp| + |T_ms omega_ms|``);
     * ``peak_T_mp``, ``peak_T_ms`` [N m] against ``T_mp_max``, ``T_ms_max`` (NaN without
       limits), ``saturated``: the share of samples with a servo at its torque limit.
+
+    Parameters
+    ----------
+    run : ClosedLoopResult
+        A run (its ``metrics`` are not read).
+
+    Returns
+    -------
+    dict str -> object
+        The numbers above (floats, ``ratio_span`` a list of two ratios [-], ``macro_slip`` a
+        bool), with ``complete`` (bool) and ``message`` (str) of the simulation.
     """
     res, sc = run.result, run.scenario
     t = res.t
@@ -259,7 +359,32 @@ def safety_factor_twin(scenario: Scenario, params: Params, mu_design: str = "rat
     """The same run under a production CVT's open-loop clamping (``clamping =
     "safety-factor"``, `empact.control.law`): the same load torque history (a ``load_step``
     becomes the same absolute step of ``T_l``), the same ratio reference, started at the
-    strategy's own steady clamping ``SF |T_l| cos(beta) / (2 mu_design R_s)``."""
+    strategy's own steady clamping ``SF |T_l| cos(beta) / (2 mu_design R_s)``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        A scenario with a ``[controller]`` table.
+    params : Params
+        The parameter set its start is trimmed on.
+    mu_design : {"ratio-blind", "ratio-aware"}
+        The strategy's traction coefficient: the smallest traction peak over the ratio
+        range, or the peak at the measured ratio.
+    safety_factor : float
+        The clamping safety factor ``SF`` [-] on the load torque.
+
+    Returns
+    -------
+    Scenario
+        A copy named ``<name>-sf<SF>-<mu_design>``: the safety-factor clamping, started at
+        its steady clamping force ``F_s`` [N] and the same load torque ``T_l`` [N m], the
+        ratio reference kept, no ``load_step`` and no ``[targets]``.
+
+    Raises
+    ------
+    ParameterError
+        When the scenario has no ``[controller]`` table.
+    """
     if scenario.controller is None:
         raise ParameterError(f"scenario {scenario.name!r} has no [controller] table")
     model, op = scenario_model(scenario, params)
@@ -308,6 +433,20 @@ class TargetCheck:
 def check_targets(metrics: dict[str, Any], targets: dict[str, Any]) -> list[TargetCheck]:
     """Each of a scenario's ``[targets]`` against a run's metrics (`metrics`); a run that
     did not complete misses every target.
+
+    Parameters
+    ----------
+    metrics : dict str -> object
+        A run's metrics (`metrics`, or ``ClosedLoopResult.metrics``).
+    targets : dict str -> (lo, hi) or bool
+        A scenario's ``[targets]``: a band ``(lo, hi)`` in the metric's units (an upper
+        bound is ``(-inf, hi)``), or the bool a flag must have.
+
+    Returns
+    -------
+    list of TargetCheck
+        One per target, in the order of `targets`: the metric's value, the target and
+        whether it is met.
 
     Raises
     ------

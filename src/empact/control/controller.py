@@ -316,7 +316,26 @@ def _schedule(doc: Any, src: Path) -> Schedule:
 
 def load_controller(path: str | os.PathLike[str]) -> Controller:
     """Read a controller JSON file (`Controller.save`); one-line errors for bad files, naming
-    the key, its value and what is allowed."""
+    the key, its value and what is allowed.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A JSON file of schema ``empact.controller``.
+
+    Returns
+    -------
+    Controller
+        From the measured errors (``r_g`` and a slip signal, or their logarithms) to the
+        servo torques ``(T_mp, T_ms)`` [N m]: A, B, C, D, the sample time ``dt`` [s] (0:
+        continuous), the design data and the schedule, if any.
+
+    Raises
+    ------
+    ParameterError
+        For a missing file, a file that is not JSON of the schema, or a bad key (names,
+        matrix shapes, ``dt``, ``design``, ``schedule``).
+    """
     p = Path(path)
     if not p.is_file():
         raise ParameterError(f"{p}: no such controller file")

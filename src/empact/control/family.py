@@ -332,7 +332,24 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
 
 def design_family(params: Params, **options) -> "PlantFamily":
     """The design family (`DESIGN_GRID`, with `LOOP_FAMILY_OUTPUTS`) on a parameter set;
-    `options` as `plant_family`'s."""
+    `options` as `plant_family`'s.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (its ``operating`` point gives the primary speed and the base).
+    **options
+        Further keywords of `plant_family` other than the grid's axes and ``outputs``
+        (``base``, ``model``, ``sweep``, ``omega_p``, or
+        `empact.nonlinear.model.ModelOptions` fields).
+
+    Returns
+    -------
+    PlantFamily
+        Shape (7, 3, 3) over ``r_g`` [-] x ``tau`` [-] x ``F_s`` [N] (an ``omega_p`` array
+        adds its axis), inputs ``T_mp, T_ms`` [N m] and the load input, outputs
+        `LOOP_FAMILY_OUTPUTS`.
+    """
     return plant_family(params, **DESIGN_GRID, outputs=LOOP_FAMILY_OUTPUTS, **options)
 
 
@@ -362,7 +379,28 @@ def _linearise_points(task) -> dict[str, NDArray]:
 
 def save_family(family: PlantFamily, path: str | os.PathLike[str], fmt: str | None = None
                 ) -> Path:
-    """Write a family atomically as ``.npz``, JSON or ``.mat`` (see the module notes)."""
+    """Write a family atomically as ``.npz``, JSON or ``.mat`` (see the module notes).
+
+    Parameters
+    ----------
+    family : PlantFamily
+        The family to write.
+    path : str or path-like
+        The destination file.
+    fmt : {"npz", "json", "mat"}, optional
+        The format (default: from the suffix of `path`); only ``.npz`` reads back
+        (`load_family`).
+
+    Returns
+    -------
+    Path
+        The file written (`path`).
+
+    Raises
+    ------
+    ParameterError
+        For a format (or suffix) that is none of the three.
+    """
     fmt = check_choice("format", fmt or Path(path).suffix.lstrip(".").lower(),
                        ("npz", "json", "mat"))
     data = family.to_dict()
@@ -388,7 +426,25 @@ def save_family(family: PlantFamily, path: str | os.PathLike[str], fmt: str | No
 
 def load_family(path: str | os.PathLike[str]) -> PlantFamily:
     """Read a family written by `save_family` as ``.npz`` (one-line errors for a file that is
-    not one)."""
+    not one).
+
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.npz`` file of `save_family` (or ``empact plants --out FILE.npz``).
+
+    Returns
+    -------
+    PlantFamily
+        The family as written: axes, fixed variables, the A, B, C, D arrays (shapes
+        ``grid + (n, n)``, ``grid + (n, m)``, ``grid + (q, n)``, ``grid + (q, m)``), names,
+        operating variables, trim status and model options.
+
+    Raises
+    ------
+    ParameterError
+        For a file that is not ``.npz``, not readable, or not a consistent plant family.
+    """
     p = Path(path)
     hint = "write one with `empact plants --out FILE.npz`"
     if p.suffix.lower() != ".npz":

@@ -141,7 +141,21 @@ class LoopConfig:
 
 def reference_table(references: Mapping[str, NDArray], t: NDArray) -> dict[str, NDArray]:
     """Piecewise-linear references ``{name: [[t, v], ...]}`` at times `t` (right-continuous:
-    a repeated time is a step; held before the first and after the last point)."""
+    a repeated time is a step; held before the first and after the last point).
+
+    Parameters
+    ----------
+    references : dict str -> ndarray, shape (k, 2)
+        Each reference as rows ``[t, value]`` (times [s] non-decreasing; values in the
+        reference's units, e.g. ``r_g`` [-], ``nu`` [-]).
+    t : ndarray, shape (n_t,)
+        Times to evaluate at [s].
+
+    Returns
+    -------
+    dict str -> ndarray, shape (n_t,)
+        Each reference's value at `t`, by name.
+    """
     out = {}
     tt = np.asarray(t, float)
     for name, arr in references.items():

@@ -55,7 +55,24 @@ _H_REF = np.array([1e-6, 1e-8, 1e-7, 1e-6])
 def zoh(A: NDArray, B: NDArray, dt: float) -> tuple[NDArray, NDArray]:
     """Exact zero-order-hold discretisation of stacked systems ``(..., n, n)``,
     ``(..., n, m)``: ``Phi = e^(A dt)``, ``Gamma = int_0^dt e^(A s) ds B`` (one matrix
-    exponential of the block ``[[A, B], [0, 0]] dt``, `scipy.linalg.expm`)."""
+    exponential of the block ``[[A, B], [0, 0]] dt``, `scipy.linalg.expm`).
+
+    Parameters
+    ----------
+    A : array_like, shape (..., n, n)
+        Continuous state matrices [1/s], any leading (grid) dimensions.
+    B : array_like, shape (..., n, m)
+        Continuous input matrices, the same leading dimensions.
+    dt : float
+        Sample period [s].
+
+    Returns
+    -------
+    Phi : ndarray, shape (..., n, n)
+        ``e^(A dt)`` [-].
+    Gamma : ndarray, shape (..., n, m)
+        ``int_0^dt e^(A s) ds B``, the input matrix under the zero-order hold.
+    """
     A, B = np.asarray(A, float), np.asarray(B, float)
     n, m = A.shape[-1], B.shape[-1]
     M = np.zeros(A.shape[:-2] + (n + m, n + m))
@@ -70,7 +87,23 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
     starting point by central differences: ``s' = Sz s + Sy y + Sr r``, ``e = Ez s + Ey y +
     Er r``, ``u_ff = Fz s + Fy y + Fr r`` in deviations of the state ``s``, the raw
     measurements ``y`` (`RAW_SIGNALS`) and the references ``r`` (``r_g, slip, mu,
-    dr_g/dt``)."""
+    dr_g/dt``).
+
+    Parameters
+    ----------
+    law : LoopLaw
+        The law, linearised at its start (its first references, trim measurements and
+        initial pre-processing state).
+
+    Returns
+    -------
+    dict str -> ndarray
+        ``Sz``, ``Sy``, ``Sr`` shapes (n_pre, n_pre), (n_pre, 7), (n_pre, 4); ``Ez``,
+        ``Ey``, ``Er`` and ``Fz``, ``Fy``, ``Fr`` shapes (2, n_pre), (2, 7), (2, 4): the
+        next pre-processing state, the controller's two errors (ratio, slip) and the two
+        feedforward servo torques ``(T_mp, T_ms)`` [N m] per unit deviation (SI units of
+        each signal); ``n_pre`` is ``law.n_pre``.
+    """
     s0 = law.z0[:law.n_pre]
     y0 = law.raw0
     r0 = np.array([law.refs.r_g[0], law.refs.slip[0], law.refs.mu[0], 0.0])
@@ -138,6 +171,33 @@ class LoopModel:
     with ``du = mask * K(z) e`` (`controller`, discrete).  ``w`` are the machine's other
     inputs (`disturbances`), held over each sample, and ``r`` the references (``r_g``,
     slip, mu, dr_g/dt).
+
+    Attributes
+    ----------
+    Aa, Bu, Bw, Br : ndarray
+        State, servo-torque, disturbance and reference matrices of the augmented plant
+        (discrete, per sample), shapes (n_xi, n_xi), (n_xi, 2), (n_xi, n_w), (n_xi, 4)
+        after the leading dimensions `shape`.
+    Ce, Dew, Der : ndarray
+        The controller's errors (ratio, slip), shapes (2, n_xi), (2, n_w), (2, 4) after
+        the leading dimensions.
+    Cy, Dyu, Dyw, Dyr : ndarray
+        The predicted `outputs`, shapes (n_y, n_xi), (n_y, 2), (n_y, n_w), (n_y, 4) after
+        the leading dimensions.
+    controller : Controller
+        The controller, discrete at `dt`.
+    mask : ndarray, shape (2,)
+        Which controller outputs reach the servos (1 or 0; the safety-factor strategy
+        drops the secondary's).
+    dt : float
+        Sample period [s].
+    disturbances : tuple of str
+        Names of the machine's other inputs ``w`` (n_w of them).
+    outputs : tuple of str
+        Names of the predicted signals: `PERFORMANCE`, then ``T_mp``, ``T_ms`` (n_y).
+    y0 : ndarray, shape (n_y,)
+        The outputs at the trim (SI; `loop_model`), added to the deviations by
+        `predict_scenario`; empty for a family (`family_loops`).
     """
 
     Aa: NDArray[np.float64]
@@ -259,7 +319,18 @@ class LoopModel:
 
 def default_omega(dt: float) -> NDArray[np.float64]:
     """300 frequencies [rad/s], log-spaced from 0.01 Hz to just below the Nyquist
-    frequency."""
+    frequency.
+
+    Parameters
+    ----------
+    dt : float
+        Sample period [s].
+
+    Returns
+    -------
+    ndarray, shape (300,)
+        ``2 pi f`` [rad/s] for f log-spaced from 0.01 Hz to ``0.49 / dt`` [Hz].
+    """
     return 2 * np.pi * np.logspace(-2, np.log10(0.49 / dt), 300)
 
 
@@ -333,7 +404,30 @@ def _check_no_feedthrough(D_raw_u: NDArray) -> None:
 def loop_model(scenario: Scenario, params: Params,
                controller: Controller | None = None) -> tuple[LoopModel, LoopLaw]:
     """The linear model of a closed-loop scenario's loop at its trimmed start, and the
-    (ideal) law it linearises."""
+    (ideal) law it linearises.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        A scenario with a ``[controller]`` table.
+    params : Params
+        The parameter set the start is trimmed and linearised on.
+    controller : Controller, optional
+        Replaces the scenario's controller file.
+
+    Returns
+    -------
+    loop : LoopModel
+        One point (``shape == ()``), discrete at the law's sample time, with ``y0`` the
+        trim's outputs.
+    law : LoopLaw
+        The law without servo limits, quantisation and noise (`LoopConfig.ideal`).
+
+    Raises
+    ------
+    ParameterError
+        When the law's measurements depend directly on the servo torques.
+    """
     model, op = scenario_model(scenario, params)
     law = build_law(scenario, params, controller, model, op)
     ideal = LoopLaw(law.controller, model, law.point, law.u0, law.config.ideal(),
@@ -357,7 +451,24 @@ def loop_model(scenario: Scenario, params: Params,
 def predict_scenario(scenario: Scenario, params: Params,
                      controller: Controller | None = None) -> LoopPrediction:
     """The linear prediction of a closed-loop scenario's run (`loop_model` driven by the
-    scenario's inputs and references, sampled at the loop's rate)."""
+    scenario's inputs and references, sampled at the loop's rate).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        A scenario with a ``[controller]`` table.
+    params : Params
+        The parameter set.
+    controller : Controller, optional
+        Replaces the scenario's controller file.
+
+    Returns
+    -------
+    LoopPrediction
+        ``t`` shape (n_k,) [s], from 0 to the scenario's duration at the loop's sample
+        period; ``signals``: `PERFORMANCE` and ``T_mp``, ``T_ms`` [N m], each shape (n_k,),
+        absolute (trim plus the linear deviation).
+    """
     lm, law = loop_model(scenario, params, controller)
     model, op = scenario_model(scenario, params)
     n_k = int(round(scenario.duration / lm.dt)) + 1
@@ -383,7 +494,34 @@ def family_loops(family: PlantFamily, controller: Controller, config: LoopConfig
                  params: Params, model: EmpactModel | None = None) -> LoopModel:
     """The loop model at every point of `family` (which must hold the `RAW_SIGNALS` and
     `PERFORMANCE` outputs: ``plant_family(..., outputs=LOOP_FAMILY_OUTPUTS)``) for
-    `controller` under `config` (its ideal version), references held at each point."""
+    `controller` under `config` (its ideal version), references held at each point.
+
+    Parameters
+    ----------
+    family : PlantFamily
+        Every point trimmed, with the outputs `LOOP_FAMILY_OUTPUTS`.
+    controller : Controller
+        The controller (continuous: discretised by the law at the loop's rate).
+    config : LoopConfig
+        The loop configuration; its ideal version (no limits, quantisation or noise) is
+        linearised.
+    params : Params
+        The parameter set the law knows.
+    model : EmpactModel, optional
+        The machine's model (default: `nonlinear_model` with the family's options).
+
+    Returns
+    -------
+    LoopModel
+        Stacked over the grid (``shape == family.shape``), discrete at the loop's sample
+        time; ``y0`` empty.
+
+    Raises
+    ------
+    ParameterError
+        When the family lacks outputs the loop needs, has points that did not trim, or the
+        measurements depend directly on the servo torques.
+    """
     missing = [n for n in RAW_SIGNALS + PERFORMANCE if n not in family.outputs]
     if missing:
         raise ParameterError(f"the family lacks the outputs {', '.join(missing)} the loop "
