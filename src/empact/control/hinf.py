@@ -52,7 +52,28 @@ def residualize(A, B, C, D, f_keep_hz: float | None = None, *,
                 f_keep: float | None = None) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Remove the modes faster than `f_keep_hz` [Hz] by residualisation (DC gain kept): real
     Schur form with the slow eigenvalues first; the fast block's states are set to their
-    quasi-static values (they must be stable).  (``f_keep``: deprecated name.)"""
+    quasi-static values (they must be stable).  (``f_keep``: deprecated name.)
+
+    Parameters
+    ----------
+    A, B, C, D : array_like
+        State-space matrices, shapes (n, n), (n, m), (p, n), (p, m).
+    f_keep_hz : float
+        Modes with ``|lambda| >= 2 pi f_keep_hz`` [rad/s] are residualised.
+    f_keep : float, optional
+        Deprecated name of `f_keep_hz`.
+
+    Returns
+    -------
+    A_r, B_r, C_r, D_r : ndarray
+        The reduced model in the slow Schur coordinates, shapes (k, k), (k, m), (p, k),
+        (p, m), with k the number of slow modes; its DC gain equals the full model's.
+
+    Raises
+    ------
+    ParameterError
+        When a fast mode is not stable.
+    """
     if f_keep is not None:
         warnings.warn("residualize(f_keep=) is deprecated; use f_keep_hz [Hz]",
                       DeprecationWarning, stacklevel=2)
@@ -104,7 +125,27 @@ def _zeros_tall(A, B, C, D) -> NDArray[np.complex128]:
 def check_wellposed(P, nmeas: int, ncon: int, axis_tol: float = 1e-6) -> None:
     """Raise `ParameterError` (one line) when the H-infinity assumptions A1-A4 fail for the
     generalized plant `P` (last `ncon` inputs are controls, last `nmeas` outputs
-    measurements)."""
+    measurements).
+
+    Parameters
+    ----------
+    P : control.StateSpace
+        The generalized plant (e.g. of `mixed_sensitivity_plant`): exogenous inputs, then
+        controls; performance outputs, then measurements.
+    nmeas : int
+        Number of measurements (the last outputs of `P`).
+    ncon : int
+        Number of controls (the last inputs of `P`).
+    axis_tol : float
+        An invariant zero ``z`` counts as on the imaginary axis when ``|Re z| <= axis_tol
+        max(1, |z|)`` [-].
+
+    Raises
+    ------
+    ParameterError
+        Naming the assumption that fails: A1 (stabilisable, detectable), A2 (rank of D12,
+        D21), A3 or A4 (no invariant zero on the imaginary axis).
+    """
     A, B, C, D = (np.asarray(M, float) for M in (P.A, P.B, P.C, P.D))
     n, m, p = A.shape[0], B.shape[1], C.shape[0]
     m1, p1 = m - ncon, p - nmeas
@@ -151,7 +192,41 @@ def mixed_sensitivity_plant(G, bandwidth_hz, *, M: float = 2.0, A_low: float = 1
                             u_bandwidth_hz: float = 20.0, u_scale: float = 1.0,
                             y_scale=Y_SCALE):
     """``(P, W1, W2, Gs)``: the S / KS generalized plant of the output-scaled plant ``Gs``
-    (python-control ``augw``) and its weights."""
+    (python-control ``augw``) and its weights.
+
+    Parameters
+    ----------
+    G : control.StateSpace
+        The plant, controls (servo torques [N m]) to measured outputs (ratio, slip [-]).
+    bandwidth_hz : sequence of float
+        Performance bandwidth ``w_b / (2 pi)`` of W1 for each output [Hz].
+    M : float
+        High-frequency gain bound of the sensitivity in W1 (its peak allowed) [-].
+    A_low : float
+        Low-frequency gain of the sensitivity in W1 (the steady error allowed) [-].
+    u_bandwidth_hz : float
+        Corner ``w_bc / (2 pi)`` of the control-effort weight W2 [Hz].
+    u_scale : float
+        Servo torque regarded as large [N m] (W2 is divided by it).
+    y_scale : sequence of float
+        Size of a unit error of each output [-] (default `Y_SCALE`); ``Gs`` has its
+        outputs divided by these.
+
+    Returns
+    -------
+    P : control.StateSpace
+        The generalized plant ``augw(Gs, W1, W2)``: inputs the exogenous signals ``w`` (one
+        per output), then the controls ``u``; outputs the weighted error ``W1 (w - Gs u)``,
+        the weighted effort ``W2 u``, then the error ``w - Gs u`` (closing ``u = K (w - Gs
+        u)`` gives ``W1 S`` and ``W2 K S``).
+    W1 : control.TransferFunction
+        Diagonal performance weight ``(s / M + w_b) / (s + A_low w_b)``, one per output.
+    W2 : control.TransferFunction
+        Diagonal effort weight ``(s + w_bc / 1e3) / (1e-3 s + w_bc) / u_scale``, one per
+        control.
+    Gs : control.StateSpace
+        The output-scaled plant.
+    """
     Sy = np.diag(1.0 / np.asarray(y_scale, float))
     Gs = control.ss(G.A, G.B, Sy @ G.C, Sy @ G.D)
     wb = 2 * np.pi * np.asarray(bandwidth_hz, float)

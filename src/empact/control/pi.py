@@ -39,7 +39,30 @@ ROLL_OFF = 5.0
 def pi_controller(kp, wi, wf, measured=("r_g", "nu"), outputs=("T_mp", "T_ms"),
                   design=None) -> Controller:
     """The diagonal controller ``diag(kp_j (1 + wi_j / s) / (1 + s / wf_j)^2)`` as a state
-    space (three states per loop: the integrator and the second-order roll-off)."""
+    space (three states per loop: the integrator and the second-order roll-off).
+
+    Parameters
+    ----------
+    kp : array_like, shape (m,)
+        Proportional gain of each loop [N m per unit of its error, e.g. N m for a ratio or
+        slip error of 1].
+    wi : array_like, shape (m,)
+        Integral corner of each loop [rad/s].
+    wf : array_like, shape (m,)
+        Corner of each loop's second-order roll-off [rad/s].
+    measured : tuple of str
+        The measured signals, one per loop (default ratio and slip, ``("r_g", "nu")``).
+    outputs : tuple of str
+        The commanded servo torques, one per loop.
+    design : dict, optional
+        The design data the controller records.
+
+    Returns
+    -------
+    Controller
+        Continuous (``dt = 0``), ``3 m`` states, method ``"pi"``: loop j from the error of
+        ``measured[j]`` to ``outputs[j]`` [N m].
+    """
     kp, wi, wf = (np.asarray(v, float) for v in (kp, wi, wf))
     m = len(kp)
     A = np.zeros((3 * m, 3 * m))

@@ -35,7 +35,21 @@ __all__ = ["OMEGA", "frequency_responses", "plant_responses", "disk_margin", "di
 
 
 def frequency_responses(A, B, C, D, omega) -> NDArray[np.complex128]:
-    """``C (j w I - A)^-1 B + D`` for stacks of systems: A (..., n, n) -> (..., n_w, p, m)."""
+    """``C (j w I - A)^-1 B + D`` for stacks of systems: A (..., n, n) -> (..., n_w, p, m).
+
+    Parameters
+    ----------
+    A, B, C, D : array_like
+        Continuous state-space matrices, shapes (..., n, n), (..., n, m), (..., p, n),
+        (..., p, m), with common (broadcastable) leading dimensions.
+    omega : array_like, shape (n_w,)
+        Frequencies [rad/s].
+
+    Returns
+    -------
+    ndarray of complex, shape (..., n_w, p, m)
+        The responses, output units per input unit.
+    """
     A, B, C, D = (np.asarray(M) for M in (A, B, C, D))
     w = np.asarray(omega, float)
     n = A.shape[-1]
@@ -73,7 +87,25 @@ def _mu_2x2(M: NDArray[np.complex128], iters: int = 60) -> NDArray[np.float64]:
 
 def disk_margin(L: NDArray[np.complex128]) -> NDArray[np.float64]:
     """Multiloop balanced disk margin ``alpha`` of loops ``L`` (..., n_w, m, m) over the
-    frequency axis: shape (...)."""
+    frequency axis: shape (...).
+
+    Parameters
+    ----------
+    L : array_like of complex, shape (..., n_w, m, m)
+        Loop responses (``K G`` or ``G K``) at n_w frequencies, one or two loops (m = 1 or
+        2).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``alpha = 1 / max_w mu(S - I/2)`` [-], ``S = (I + L)^-1``; it says nothing of
+        closed-loop stability (check the poles).
+
+    Raises
+    ------
+    ValueError
+        For more than two loops.
+    """
     L = np.asarray(L)
     m = L.shape[-1]
     S = np.linalg.inv(np.eye(m) + L)
@@ -88,7 +120,21 @@ def disk_margin(L: NDArray[np.complex128]) -> NDArray[np.float64]:
 
 
 def disk_gain_phase(alpha) -> tuple[NDArray, NDArray]:
-    """``(gain margin [dB], phase margin [deg])`` of a balanced disk margin ``alpha``."""
+    """``(gain margin [dB], phase margin [deg])`` of a balanced disk margin ``alpha``.
+
+    Parameters
+    ----------
+    alpha : array_like
+        Balanced disk margins [-], any shape.
+
+    Returns
+    -------
+    gain_margin_db : ndarray
+        ``20 log10((2 + alpha) / (2 - alpha))`` [dB] (inf for ``alpha >= 2``), the shape of
+        `alpha`.
+    phase_margin_deg : ndarray
+        ``2 atan(alpha / 2)`` [deg], the shape of `alpha`.
+    """
     a = np.asarray(alpha, float)
     with np.errstate(divide="ignore"):
         gm = np.where(a < 2, 20 * np.log10((2 + a) / np.where(a < 2, 2 - a, 1.0)), np.inf)
@@ -97,7 +143,21 @@ def disk_gain_phase(alpha) -> tuple[NDArray, NDArray]:
 
 def closed_loop_matrix(A, B, C, Ac, Bc, Cc, Dc) -> NDArray[np.float64]:
     """State matrix of ``u = K (r - y)`` around plants (stacked A (..., n, n), B (..., n, m)
-    control inputs, C (..., p, n) measured outputs, no feedthrough) with the controller."""
+    control inputs, C (..., p, n) measured outputs, no feedthrough) with the controller.
+
+    Parameters
+    ----------
+    A, B, C : array_like
+        The plants, shapes (..., n, n), (..., n, m), (..., p, n).
+    Ac, Bc, Cc, Dc : ndarray
+        The continuous controller from the p errors to the m controls, shapes (n_c, n_c),
+        (n_c, p), (m, n_c), (m, p).
+
+    Returns
+    -------
+    ndarray, shape (..., n + n_c, n + n_c)
+        The closed loop's state matrix [1/s], state ``[x; x_c]``.
+    """
     A, B, C = (np.asarray(M) for M in (A, B, C))
     nc = Ac.shape[0]
     top = np.concatenate([A - B @ Dc @ C, np.broadcast_to(B @ Cc, A.shape[:-2] + (A.shape[-1],
@@ -161,7 +221,25 @@ def measured_rows(family: PlantFamily, names) -> NDArray[np.float64]:
 
 def plant_responses(family: PlantFamily, inputs, outputs, omega) -> NDArray[np.complex128]:
     """The family's responses from `inputs` to `outputs` (`measured_rows` names) at `omega`
-    [rad/s]: shape ``family.shape + (n_w, n_out, n_in)`` (reusable across controllers)."""
+    [rad/s]: shape ``family.shape + (n_w, n_out, n_in)`` (reusable across controllers).
+
+    Parameters
+    ----------
+    family : PlantFamily
+        The plants.
+    inputs : sequence of str
+        Family inputs (e.g. ``("T_mp", "T_ms")``), n_in of them.
+    outputs : sequence of str
+        Family outputs or ``ln_<slip>`` (`measured_rows`), n_out of them.
+    omega : array_like, shape (n_w,)
+        Frequencies [rad/s].
+
+    Returns
+    -------
+    ndarray of complex, shape ``family.shape + (n_w, n_out, n_in)``
+        The responses without feedthrough (e.g. [1/(N m)] from a servo torque to ratio or
+        slip).
+    """
     ii = [family.inputs.index(n) for n in inputs]
     B, C = family.B[..., ii], measured_rows(family, outputs)
     return frequency_responses(family.A, B, C, np.zeros(C.shape[:-1] + (B.shape[-1],)), omega)
@@ -227,6 +305,26 @@ def mu_upper_bound(family: PlantFamily, controller, nominal: tuple[int, ...],
 
     Returns ``{"mu_peak", "n_blocks", "captured"}`` (``captured``: the share of the
     deviations' energy the kept directions carry).
+
+    Parameters
+    ----------
+    family : PlantFamily
+        The plants.
+    controller : Controller
+        Continuous, from ``controller.measured`` errors to ``controller.outputs``.
+    nominal : tuple of int
+        Grid index of the nominal point ``A0``.
+    n_directions : int
+        Most principal directions ``E_i`` kept.
+    omega : ndarray, optional
+        Frequencies [rad/s] (default 200 points, log-spaced from 0.01 to 1000 Hz).
+
+    Returns
+    -------
+    dict str -> float
+        ``mu_peak`` [-] (< 1: robustly stable over the box), ``n_blocks`` (the number of
+        real 1x1 blocks, an int), ``captured`` [-] and ``omega_peak`` [rad/s], the
+        frequency of the peak.
     """
     ii = [family.inputs.index(n) for n in controller.outputs]
     A0, B0 = family.A[nominal], family.B[nominal][:, ii]

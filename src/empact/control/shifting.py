@@ -81,7 +81,35 @@ def shift_envelope(model: EmpactModel, r_g: ArrayLike, omega_p: float, T_l: floa
                    tau: float, limits: ServoLimits) -> ShiftEnvelope:
     """The upshift-rate envelope of the module notes at ratios `r_g` on the test bench
     (`model`: drive speed-controlled, load torque-controlled), primary speed `omega_p`
-    [rad/s], load torque `T_l` [N m] and set-point torque ratio `tau`."""
+    [rad/s], load torque `T_l` [N m] and set-point torque ratio `tau`.
+
+    Parameters
+    ----------
+    model : EmpactModel
+        The test bench: ``drive = "speed"``, ``load = "torque"``.
+    r_g : array_like, shape (n,)
+        Geometric ratios [-] (a scalar is one ratio).
+    omega_p : float
+        Primary speed [rad/s].
+    T_l : float
+        Load torque [N m] (its magnitude counts).
+    tau : float
+        Torque ratio of the set-point ``mu / mu_max`` [-], in (0, 1).
+    limits : ServoLimits
+        The servo torque and speed limits.
+
+    Returns
+    -------
+    ShiftEnvelope
+        At each ratio the largest ratio rate [1/s], the limit that binds (`LIMITS`) and the
+        clamping force [N] and primary servo torque [N m] at that rate.
+
+    Raises
+    ------
+    ParameterError
+        For a model that is not the test bench, `tau` outside (0, 1), or a ratio that does
+        not trim.
+    """
     o = model.options
     if o.drive != "speed" or o.load != "torque":
         raise ParameterError("shift_envelope: the test bench (drive speed-controlled, load "
@@ -141,7 +169,35 @@ def shift_reference(envelope: ShiftEnvelope, r_start: float, r_end: float, t_sta
     """A ratio reference ``[[t, r_g], ...]`` from `r_start` to `r_end` (upshift) starting at
     `t_start` [s] whose rate is `share` of the envelope at every ratio, reached and left at
     `acceleration` [1/s^2] (the rate ``min(share envelope, sqrt(2 a (r - r_start)),
-    sqrt(2 a (r_end - r)))``; `n` straight pieces, equal in ``ln r_g``)."""
+    sqrt(2 a (r_end - r)))``; `n` straight pieces, equal in ``ln r_g``).
+
+    Parameters
+    ----------
+    envelope : ShiftEnvelope
+        The rate envelope (`shift_envelope`), covering ``[r_start, r_end]``.
+    r_start, r_end : float
+        First and last ratio [-], ``r_end > r_start``.
+    t_start : float
+        Start of the shift [s].
+    share : float
+        Share of the envelope's rate used [-], in (0, 1].
+    acceleration : float
+        Ratio acceleration ``a`` at the start and end of the shift [1/s^2].
+    n : int
+        Number of straight pieces.
+
+    Returns
+    -------
+    ndarray, shape (n + 1, 2)
+        Rows ``[t, r_g]``: times [s] from `t_start`, ratios [-] geometric from `r_start` to
+        `r_end` (a scenario's ``r_g`` reference).
+
+    Raises
+    ------
+    ParameterError
+        For ``r_end <= r_start``, `share` or `acceleration` out of range, or an envelope
+        that allows no shift at some ratio.
+    """
     if not r_end > r_start:
         raise ParameterError(f"shift_reference: an upshift needs r_end > r_start, got "
                              f"{r_start:g} -> {r_end:g}")
