@@ -59,7 +59,35 @@ DAMPING_LEVELS = ("none", "moderate", "large")
 
 @dataclass(frozen=True)
 class ActuationParams(Section):
-    """Linear actuation model (paper Sec. 2.1, Fig. 3)."""
+    """Linear actuation model (paper Sec. 2.1, Fig. 3).
+
+    Attributes
+    ----------
+    J_mp : float
+        Primary servo inertia (rotor and worm), coordinate q1 [kg m^2].
+    J_ms : float
+        Secondary servo inertia (rotor and chain sprocket), coordinate q2 [kg m^2].
+    J_sp : float
+        Primary sun gear with screw (ring, carrier and planets lumped), q3 [kg m^2].
+    J_ss : float
+        Secondary sun gear with screw input, q4 [kg m^2].
+    m_p, m_s : float
+        Primary and secondary moving sheaves with screw output, q5 and q6 [kg].
+    i_w : float
+        Worm ratio (servo turns per ring turn) [-].
+    i_c : float
+        Chain ratio (servo turns per ring turn) [-].
+    i_e : float
+        Ring to sun ratio of the epicyclic sets (the paper: 2) [-].
+    s : float
+        Screw pitch (translation per radian) [m/rad].
+    k_w, k_c : float
+        Worm stiffness (spring 1) and chain stiffness (spring 2) [N m/rad].
+    k_belt : float
+        Longitudinal pushbelt stiffness (spring 3) [N/m].
+    k_tp, k_ts : float
+        Primary and secondary thrust bearing stiffnesses (springs 4 and 5) [N/m].
+    """
 
     _name = "actuation"
     J_mp: float = param("kg m^2", "primary servo inertia (rotor and worm), coordinate q1",
@@ -84,7 +112,20 @@ class ActuationParams(Section):
 
 @dataclass(frozen=True)
 class DampingLevel(Section):
-    """One damping level of the actuation model (Fig. 6)."""
+    """One damping level of the actuation model (Fig. 6).
+
+    Attributes
+    ----------
+    alpha : float
+        Proportional spring damping, ``C_spring = alpha K`` [s].
+    c_mp, c_ms : float
+        Viscous friction of the primary and secondary servos [N m s/rad].
+    c_sp, c_ss : float
+        Viscous friction of the primary and secondary screws [N m s/rad].
+    c_shafai : float
+        Shafai pulley damping coefficient [N/m]: the pulley damping is ``c_pulley =
+        c_shafai / |omega|`` [N s/m] at pulley speed ``omega``.
+    """
 
     _name = "damping"
     alpha: float = param("s", "proportional spring damping, C_spring = alpha K", 0.0, 0.1,
@@ -103,7 +144,17 @@ class DampingLevel(Section):
 
 @dataclass(frozen=True)
 class DampingParams:
-    """The three damping levels of Fig. 6 and the pulley speed for Shafai's model."""
+    """The three damping levels of Fig. 6 and the pulley speed for Shafai's model.
+
+    Attributes
+    ----------
+    none, moderate, large : DampingLevel
+        The damping levels ``[damping.none]``, ``[damping.moderate]`` and
+        ``[damping.large]`` (`DAMPING_LEVELS`).
+    omega_pulley : float
+        Pulley speed of Shafai's damping model in the linear actuation model [rad/s], in
+        (0, 2000].
+    """
 
     none: DampingLevel
     moderate: DampingLevel
@@ -122,7 +173,25 @@ class DampingParams:
 
 @dataclass(frozen=True)
 class DrivelineParams(Section):
-    """Test-bench driveline (paper Sec. 2.2, Fig. 7)."""
+    """Test-bench driveline (paper Sec. 2.2, Fig. 7).
+
+    Attributes
+    ----------
+    J_d : float
+        Drive motor inertia, q1 [kg m^2].
+    J_p : float
+        Primary pulley with torque converter, q2 [kg m^2].
+    J_s : float
+        Secondary pulley, q3 [kg m^2].
+    J_l : float
+        Load motor inertia, q4 [kg m^2].
+    k_tc : float
+        Torque converter lock-up clutch stiffness [N m/rad].
+    k_belt : float
+        Pushbelt stiffness as a chain element, on the elongation ``R_p q2 - R_s q3`` [N/m].
+    k_ds : float
+        Driveshaft stiffness [N m/rad].
+    """
 
     _name = "driveline"
     J_d: float = param("kg m^2", "drive motor inertia, q1", 1e-6, 1e3)
@@ -139,7 +208,17 @@ class DrivelineParams(Section):
 class Sec21Stiffness(Section):
     """Stiffnesses of the actuation model with the paper's Sec. 2.1 kinematics as published
     (kinematics ``"paper-sec2.1"``), calibrated to Table 1 on its own: the overlay that
-    `empact.linear.actuation.actuation_model` and the nonlinear model use for that variant."""
+    `empact.linear.actuation.actuation_model` and the nonlinear model use for that variant.
+
+    Attributes
+    ----------
+    k_w, k_c : float
+        Worm stiffness (spring 1) and chain stiffness (spring 2) [N m/rad].
+    k_belt : float
+        Longitudinal pushbelt stiffness (spring 3) [N/m].
+    k_tp, k_ts : float
+        Primary and secondary thrust bearing stiffnesses (springs 4 and 5) [N/m].
+    """
 
     _name = "paper_sec21"
     k_w: float = param("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
@@ -511,7 +590,25 @@ def _merge(into: dict[str, Any], data: Mapping[str, Any], where: str,
 
 
 def read_toml(path: str | os.PathLike[str], what: str = "parameter") -> dict[str, Any]:
-    """Parse a TOML file; a missing file or bad syntax is a one-line `ParameterError`."""
+    """Parse a TOML file; a missing file or bad syntax is a one-line `ParameterError`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The TOML file to read.
+    what : str
+        What the file is, for the error messages (``"no such parameter file"``).
+
+    Returns
+    -------
+    dict
+        The parsed tables and values (nested dicts, as `tomllib.load` returns them).
+
+    Raises
+    ------
+    ParameterError
+        When the file is missing, a folder, not UTF-8, not valid TOML or unreadable.
+    """
     try:
         with open(path, "rb") as fh:
             return tomllib.load(fh)
@@ -572,14 +669,34 @@ class ParameterInfo:
 
 def parameter_sources() -> dict[str, dict[str, Any]]:
     """Source and plausible band of every shipped parameter (``data/parameter_sources.toml``):
-    dotted name -> ``{"source": str, "band": [lo, hi]}``."""
+    dotted name -> ``{"source": str, "band": [lo, hi]}``.
+
+    Returns
+    -------
+    dict
+        Dotted parameter name (``"traction.B_med"``) -> ``{"source": str, "band": [lo,
+        hi]}``, the band in the parameter's SI unit.
+    """
     text = resources.files("empact.data").joinpath("parameter_sources.toml").read_text()
     return dict(tomllib.loads(text))
 
 
 def describe_parameters(params: Params | None = None) -> list[ParameterInfo]:
     """Every parameter of a set (default: the shipped one) with its unit, allowed interval,
-    meaning, value, plausible band and source, in file order."""
+    meaning, value, plausible band and source, in file order.
+
+    Parameters
+    ----------
+    params : Params, optional
+        The parameter set whose values are shown (default: `default_params`).
+
+    Returns
+    -------
+    list of ParameterInfo
+        One entry per parameter, in the order of the parameter file's tables; the band is
+        ``(nan, nan)`` and the source empty for a parameter without an entry in
+        `parameter_sources`.
+    """
     params = default_params() if params is None else params
     sources = parameter_sources()
     out = []
@@ -639,7 +756,20 @@ def load_params(path: str | os.PathLike[str] | None = None) -> Params:
 
 
 def dumps_params(params: Params, header: str = "") -> str:
-    """TOML text of a parameter set, with an optional comment header."""
+    """TOML text of a parameter set, with an optional comment header.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (every key, SI units; only the given operating-point variables).
+    header : str
+        Comment lines put at the top of the text (each prefixed with ``#``).
+
+    Returns
+    -------
+    str
+        The TOML text, as `save_params` writes it and `load_params` reads it back.
+    """
     lines = "".join(f"# {line}\n" for line in header.splitlines())
     return lines + tomli_w.dumps(params.to_dict())
 

@@ -45,8 +45,21 @@ def check_plausible(params: Params, source: str = "parameters") -> Params:
 
     Parameters
     ----------
-    params : the parameter set
-    source : the file it came from (named in the message)
+    params : Params
+        The parameter set.
+    source : str
+        The file it came from (named in the message).
+
+    Returns
+    -------
+    Params
+        `params` itself, unchanged.
+
+    Raises
+    ------
+    ParameterError
+        One line naming `source`, the section or key and what is wrong (the module notes
+        list the checks).
     """
     where = f"{source}: "
     tr = traction_from_params(params)

@@ -95,7 +95,24 @@ def chunk_count(n_items: int, seconds_per_item: float, workers: int = 1,
                 target: float = 0.05) -> int:
     """Number of chunks for `n_items` items of `seconds_per_item` each: chunks of about
     `target` seconds (>= 50 ms: Dask's per-task overhead is about 5 ms), and at least two per
-    worker when the work allows it."""
+    worker when the work allows it.
+
+    Parameters
+    ----------
+    n_items : int
+        Number of items (points) of the sweep.
+    seconds_per_item : float
+        Estimated compute time of one item [s].
+    workers : int
+        Chunks that run at once (`SweepOptions.parallelism`).
+    target : float
+        Wanted compute time of one chunk [s].
+
+    Returns
+    -------
+    int
+        The number of chunks, between 1 and `n_items` (1 when there are no items).
+    """
     per = max(1, int(math.ceil(target / max(seconds_per_item, 1e-9))))
     n = max(1, int(math.ceil(n_items / per)))
     return max(1, min(n_items, max(n, 2 * workers if n_items * seconds_per_item
@@ -103,7 +120,20 @@ def chunk_count(n_items: int, seconds_per_item: float, workers: int = 1,
 
 
 def chunk_slices(n_items: int, n_chunks: int) -> list[slice]:
-    """`n_chunks` contiguous slices covering ``range(n_items)``, sizes differing by one."""
+    """`n_chunks` contiguous slices covering ``range(n_items)``, sizes differing by one.
+
+    Parameters
+    ----------
+    n_items : int
+        Number of items.
+    n_chunks : int
+        Wanted number of chunks (clipped to ``[1, n_items]``).
+
+    Returns
+    -------
+    list of slice
+        The slices in order, none empty (an empty list when there are no items).
+    """
     n_chunks = max(1, min(n_chunks, n_items))
     edges = [round(k * n_items / n_chunks) for k in range(n_chunks + 1)]
     return [slice(a, b) for a, b in zip(edges, edges[1:]) if b > a]
@@ -112,7 +142,22 @@ def chunk_slices(n_items: int, n_chunks: int) -> list[slice]:
 def plan_chunks(n_items: int, seconds_per_item: float,
                 options: SweepOptions | None = None) -> list[slice]:
     """Contiguous chunks of ``range(n_items)`` sized by `chunk_count` for `options`'
-    parallelism (in process by default)."""
+    parallelism (in process by default).
+
+    Parameters
+    ----------
+    n_items : int
+        Number of items of the sweep.
+    seconds_per_item : float
+        Estimated compute time of one item [s].
+    options : SweepOptions, optional
+        The scheduler whose parallelism sizes the chunks (default: in process).
+
+    Returns
+    -------
+    list of slice
+        Contiguous slices covering ``range(n_items)``, in order (`chunk_slices`).
+    """
     workers = (options or SweepOptions()).parallelism
     return chunk_slices(n_items, chunk_count(n_items, seconds_per_item, workers))
 
@@ -128,6 +173,28 @@ def run_chunks(fn: Callable[[Any], Any], chunks: Sequence[Any],
     """``[fn(c) for c in chunks]`` on the chosen scheduler, results in chunk order.
 
     `fn` must be a module-level function and the chunks picklable for Dask schedulers.
+
+    Parameters
+    ----------
+    fn : callable
+        The chunk function, called with one chunk (with one BLAS thread).
+    chunks : sequence
+        The chunks, each `fn`'s argument.
+    options : SweepOptions, optional
+        Where and how the sweep runs (default: in process, no progress bar).
+    desc : str
+        Label of the progress bar.
+
+    Returns
+    -------
+    list
+        ``fn(c)`` for every chunk ``c``, in chunk order.
+
+    Raises
+    ------
+    SweepError
+        When Dask is missing, the scheduler cannot be reached, or a chunk fails on a worker
+        (the message names the chunk's index).
     """
     opts = options or SweepOptions()
     chunks = list(chunks)

@@ -92,7 +92,27 @@ class AnalysisContext:
 
 
 def evaluate(params: Params, context: AnalysisContext) -> dict[str, float]:
-    """The outputs (`OUTPUTS`) of one run; raises on failure (the caller records why)."""
+    """The outputs (`OUTPUTS`) of one run; raises on failure (the caller records why).
+
+    Parameters
+    ----------
+    params : Params
+        The run's (spread) parameter set.
+    context : AnalysisContext
+        The analysis (``kind``) and, for the closed loop, its scenario, controller and
+        nominal parameters.
+
+    Returns
+    -------
+    dict of str to float
+        ``OUTPUTS[context.kind]``'s names -> values in the units `OUTPUTS` gives (slips as
+        fractions [-]; NaN for a plant output that does not exist, e.g. no resonant mode).
+
+    Raises
+    ------
+    RunFailed
+        When a closed-loop simulation stops early (the solver's message).
+    """
     return _EVALUATE[context.kind](params, context)
 
 

@@ -107,7 +107,15 @@ class Distribution:
 
 @dataclass(frozen=True)
 class Spread:
-    """The distributions of a Monte Carlo study, in file order."""
+    """The distributions of a Monte Carlo study, in file order.
+
+    Attributes
+    ----------
+    distributions : tuple of Distribution
+        One per spread parameter, in file order.
+    source : str
+        The spread file it was read from (empty if built in code), for messages.
+    """
 
     distributions: tuple[Distribution, ...]
     source: str = ""
@@ -216,7 +224,30 @@ def _check_reachable(d: Distribution, params: Params, where: str) -> None:
 
 
 def spread_from_dict(data: Mapping[str, Any], params: Params, source: str = "") -> Spread:
-    """Validate a parsed spread document against a parameter set (names, distributions)."""
+    """Validate a parsed spread document against a parameter set (names, distributions).
+
+    Parameters
+    ----------
+    data : mapping
+        A parsed spread document: a ``spread`` table of one table per parameter, keyed by
+        its dotted name (``[spread."actuation.k_w"]`` or ``[spread.actuation.k_w]``).
+    params : Params
+        The nominal set (defines each parameter's value and allowed range).
+    source : str
+        The file it came from (named in the messages).
+
+    Returns
+    -------
+    Spread
+        The distributions by dotted name, in document order.
+
+    Raises
+    ------
+    ParameterError
+        One line naming the file and parameter: an unknown table, key, parameter or
+        distribution, a parameter given twice, bad bounds, or a distribution whose values the
+        parameter set never accepts.
+    """
     where = source or "spread"
     extra = sorted(set(data) - {"spread"})
     if extra:

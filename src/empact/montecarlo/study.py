@@ -166,7 +166,19 @@ def _run_chunk(task) -> tuple[NDArray, NDArray, NDArray, list[str]]:
 def failure_kind(exc: BaseException) -> str:
     """What kind of failure an exception of a run is (the reasons' first word, by which the
     summary counts them): ``parameters`` (a value out of its range), ``trim`` (no steady
-    point), ``stopped`` (the simulation stopped early), ``error`` (anything else)."""
+    point), ``stopped`` (the simulation stopped early), ``error`` (anything else).
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception a run raised.
+
+    Returns
+    -------
+    {"trim", "parameters", "stopped", "error"}
+        The kind (`TrimError` is ``trim``, any other `ParameterError` ``parameters``,
+        `RunFailed` ``stopped``).
+    """
     if isinstance(exc, TrimError):
         return "trim"
     if isinstance(exc, ParameterError):
@@ -232,7 +244,21 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
 
 def save_montecarlo(result: MonteCarloResult, folder: str | os.PathLike[str]) -> Path:
     """Write ``runs.csv``, ``runs.json`` (the table; null for NaN) and ``summary.json`` into
-    `folder`, all or nothing (a temporary folder moved into place)."""
+    `folder`, all or nothing (a temporary folder moved into place).
+
+    Parameters
+    ----------
+    result : MonteCarloResult
+        The study to write.
+    folder : str or path-like
+        The folder written (created with its parents if missing; other files in it are
+        left alone, files of the same name replaced).
+
+    Returns
+    -------
+    Path
+        `folder`.
+    """
     with atomic_folder(folder) as tmp:
         (tmp / "runs.csv").write_text(result.to_csv())
         doc = {"schema": {"name": "empact.montecarlo.runs", "version": SCHEMA_VERSION},

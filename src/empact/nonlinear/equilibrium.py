@@ -143,7 +143,26 @@ def traction_peak(model: EmpactModel, r_g: ArrayLike) -> tuple[NDArray, NDArray]
     """Slip at the peak of the kernel's traction curve and the peak value ``(nu_peak,
     mu_peak)`` at ratio(s) `r_g` (golden-section search on [0, 0.99], to rounding; the
     curve is unimodal in slip; compiled: `_kernel.traction_peak_many`, bitwise the
-    vectorised search `_traction_peak_numpy`)."""
+    vectorised search `_traction_peak_numpy`).
+
+    Parameters
+    ----------
+    model : EmpactModel
+        Its compiled traction curve is searched.
+    r_g : float or array_like
+        Geometric ratio(s) [-], > 0, any shape.
+
+    Returns
+    -------
+    nu_peak, mu_peak : float or ndarray
+        Slip [-] at the peak and the peak traction coefficient [-]: floats for a scalar
+        `r_g`, else arrays of its shape.
+
+    Raises
+    ------
+    ValueError
+        If a ratio is not positive.
+    """
     r = np.atleast_1d(np.asarray(r_g, float))
     if np.any(r <= 0):
         raise ValueError(f"r_g = {r[r <= 0].flat[0]:g}: must be positive")
@@ -247,6 +266,21 @@ def slip_at_torque_ratio(model: EmpactModel, tau: ArrayLike,
     (a set-point with the torque reserve ``1 - tau``), at ratio(s) `r_g` (broadcast; to
     rounding).
 
+    Parameters
+    ----------
+    model : EmpactModel
+        Its compiled traction curve is used.
+    tau : array_like
+        Torque ratio(s) ``mu / mu_max`` [-] in [0, 1] (the torque reserve is ``1 - tau``).
+    r_g : array_like
+        Geometric ratio(s) [-], broadcast with `tau`.
+
+    Returns
+    -------
+    ndarray
+        The slip ``nu`` [-] (>= 0, at most the peak's), the broadcast shape of `tau` and
+        `r_g`.
+
     Raises
     ------
     ParameterError
@@ -306,6 +340,36 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
     cannot be trimmed are marked (``ok``, ``reason``), never dropped.
 
     Parameters as `OperatingPoint`: exactly two of the slip (`nu` or `tau`), `F_s`, `T_l`.
+
+    Parameters
+    ----------
+    model : EmpactModel
+    r_g : array_like, shape (N,)
+        Geometric ratios [-].
+    omega_p : array_like, shape (N,)
+        Primary speeds [rad/s], > 0.
+    nu : array_like, shape (N,), optional
+        Slips [-].
+    F_s : array_like, shape (N,), optional
+        Secondary clamping forces [N], > 0.
+    T_l : array_like, shape (N,), optional
+        Load torques [N m].
+    tau : array_like, shape (N,), optional
+        Torque ratios ``mu / mu_max`` [-] (a slip on the rising branch of the traction
+        curve), in place of `nu`.
+
+    Returns
+    -------
+    TrimGrid
+        All N points (the broadcast size of the arguments, scalars as length 1): states,
+        inputs, outputs and the solved operating variables, with ``ok``, ``reason`` and
+        ``residual`` per point.
+
+    Raises
+    ------
+    TrimError
+        When the arguments do not give exactly two of the slip, `F_s` and `T_l` (with
+        ``belt="locked"``: `F_s`, optionally `T_l`, and no slip).
     """
     locked = model.options.belt == "locked"
     if nu is not None and tau is not None:

@@ -43,7 +43,18 @@ BENCH_OPTIONS = {"drive": "speed", "load": "torque"}
 
 def disturbance_input(model: EmpactModel) -> str:
     """The plant's disturbance input: the load torque ``T_l`` (torque-controlled load motor)
-    or the load speed reference ``omega_l_ref`` (speed-controlled)."""
+    or the load speed reference ``omega_l_ref`` (speed-controlled).
+
+    Parameters
+    ----------
+    model : EmpactModel
+        The nonlinear model (its ``load`` option decides).
+
+    Returns
+    -------
+    str
+        ``"T_l"`` [N m] or ``"omega_l_ref"`` [rad/s]: ``model.inputs[3]``.
+    """
     return model.inputs[3]
 
 
@@ -97,7 +108,31 @@ def linearize_many(model: EmpactModel, X: NDArray, U: NDArray, r_g0: NDArray,
                    nu0: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """`linearize` at many trimmed points in one compiled loop: states `X` (N, n), inputs
     `U` (N, 4), their ratios and slips (N,) -> ``A`` (N, n, n), ``B`` (N, n, 4), ``C`` (N, ny,
-    n), ``D`` (N, ny, 4) over all inputs and outputs, ``nu_r`` at each point's ratio."""
+    n), ``D`` (N, ny, 4) over all inputs and outputs, ``nu_r`` at each point's ratio.
+
+    Parameters
+    ----------
+    model : EmpactModel
+        The nonlinear model.
+    X : array, shape (N, n)
+        Trimmed states, ordered as ``model.states``.
+    U : array, shape (N, 4)
+        Their inputs, ordered as ``model.inputs``.
+    r_g0 : array, shape (N,)
+        Trimmed ratios [-] (the reference of ``nu_r``).
+    nu0 : array, shape (N,)
+        Trimmed slips [-].
+
+    Returns
+    -------
+    A : ndarray, shape (N, n, n)
+    B : ndarray, shape (N, n, 4)
+    C : ndarray, shape (N, ny, n)
+    D : ndarray, shape (N, ny, 4)
+        ``dx = A x + B u``, ``y = C x + D u`` in deviations at each point, states, inputs
+        and outputs ordered as ``model.states``, ``model.inputs`` and ``model.outputs``
+        (``ny = len(model.outputs)``; SI units).
+    """
     A, B, C, D = model.jacobian_many(X, U)
     _refer_nu_r(model, C, D, r_g0, nu0)
     return A, B, C, D
@@ -164,7 +199,20 @@ class Plant:
 
 
 def trim_point(model: EmpactModel, op: OperatingPoint) -> TrimResult:
-    """Deprecated: `empact.nonlinear.equilibrium.trim` takes the `OperatingPoint` itself."""
+    """Deprecated: `empact.nonlinear.equilibrium.trim` takes the `OperatingPoint` itself.
+
+    Parameters
+    ----------
+    model : EmpactModel
+        The nonlinear model.
+    op : OperatingPoint
+        The trim request.
+
+    Returns
+    -------
+    TrimResult
+        ``trim(model, op)`` (with a `DeprecationWarning`).
+    """
     warnings.warn("trim_point(model, op) is deprecated; use trim(model, op)",
                   DeprecationWarning, stacklevel=2)
     return trim(model, op)

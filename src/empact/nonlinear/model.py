@@ -550,7 +550,22 @@ def sheave_sense(kinematics: str) -> float:
 def shift_inertia(params: Params, kinematics: str = "equal-translation",
                   r_g: float = 1.0) -> float:
     """Inertia of the actuation's shift (rigid-body) motion referred to the primary servo
-    [kg m^2]: ``v^T M v`` with the rigid-body mode ``v`` scaled to ``q1 = 1``."""
+    [kg m^2]: ``v^T M v`` with the rigid-body mode ``v`` scaled to ``q1 = 1``.
+
+    Parameters
+    ----------
+    params : Params
+        Its ``[actuation]`` and ``[variator]`` blocks are read.
+    kinematics : {"equal-translation", "paper-sec2.1"}
+        The sheave kinematics of the actuation model.
+    r_g : float
+        Geometric ratio [-] at which the actuation model is built.
+
+    Returns
+    -------
+    float
+        The shift inertia referred to the primary servo [kg m^2].
+    """
     lm = actuation_model(params, r_g, kinematics=kinematics)
     v = lm.modes().shapes[:, 0]
     v = v / v[0]
@@ -607,6 +622,11 @@ def rhs(t: float, x: ArrayLike, u: ArrayLike, params: Params | EmpactModel) -> N
         Inputs ``T_mp, T_ms, T_d, T_l`` [N m] (other names with the controllers).
     params : Params or EmpactModel
         A parameter set (default options) or a built model.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The state derivative ``dx/dt`` (SI units of the states per second).
     """
     model = params if isinstance(params, EmpactModel) else _default_model(params)
     return model.rhs(t, x, u)

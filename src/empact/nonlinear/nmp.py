@@ -62,7 +62,23 @@ class BeltLengthChange:
 
 
 def belt_length_change(params: Params, r_g: ArrayLike, delta: float = 1e-5) -> BeltLengthChange:
-    """Delta_x (eq. 5) and the belt-length change for an equal translation `delta` [m]."""
+    """Delta_x (eq. 5) and the belt-length change for an equal translation `delta` [m].
+
+    Parameters
+    ----------
+    params : Params
+        Its ``[variator]`` block is read.
+    r_g : array_like
+        Geometric ratio(s) [-], a scalar or shape (n_r,), inside the variator's range.
+    delta : float
+        Equal translation of both moving sheaves [m], in (0, 1e-3).
+
+    Returns
+    -------
+    BeltLengthChange
+        ``phi`` [rad], ``delta_x`` [m] and the exact and first-order belt-length changes
+        ``dL_exact``, ``dL_first_order`` [m], each of shape (n_r,).
+    """
     v = params.variator
     check_number("delta", delta, 0.0, 1e-3, lo_open=True, hi_open=True, unit="m")
     r = np.atleast_1d(check_ratio(r_g, v))

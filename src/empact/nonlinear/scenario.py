@@ -356,7 +356,23 @@ def load_scenario(path: str | os.PathLike[str]) -> Scenario:
 
 def check_tables(data: Mapping[str, Any], schema: Mapping[str, Any], src: str) -> None:
     """Refuse a table not in `schema` (table -> allowed keys, or None for any), a value where
-    a table belongs, and a key not allowed in its table: one line naming `src`."""
+    a table belongs, and a key not allowed in its table: one line naming `src`.
+
+    Parameters
+    ----------
+    data : mapping
+        The parsed TOML document: table name -> table.
+    schema : mapping
+        Table name -> the set of allowed keys, or None for any key.
+    src : str
+        The file it came from (named in the message).
+
+    Raises
+    ------
+    ParameterError
+        For an unknown table or key, or a value where a table belongs (a key of empact
+        0.1's closed-loop layout is named with where it belongs now).
+    """
     for key, value in data.items():
         if key not in schema:
             raise ParameterError(f"{src}: unknown table [{key}] (allowed: {', '.join(schema)})")
@@ -375,7 +391,27 @@ def check_tables(data: Mapping[str, Any], schema: Mapping[str, Any], src: str) -
 def model_options(table: Mapping[str, Any], src: str,
                   defaults: Mapping[str, Any] | None = None) -> ModelOptions:
     """A scenario file's ``[model]`` table as `ModelOptions` (over `defaults`); a relative
-    ``thrust_ratio`` or ``creep_map`` path is read relative to the scenario file."""
+    ``thrust_ratio`` or ``creep_map`` path is read relative to the scenario file.
+
+    Parameters
+    ----------
+    table : mapping
+        The ``[model]`` table: `ModelOptions` field -> value.
+    src : str
+        The scenario file (relative paths are taken from its folder; named in messages).
+    defaults : mapping, optional
+        Option values the table overrides.
+
+    Returns
+    -------
+    ModelOptions
+        The validated options.
+
+    Raises
+    ------
+    ParameterError
+        One line naming `src` and the bad option.
+    """
     model = {**(defaults or {}), **dict(table)}
     for key in ("thrust_ratio", "creep_map"):
         path = model.get(key)
@@ -448,7 +484,26 @@ def _overrides(table: Mapping[str, Any], kind: type, name: str, src: str) -> dic
 
 
 def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenario:
-    """Validate a scenario given as a nested mapping (the parsed TOML)."""
+    """Validate a scenario given as a nested mapping (the parsed TOML).
+
+    Parameters
+    ----------
+    data : mapping
+        The parsed scenario document (tables as in the module docstring; SI units).
+    src : str
+        Where it came from: named in every message; relative file names of the ``[model]``
+        and ``[controller]`` tables are taken from its folder when it is a file.
+
+    Returns
+    -------
+    Scenario
+        The validated scenario (its ``source`` is `src`).
+
+    Raises
+    ------
+    ParameterError
+        One line naming `src`, the key, the bad value and what is allowed.
+    """
     check_tables(data, _SCENARIO_KEYS, src)
     head = data.get("scenario", {})
     if "duration" not in head:
@@ -550,7 +605,19 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
 
 def input_names(options: ModelOptions) -> tuple[str, ...]:
     """The model's four input names under `options` (controllers replace torques by
-    references)."""
+    references).
+
+    Parameters
+    ----------
+    options : ModelOptions
+        The model options (``ratio_control``, ``drive``, ``load``).
+
+    Returns
+    -------
+    tuple of str, length 4
+        ``T_mp`` or ``r_g_ref``, ``T_ms``, ``T_d`` or ``omega_d_ref``, ``T_l`` or
+        ``omega_l_ref``, in the model's input order.
+    """
     return ("r_g_ref" if options.ratio_control else "T_mp", "T_ms",
             "omega_d_ref" if options.drive == "speed" else "T_d",
             "omega_l_ref" if options.load == "speed" else "T_l")
@@ -558,7 +625,26 @@ def input_names(options: ModelOptions) -> tuple[str, ...]:
 
 def signal(where: str, pts: Any) -> NDArray[np.float64]:
     """A piecewise-linear signal ``[[t, value], ...]`` as an array of shape (k, 2): times
-    non-decreasing from 0, each repeated at most once (a step), values finite."""
+    non-decreasing from 0, each repeated at most once (a step), values finite.
+
+    Parameters
+    ----------
+    where : str
+        What the signal is, for the messages (``"file.toml: inputs.T_l"``).
+    pts : sequence of [t, value] pairs
+        The points: times [s] and values in the signal's SI unit.
+
+    Returns
+    -------
+    ndarray, shape (k, 2)
+        The points as floats, column 0 the times [s].
+
+    Raises
+    ------
+    ParameterError
+        When the points are not a non-empty list of pairs, not finite, or their times are
+        negative, decreasing or repeated more than once.
+    """
     try:
         arr = np.array(pts, dtype=float)
     except (TypeError, ValueError):
@@ -588,7 +674,20 @@ def _example_files() -> dict[str, Path]:
 
 def list_examples(closed_loop: bool | None = None) -> dict[str, str]:
     """Shipped example scenarios: name -> description (all, or only the open-loop or the
-    closed-loop ones)."""
+    closed-loop ones).
+
+    Parameters
+    ----------
+    closed_loop : bool, optional
+        True: only the closed-loop scenarios (with a ``[controller]`` table); False: only
+        the open-loop ones; None: all.
+
+    Returns
+    -------
+    dict of str to str
+        Example name (the file name without ``.toml``) -> its description; the open-loop
+        examples first, each folder by name.
+    """
     out = {}
     for name, path in _example_files().items():
         data = tomllib.loads(path.read_text())
@@ -598,7 +697,23 @@ def list_examples(closed_loop: bool | None = None) -> dict[str, str]:
 
 
 def example_path(name: str) -> Path:
-    """Path of a shipped example scenario (`list_examples` names)."""
+    """Path of a shipped example scenario (`list_examples` names).
+
+    Parameters
+    ----------
+    name : str
+        The example's name (its file name without ``.toml``).
+
+    Returns
+    -------
+    Path
+        The shipped TOML file.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown name (the message lists the names).
+    """
     files = _example_files()
     if name not in files:
         raise ParameterError(f"example {name!r}: choose from {', '.join(files)}")

@@ -93,6 +93,20 @@ def state_tolerances(model: EmpactModel, rtol: float) -> tuple[NDArray, NDArray]
     Positions are absolute (their offsets are arbitrary), so they get no relative tolerance;
     the absolute tolerances are ``rtol`` times a characteristic size of each state, chosen so
     that the belt stretch (~0.3 mm) and the bearing deflections are resolved.
+
+    Parameters
+    ----------
+    model : EmpactModel
+        The model whose states (``model.states``) the tolerances are for.
+    rtol : float
+        The integrator's relative tolerance [-].
+
+    Returns
+    -------
+    rtol, atol : ndarray, shape (n,)
+        Relative tolerances [-] (0 for the angles and sheave positions) and absolute
+        tolerances, in each state's unit (`empact.nonlinear.STATE_UNITS`), ordered as
+        ``model.states``.
     """
     scale = {"theta_mp": 0.1, "theta_ms": 0.1, "theta_sp": 0.01, "theta_ss": 0.01,
              "x_p": 1e-6, "x_s": 1e-6, "omega_mp": 1.0, "omega_ms": 1.0, "omega_sp": 0.1,
@@ -387,7 +401,28 @@ def _inputs_at(t, sig_t, sig_v, sig_n) -> NDArray[np.float64]:
 
 def scenario_model(scenario: Scenario, params: Params) -> tuple[EmpactModel, TrimResult]:
     """The model and the trimmed initial point of a scenario (``nu_r`` refers to the initial
-    point's ratio)."""
+    point's ratio).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario (its model options and initial point).
+    params : Params
+        The parameter set of the model.
+
+    Returns
+    -------
+    model : EmpactModel
+        The nonlinear model under the scenario's options (``reference_ratio`` the initial
+        ratio unless the options set one).
+    op : TrimResult
+        The trimmed initial point.
+
+    Raises
+    ------
+    TrimError
+        When the initial point cannot be trimmed.
+    """
     options = replace(scenario.options, reference_ratio=scenario.options.reference_ratio
                       if scenario.options.reference_ratio is not None
                       else scenario.initial.r_g)
@@ -400,7 +435,28 @@ def scenario_signals(scenario: Scenario, model: EmpactModel,
     """The scenario's input signals for `simulate`: ``F_s_ref`` mapped to the static servo
     torque ``T_ms = i_e s F_s_ref / i_c`` (with the sense of q6), offsets added to the
     trimmed inputs, and a ``load_step`` (a fraction of the torque capacity ``T_l / tau`` at
-    the trimmed start) as a step of ``T_l`` at ``load_step_time``."""
+    the trimmed start) as a step of ``T_l`` at ``load_step_time``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario (its inputs, offsets and load step).
+    model : EmpactModel
+        The model it runs on (`scenario_model`).
+    op : TrimResult
+        The trimmed initial point (its inputs ``u``, load torque and torque ratio).
+
+    Returns
+    -------
+    dict of str to ndarray
+        Model input name -> piecewise-linear signal ``[[t, value], ...]``, shape (k, 2),
+        times [s] and values in SI.
+
+    Raises
+    ------
+    ParameterError
+        When a ``load_step`` is asked for from an unloaded start.
+    """
     signals = dict(scenario.inputs)
     if scenario.load_step is not None:
         T_l0, t0 = op.T_l, scenario.load_step_time
@@ -459,7 +515,20 @@ def run_scenario(scenario: Scenario, params: Params, *,
 def csv_text(result: SimulationResult, states: bool = False) -> str:
     """CSV of a result: a ``#`` comment line with the status, then a header of names with
     units (``time [s]``, the outputs, the inputs, and with `states` the states as
-    ``x_<state>``) and one row per sample; `empact.identification.load_records` reads it."""
+    ``x_<state>``) and one row per sample; `empact.identification.load_records` reads it.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        The simulation.
+    states : bool
+        Also write the states.
+
+    Returns
+    -------
+    str
+        The CSV text (values with 10 significant digits, SI units as in the header).
+    """
     buf = io.StringIO()
     status = "complete" if result.complete else "INCOMPLETE"
     detail = result.message.removeprefix("completed: ")  # (not "complete: completed: ...")
@@ -478,6 +547,21 @@ def csv_text(result: SimulationResult, states: bool = False) -> str:
 
 
 def write_csv(result: SimulationResult, path: str | os.PathLike[str], states: bool = False) -> Path:
-    """Write `csv_text` to `path` atomically (temporary file, then rename)."""
+    """Write `csv_text` to `path` atomically (temporary file, then rename).
+
+    Parameters
+    ----------
+    result : SimulationResult
+        The simulation.
+    path : str or path-like
+        The CSV file written.
+    states : bool
+        Also write the states.
+
+    Returns
+    -------
+    Path
+        `path`.
+    """
     atomic_write_text(path, csv_text(result, states))
     return Path(path)

@@ -48,17 +48,65 @@ _STANDSTILL = "the slip nu = 1 - omega_s / (r_g omega_p) of eq. 2 is undefined a
 
 
 def check_speed(omega_p: ArrayLike) -> NDArray[np.float64]:
-    """Primary speeds [rad/s] as an array, all > 0 (one-line error naming the first bad)."""
+    """Primary speeds [rad/s] as an array, all > 0 (one-line error naming the first bad).
+
+    Parameters
+    ----------
+    omega_p : array_like
+        Primary pulley speed(s) [rad/s], any shape.
+
+    Returns
+    -------
+    ndarray
+        `omega_p` as a float array, its shape.
+
+    Raises
+    ------
+    ParameterError
+        If any speed is not finite or not positive (the slip is undefined at standstill).
+    """
     return check_values("omega_p", omega_p, 0.0, lo_open=True, unit="rad/s", note=_STANDSTILL)
 
 
 def check_clamp(F_s: ArrayLike) -> NDArray[np.float64]:
-    """Clamping forces [N] as an array, all >= 0."""
+    """Clamping forces [N] as an array, all >= 0.
+
+    Parameters
+    ----------
+    F_s : array_like
+        Secondary clamping force(s) [N], any shape.
+
+    Returns
+    -------
+    ndarray
+        `F_s` as a float array, its shape.
+
+    Raises
+    ------
+    ParameterError
+        If any force is not finite or negative.
+    """
     return check_values("F_s", F_s, 0.0, unit="N")
 
 
 def check_slip(nu: ArrayLike) -> NDArray[np.float64]:
-    """Slips [-] as an array, all in (-1, 1)."""
+    """Slips [-] as an array, all in (-1, 1).
+
+    Parameters
+    ----------
+    nu : array_like
+        Slip(s) [-] (fractions: 0.01 is 1 %), any shape.
+
+    Returns
+    -------
+    ndarray
+        `nu` as a float array, its shape.
+
+    Raises
+    ------
+    ParameterError
+        If any slip is not finite or outside (-1, 1).
+    """
     return check_values("nu", nu, -1.0, 1.0, lo_open=True, hi_open=True,
                         note="a fraction: 0.01 is 1 %")
 
@@ -68,8 +116,15 @@ def slip(omega_p: ArrayLike, omega_s: ArrayLike, r_g: ArrayLike) -> NDArray[np.f
 
     Parameters
     ----------
-    omega_p, omega_s : primary and secondary pulley speeds [rad/s]; ``omega_p`` > 0
-    r_g : geometric ratio ``R_p / R_s`` [-]
+    omega_p, omega_s : array_like
+        Primary and secondary pulley speeds [rad/s]; ``omega_p`` > 0.
+    r_g : array_like
+        Geometric ratio ``R_p / R_s`` [-].
+
+    Returns
+    -------
+    ndarray
+        The slip ``nu`` [-], the broadcast shape of the inputs.
 
     Raises
     ------
@@ -88,9 +143,22 @@ def belt_torque(params: Params, nu: ArrayLike, r_g: ArrayLike, F_s: ArrayLike,
 
     Parameters
     ----------
-    params : parameter set (variator geometry; traction model if `traction` is None)
-    nu : slip [-];  r_g : geometric ratio [-];  F_s : clamping force [N]
-    traction : traction model (default `traction_from_params(params)`)
+    params : Params
+        Parameter set (variator geometry; traction model if `traction` is None).
+    nu : array_like
+        Slip [-].
+    r_g : array_like
+        Geometric ratio [-].
+    F_s : array_like
+        Secondary clamping force [N], >= 0.
+    traction : TractionModel, optional
+        Traction model (default `traction_from_params(params)`).
+
+    Returns
+    -------
+    ndarray
+        The belt torque ``T_b`` on the secondary pulley [N m], the broadcast shape of `nu`,
+        `r_g` and `F_s`.
     """
     tr = traction_from_params(params) if traction is None else traction
     nu_a, r_a, f_a = np.broadcast_arrays(np.asarray(nu, float), np.asarray(r_g, float),
@@ -162,7 +230,24 @@ def linearisation_terms(params: Params, r_g: ArrayLike, nu: ArrayLike, F_s: Arra
 def linearize_belt(params: Params, op: OperatingPoint | None = None,
                    traction: TractionModel | None = None) -> BeltLinearisation:
     """Eq. 3 at `op` (default: the ``[operating]`` point of `params`; a point given by a torque
-    ratio or a load is resolved first)."""
+    ratio or a load is resolved first).
+
+    Parameters
+    ----------
+    params : Params
+        Parameter set (variator geometry; traction curve if `traction` is None).
+    op : OperatingPoint, optional
+        The operating point (default ``params.operating``).
+    traction : TractionModel, optional
+        Traction model (default `traction_from_params(params)`).
+
+    Returns
+    -------
+    BeltLinearisation
+        The resolved point with the radii [m], ``mu`` and ``dmu`` [-], the damping constants
+        ``c_b`` and ``c_s`` [N m s/rad], the clamping-force gain ``g_F`` [m] and the
+        kinematic ratio ``rho`` [-].
+    """
     op = (params.operating if op is None else op).resolve(params, traction)
     t = linearisation_terms(params, op.r_g, op.nu, op.F_s, op.omega_p, traction)
     return BeltLinearisation(op=op, **{k: float(t[k]) for k in
@@ -172,7 +257,22 @@ def linearize_belt(params: Params, op: OperatingPoint | None = None,
 
 def linearise_belt(params: Params, op: OperatingPoint | None = None,
                    traction: TractionModel | None = None) -> BeltLinearisation:
-    """Deprecated: `linearize_belt`."""
+    """Deprecated: `linearize_belt`.
+
+    Parameters
+    ----------
+    params : Params
+        Parameter set.
+    op : OperatingPoint, optional
+        The operating point (default ``params.operating``).
+    traction : TractionModel, optional
+        Traction model (default `traction_from_params(params)`).
+
+    Returns
+    -------
+    BeltLinearisation
+        As `linearize_belt` (with a `DeprecationWarning`).
+    """
     warnings.warn("linearise_belt is deprecated; use linearize_belt", DeprecationWarning,
                   stacklevel=2)
     return linearize_belt(params, op, traction)

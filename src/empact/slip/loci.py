@@ -48,6 +48,20 @@ def coupled_limit(params: Params, r_g: float, nu0: float = 0.0) -> NDArray[np.co
     projected with ``W`` (``b^T W = 0``).  Its eigenvalues ``+-sqrt(-w^2)`` are the coupled
     driveline's (Table 2 with a rigid belt), plus the three structural zeros; the eighth pole
     goes to ``-inf``.
+
+    Parameters
+    ----------
+    params : Params
+        Parameter set (driveline inertias and stiffnesses; variator range).
+    r_g : float
+        Geometric ratio [-] (checked against the variator's range).
+    nu0 : float
+        Operating slip [-] of the kinematic ratio ``rho = r_g (1 - nu0)``.
+
+    Returns
+    -------
+    ndarray of complex, shape (7,)
+        The finite poles [rad/s] (three of them exact zeros), ascending in magnitude.
     """
     variator_state(r_g, params.variator)  # range check
     J, K = mass_stiffness(params)
@@ -142,7 +156,25 @@ def belt_root_locus(params: Params, r_g: float = 1.0, nu0: float = 0.0, *,
 # Fig. 11: poles over an operating-point variable
 # --------------------------------------------------------------------------------------------
 def grid_values(name: str, values: ArrayLike) -> NDArray[np.float64]:
-    """Values of one operating-point variable `name` as a non-empty 1-d array."""
+    """Values of one operating-point variable `name` as a non-empty 1-d array.
+
+    Parameters
+    ----------
+    name : str
+        An operating-point variable (one of `VARIABLES`).
+    values : array_like
+        Its value(s), a scalar or a 1-d sequence, in the variable's unit.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The values as floats (a scalar becomes shape (1,)).
+
+    Raises
+    ------
+    ParameterError
+        For an unknown variable, or values that are empty or not 1-d.
+    """
     check_choice("operating-point variable", name, VARIABLES)
     v = np.atleast_1d(np.asarray(values, float))
     if v.ndim != 1 or v.size == 0:
@@ -242,6 +274,33 @@ def slip_frequency_responses(params: Params, ops: Sequence[OperatingPoint],
 
     Returns one `~empact.lti.FrequencyResponse` per point, ``H`` shape (1, 1, n_f) in
     output units per input unit (``nu`` per N for ``F_s -> nu``); `omega` [rad/s].
+
+    Parameters
+    ----------
+    params : Params
+        Parameter set (variator, driveline, traction).
+    ops : sequence of OperatingPoint
+        The operating points (each resolved as `empact.slip.model.slip_model` does).
+    omega : array_like, shape (n_f,)
+        Angular frequencies [rad/s], > 0.
+    labels : sequence of str, optional
+        One label per point (default: ``"r_g = ..., nu = ... %"``).
+    traction : TractionModel, optional
+        Traction model (default `traction_from_params(params)`).
+    input : {"F_s", "T_d", "T_l"}
+        The input of the responses.
+    output : {"nu", "omega_p", "omega_s", "T_b"}
+        The output of the responses.
+
+    Returns
+    -------
+    list of FrequencyResponse
+        One per point of `ops`, in order, ``H`` of shape (1, 1, n_f).
+
+    Raises
+    ------
+    ValueError
+        When `labels` does not have one entry per point, or for an unknown input or output.
     """
     if labels is not None and len(labels) != len(ops):
         raise ValueError(f"{len(labels)} labels for {len(ops)} operating points")

@@ -60,6 +60,18 @@ def mass_stiffness(params: Params) -> tuple[NDArray[np.float64], NDArray[np.floa
 
     Taken from ``driveline_model(params, r_g, belt=False)``; without the belt spring neither
     depends on the ratio.
+
+    Parameters
+    ----------
+    params : Params
+        Its ``[driveline]`` block is read.
+
+    Returns
+    -------
+    J : ndarray, shape (4,)
+        Inertias of the coordinates ``theta_d, theta_p, theta_s, theta_l`` [kg m^2].
+    K : ndarray, shape (4, 4)
+        Stiffness matrix of the torque converter and driveshaft springs [N m/rad].
     """
     lm = driveline_model(params, 1.0, belt=False)
     return np.diag(lm.M).copy(), lm.K
@@ -80,6 +92,24 @@ def assemble_A(J: NDArray[np.float64], K: NDArray[np.float64], r_g: NDArray[np.f
     """Stacked system matrices ``A``, shape (N, 8, 8), from 1-d arrays of length N.
 
     ``A = [[0, I], [-M^-1 K, -M^-1 C_b]]`` with ``C_b = c_s force vel^T``.
+
+    Parameters
+    ----------
+    J : ndarray, shape (4,)
+        Driveline inertias [kg m^2] (`mass_stiffness`).
+    K : ndarray, shape (4, 4)
+        Driveline stiffness matrix [N m/rad] (`mass_stiffness`).
+    r_g : ndarray, shape (N,)
+        Geometric ratios [-].
+    rho : ndarray, shape (N,)
+        Kinematic ratios ``r_g (1 - nu0)`` [-].
+    c_s : ndarray, shape (N,)
+        Belt damping of the secondary torque [N m s/rad].
+
+    Returns
+    -------
+    ndarray, shape (N, 8, 8)
+        The system matrices (``x' = A x``) on the states `STATES`.
     """
     N = r_g.shape[0]
     Jinv = 1.0 / J
@@ -99,6 +129,24 @@ def assemble_reduced(J: NDArray[np.float64], K: NDArray[np.float64], r_g: NDArra
     ``J_d w_d + J_p w_p + r_g (J_s w_s + J_l w_l) = 0`` in the coordinates (spring deflections,
     speeds); ``w_d`` follows from the momentum.  Its five eigenvalues are the eigenvalues of
     ``A`` other than the three structural zeros.
+
+    Parameters
+    ----------
+    J : ndarray, shape (4,)
+        Driveline inertias [kg m^2] (`mass_stiffness`).
+    K : ndarray, shape (4, 4)
+        Driveline stiffness matrix [N m/rad] (`mass_stiffness`).
+    r_g : ndarray, shape (N,)
+        Geometric ratios [-].
+    rho : ndarray, shape (N,)
+        Kinematic ratios ``r_g (1 - nu0)`` [-].
+    c_s : ndarray, shape (N,)
+        Belt damping of the secondary torque [N m s/rad].
+
+    Returns
+    -------
+    ndarray, shape (N, 5, 5)
+        The reduced system matrices on the states `REDUCED_STATES`.
     """
     N = r_g.shape[0]
     J_d, J_p, J_s, J_l = J
@@ -146,6 +194,16 @@ def state_matrices(params: Params, r_g: ArrayLike, nu: ArrayLike, F_s: ArrayLike
         -> tuple[NDArray[np.float64], ...]:
     """Slip-model matrices at many operating points at once (arrays broadcast to shape S).
 
+    Parameters
+    ----------
+    params : Params
+        Parameter set (variator, driveline; traction curve if `traction` is None).
+    r_g, nu, F_s, omega_p : array_like
+        Operating points: ratio [-], slip [-], clamping force [N] and primary speed [rad/s],
+        broadcast together to shape S.
+    traction : TractionModel, optional
+        Traction model (default `traction_from_params(params)`).
+
     Returns
     -------
     A : shape S + (8, 8);  B : shape S + (8, 3);  C : shape S + (4, 8);  D : shape S + (4, 3)
@@ -174,6 +232,21 @@ def reduced_matrices(params: Params, r_g: ArrayLike, nu: ArrayLike, F_s: ArrayLi
     + r_g (J_s omega_s + J_l omega_l) = 0``, states `REDUCED_STATES`.  Its eigenvalues are the
     five eigenvalues of `state_matrices`' ``A`` that are not structural zeros, so stability
     needs no rule for telling the structural zeros apart.  Arguments as `state_matrices`.
+
+    Parameters
+    ----------
+    params : Params
+        Parameter set (variator, driveline; traction curve if `traction` is None).
+    r_g, nu, F_s, omega_p : array_like
+        Operating points: ratio [-], slip [-], clamping force [N] and primary speed [rad/s],
+        broadcast together to shape S.
+    traction : TractionModel, optional
+        Traction model (default `traction_from_params(params)`).
+
+    Returns
+    -------
+    ndarray, shape S + (5, 5)
+        The reduced system matrices, states `REDUCED_STATES`.
     """
     t = linearisation_terms(params, r_g, nu, F_s, omega_p, traction)
     shape = t["r_g"].shape
@@ -292,7 +365,27 @@ def slip_model(params: Params, op: OperatingPoint | None = None,
 def slip_state_space(params: Params, op: OperatingPoint | None = None,
                      traction: TractionModel | None = None, inputs: Sequence[str] | None = None,
                      outputs: Sequence[str] | None = None):
-    """Named `control.StateSpace` of the slip model at `op` (see `slip_model`)."""
+    """Named `control.StateSpace` of the slip model at `op` (see `slip_model`).
+
+    Parameters
+    ----------
+    params : Params
+        Parameter set (variator, driveline, traction).
+    op : OperatingPoint, optional
+        The operating point (default ``params.operating``; resolved first).
+    traction : TractionModel, optional
+        Traction model (default `traction_from_params(params)`).
+    inputs : sequence of str, optional
+        Inputs to keep, from `INPUTS` (default all).
+    outputs : sequence of str, optional
+        Outputs to keep, from `OUTPUTS` (default all).
+
+    Returns
+    -------
+    control.StateSpace
+        Continuous, states `STATES` (deviations [rad, rad/s]), inputs ``F_s`` [N], ``T_d,
+        T_l`` [N m], outputs ``nu`` [-], ``omega_p, omega_s`` [rad/s], ``T_b`` [N m].
+    """
     return slip_model(params, op, traction).state_space(inputs, outputs)
 
 

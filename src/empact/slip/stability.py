@@ -36,7 +36,18 @@ METHODS = ("reduced", "full")
 
 
 def dynamic_poles(eigs: ArrayLike) -> NDArray[np.complex128]:
-    """Drop the `N_STRUCTURAL_ZEROS` eigenvalues of smallest magnitude (last axis)."""
+    """Drop the `N_STRUCTURAL_ZEROS` eigenvalues of smallest magnitude (last axis).
+
+    Parameters
+    ----------
+    eigs : array_like, shape S + (n,)
+        Eigenvalues of slip models [rad/s] (n = 8 for `empact.slip.model.state_matrices`).
+
+    Returns
+    -------
+    ndarray of complex, shape S + (n - 3,)
+        The remaining eigenvalues [rad/s], ascending in magnitude along the last axis.
+    """
     e = np.asarray(eigs, complex)
     order = np.argsort(np.abs(e), axis=-1)[..., N_STRUCTURAL_ZEROS:]
     return np.take_along_axis(e, order, axis=-1)

@@ -38,7 +38,21 @@ __all__ = ["VariatorParams", "wrap_angle", "belt_length", "radii", "stretched_ra
 
 @dataclass(frozen=True)
 class VariatorParams(Section):
-    """Pushbelt variator geometry (paper eqs. 4-6)."""
+    """Pushbelt variator geometry (paper eqs. 4-6).
+
+    Attributes
+    ----------
+    a : float
+        Centre distance between the pulley shafts [m].
+    beta : float
+        Pulley wedge angle (half the V angle; pushbelts: about 11 deg) [rad].
+    L_belt : float
+        Belt length (running circumference) [m].
+    R_min : float
+        Smallest running radius [m]; also ``R0``, the radius at zero sheave translation.
+    R_max : float
+        Largest running radius [m], above `R_min`.
+    """
 
     _name = "variator"
     a: float = param("m", "centre distance between the pulley shafts", 0.02, 1.0)
@@ -63,7 +77,21 @@ class VariatorParams(Section):
 
 
 def wrap_angle(R_p: ArrayLike, R_s: ArrayLike, a: float) -> NDArray[np.float64]:
-    """Wrapped-angle term ``phi = arcsin((R_p - R_s) / a)`` [rad] (eq. 4)."""
+    """Wrapped-angle term ``phi = arcsin((R_p - R_s) / a)`` [rad] (eq. 4).
+
+    Parameters
+    ----------
+    R_p, R_s : array_like
+        Primary and secondary running radii [m], broadcast together.
+    a : float
+        Centre distance [m].
+
+    Returns
+    -------
+    ndarray
+        The wrapped-angle term ``phi`` [rad], the broadcast shape of `R_p` and `R_s` (NaN
+        where ``|R_p - R_s| > a``).
+    """
     return np.arcsin((np.asarray(R_p, float) - np.asarray(R_s, float)) / a)
 
 
@@ -96,6 +124,24 @@ def radii(r_g: ArrayLike, L_belt: float, a: float, *, tol: float = 1e-13,
     Solves ``L(r_g R_s, R_s) = L_belt`` for ``R_s`` by Newton's method (vectorised), with the
     exact derivative ``dL/dR_s = r_g (pi + 2 phi) + (pi - 2 phi)``, from the exact solution
     for ``phi = 0``.
+
+    Parameters
+    ----------
+    r_g : array_like
+        Geometric ratio(s) ``R_p / R_s`` [-], > 0, any shape.
+    L_belt : float
+        Belt length [m].
+    a : float
+        Centre distance [m].
+    tol : float
+        Convergence tolerance of the Newton step, relative to `L_belt` [-].
+    max_iter : int
+        Largest number of Newton iterations.
+
+    Returns
+    -------
+    R_p, R_s : ndarray
+        Primary and secondary running radii [m], the shape of `r_g`.
 
     Raises
     ------
@@ -157,6 +203,25 @@ def stretched_radii(r_g: ArrayLike, F: ArrayLike, L_belt: float, a: float, beta:
     ``L(r_g R_s, R_s) - L_belt - F tan(beta) / (k_belt (pi - 2 phi)) = 0`` for ``R_s`` by
     Newton's method from the unstretched radii, each point stopping on its own convergence
     (so a point's result does not depend on the others in the array).
+
+    Parameters
+    ----------
+    r_g : array_like
+        Geometric ratio(s) ``R_p / R_s`` [-] of the unstretched belt, broadcast with `F`.
+    F : array_like
+        Secondary axial (clamping) force [N].
+    L_belt : float
+        Unstretched belt length [m].
+    a : float
+        Centre distance [m].
+    beta : float
+        Pulley wedge angle [rad].
+    k_belt : float
+        Longitudinal belt stiffness [N/m].
+    tol : float
+        Convergence tolerance of the Newton step, relative to ``R_s`` [-].
+    max_iter : int
+        Largest number of Newton iterations.
 
     Returns
     -------
@@ -242,7 +307,27 @@ def ratio_range(variator: VariatorParams) -> tuple[float, float]:
 
 
 def check_ratio(r_g: ArrayLike, variator: VariatorParams, name: str = "r_g") -> NDArray[np.float64]:
-    """Return `r_g` as an array, or raise `ParameterError` if any value is outside the range."""
+    """Return `r_g` as an array, or raise `ParameterError` if any value is outside the range.
+
+    Parameters
+    ----------
+    r_g : array_like
+        Geometric ratio(s) ``R_p / R_s`` [-], any shape.
+    variator : VariatorParams
+        The variator whose `ratio_range` bounds the ratio.
+    name : str
+        The name the error message gives the value.
+
+    Returns
+    -------
+    ndarray
+        `r_g` as a float array, its shape.
+
+    Raises
+    ------
+    ParameterError
+        When a value is not finite or outside the variator's ratio range.
+    """
     r = np.asarray(r_g, float)
     lo, hi = ratio_range(variator)
     bad = ~np.isfinite(r) | (r < lo * (1 - 1e-12)) | (r > hi * (1 + 1e-12))
@@ -256,7 +341,20 @@ def check_ratio(r_g: ArrayLike, variator: VariatorParams, name: str = "r_g") -> 
 def primary_radius_per_ratio(r_g: ArrayLike, variator: VariatorParams) -> NDArray[np.float64]:
     """``dR_p / dr_g`` [m] along a shift at constant belt length: eq. 6 gives ``dR_s =
     -kappa_geo dR_p`` with ``kappa_geo = (pi + 2 phi) / (pi - 2 phi)``, so ``dr_g = dR_p (1 +
-    r_g kappa_geo) / R_s``."""
+    r_g kappa_geo) / R_s``.
+
+    Parameters
+    ----------
+    r_g : array_like
+        Geometric ratio(s) ``R_p / R_s`` [-] (checked against the ratio range), any shape.
+    variator : VariatorParams
+        Centre distance, belt length and radius range (``params.variator``).
+
+    Returns
+    -------
+    ndarray
+        ``dR_p / dr_g`` [m] (per unit ratio), the shape of `r_g`.
+    """
     v = variator
     r = check_ratio(r_g, v)
     R_p, R_s = radii(r, v.L_belt, v.a)

@@ -76,6 +76,28 @@ class ShiftParams(Section):
     rates, Fig. 14's -1 slope; issue 20).  The test rig of the paper covered r_g = 0.6-1.8,
     F_s = 20-30 kN, 1000-2000 rpm.  A measured shift-speed map (`CreepMap`) replaces the
     analytic coefficient.
+
+    Attributes
+    ----------
+    D_ref : float
+        Pulley deformation amplitude ``D`` at `F_ref` [rad] (Carbone 2007, reconstructed:
+        1e-3).
+    F_ref : float
+        Clamping force at which ``D = D_ref`` [N] (Carbone 2007: 20 kN).
+    k_D : float
+        Growth of ``D`` with the clamping force [1/N] (reconstructed: 2e-5, i.e. 2 % per kN).
+    a1, a2 : float
+        Constant and quadratic terms of the ratio dependence ``g(r) = r q (a1 + a2 ln^2 r)``
+        [-] (reconstructed fit: 0.21 and 0.08).
+    gain : float
+        Overall factor on the creep rate [-]: 1 is the reconstruction's magnitude, which the
+        creep anchors put 10-20 times too slow.
+    omega_0 : float
+        Speed below which creep fades [rad/s] (``omega_eff = sqrt(omega_p^2 + omega_0^2)``:
+        no shifting without rotation).
+    xi_sat : float
+        Saturation of the log thrust-ratio error ``xi`` [-] (slip-mode shifting beyond it; no
+        published threshold).
     """
 
     _name = "shift"
@@ -111,7 +133,18 @@ SHIFT_LAWS = ("carbone", "ide", "shafai")
 
 
 def g_beta(beta: float) -> float:
-    """``(1 + cos^2 beta) / sin(2 beta)`` [-] (Carbone's wedge factor)."""
+    """``(1 + cos^2 beta) / sin(2 beta)`` [-] (Carbone's wedge factor).
+
+    Parameters
+    ----------
+    beta : float
+        Pulley wedge angle [rad].
+
+    Returns
+    -------
+    float
+        The wedge factor ``G_beta`` [-].
+    """
     return (1 + np.cos(beta) ** 2) / np.sin(2 * beta)
 
 
@@ -186,7 +219,19 @@ class CreepMap:
 def load_creep_map(path: str | os.PathLike[str]) -> CreepMap:
     """Read a measured shift-speed map from ``.csv`` (header ``r_g,F_s,K_c``; rows with the
     same ``r_g`` form one curve) or ``.toml`` (``[[curve]]`` tables with ``r_g``, ``F_s``,
-    ``K_c``).  Raises `ParameterError` naming the file, row and value."""
+    ``K_c``).  Raises `ParameterError` naming the file, row and value.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.csv`` or ``.toml`` file: ratios ``r_g`` [-], clamping forces ``F_s`` [N] and
+        creep coefficients ``K_c`` [-].
+
+    Returns
+    -------
+    CreepMap
+        One curve per ratio, the ratios increasing; its ``source`` is `path`.
+    """
     curves = read_curves(path, "shift-speed map", "F_s", "K_c")
     items = sorted(curves.items())
     return CreepMap(ratios=tuple(r for r, _ in items),
@@ -201,7 +246,26 @@ def creep_coefficient(params: _HasShift, r_g: ArrayLike, F_s: ArrayLike,
     """``K_c`` [-]: ratio change per radian of primary rotation per unit log thrust-ratio
     error, at ratio `r_g` and clamping force `F_s` [N] (broadcast); `R_p` [m] defaults to the
     unstretched belt's primary radius.  With a measured `creep_map` its ``K_c(r_g, F_s)``
-    times ``[shift] gain``."""
+    times ``[shift] gain``.
+
+    Parameters
+    ----------
+    params : Params
+        Its ``[variator]`` and ``[shift]`` blocks are read.
+    r_g : array_like
+        Geometric ratio [-], broadcast with `F_s` (and `R_p`).
+    F_s : array_like
+        Secondary clamping force [N].
+    R_p : array_like, optional
+        Primary running radius [m] (default: the unstretched belt's, from `r_g`).
+    creep_map : CreepMap, optional
+        A measured shift-speed map in place of the analytic coefficient.
+
+    Returns
+    -------
+    ndarray
+        The creep coefficient ``K_c`` [-], the broadcast shape of the inputs.
+    """
     sh, v = params.shift, params.variator
     r = np.asarray(r_g, float)
     if creep_map is not None:

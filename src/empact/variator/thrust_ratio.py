@@ -61,6 +61,16 @@ class ThrustRatioParams(Section):
     Shaped like published pushbelt curves (rising with torque, faster at LOW, flat or falling
     at OD); the values are estimates, no measured map could be read: a tabulated map (CSV or
     TOML, `empact.thrust_ratio.load_thrust_ratio`) replaces it.
+
+    Attributes
+    ----------
+    p0 : float
+        Steepness of the zero-torque curve relative to ``kappa_geo`` [-] (1: equal to it).
+    b0 : float
+        ``d ln kappa* / d tau`` at ``r_g = 1`` [-].
+    b1 : float
+        How much faster ``ln kappa*`` rises with the torque ratio ``tau`` at LOW than at OD
+        [-] (the slope is ``b0 - b1 ln r_g``).
     """
 
     _name = "thrust_ratio"
@@ -246,7 +256,22 @@ def zero_torque_difference(kmap: AnalyticThrustRatio | TabulatedThrustRatio,
                            variator: VariatorParams, r_g: ArrayLike) -> NDArray[np.float64]:
     """``kappa*(0, r_g) / kappa_geo(r_g) - 1`` [-]: how far the map's zero-torque thrust ratio
     lies from the elastic belt's geometric one (0 for the analytic map with ``p0 = 1``).  A
-    non-zero value is a static shift force at zero load: ``F_s (kappa* - kappa_geo)``."""
+    non-zero value is a static shift force at zero load: ``F_s (kappa* - kappa_geo)``.
+
+    Parameters
+    ----------
+    kmap : AnalyticThrustRatio or TabulatedThrustRatio
+        The equilibrium thrust-ratio map.
+    variator : VariatorParams
+        The geometry of ``kappa_geo``.
+    r_g : array_like
+        Geometric ratio(s) [-], any shape.
+
+    Returns
+    -------
+    ndarray
+        The relative difference [-], the shape of `r_g`.
+    """
     r = np.asarray(r_g, float)
     return kmap.kappa(np.zeros_like(r), r) / kappa_geo(r, variator) - 1
 
@@ -267,12 +292,23 @@ def ratio_stability(kmap: AnalyticThrustRatio | TabulatedThrustRatio, variator: 
 
     Parameters
     ----------
-    kmap : the equilibrium thrust-ratio map
-    variator : the geometry
-    mu_max : the traction curve's peak value over the ratio (e.g.
-        ``traction_from_params(params).mu_max``)
-    r_g, tau : ratios [-] and torque ratios [-] of the operating points
-    dr : relative ratio step of the central difference
+    kmap : AnalyticThrustRatio or TabulatedThrustRatio
+        The equilibrium thrust-ratio map.
+    variator : VariatorParams
+        The geometry.
+    mu_max : callable
+        The traction curve's peak value [-] over the ratio, vectorised (e.g.
+        ``traction_from_params(params).mu_max``).
+    r_g, tau : array_like
+        Ratios [-] and torque ratios [-] of the operating points, broadcast together.
+    dr : float
+        Relative ratio step of the central difference [-].
+
+    Returns
+    -------
+    ndarray
+        ``d ln kappa* / d r_g`` [-] (per unit ratio), the broadcast shape of `r_g` and
+        `tau`; negative where the ratio is statically unstable.
     """
     r, t = np.broadcast_arrays(np.asarray(r_g, float), np.asarray(tau, float))
 
@@ -316,7 +352,28 @@ def ratio_stability_map(kmap: AnalyticThrustRatio | TabulatedThrustRatio,
                         tau: ArrayLike, r_g: ArrayLike,
                         points: tuple[tuple[float, float], ...] = ()) -> RatioStabilityMap:
     """`ratio_stability` on the grid ``r_g x tau`` (1-D arrays), with optional marked
-    ``(tau, r_g)`` points."""
+    ``(tau, r_g)`` points.
+
+    Parameters
+    ----------
+    kmap : AnalyticThrustRatio or TabulatedThrustRatio
+        The equilibrium thrust-ratio map.
+    variator : VariatorParams
+        The geometry.
+    mu_max : callable
+        The traction curve's peak value [-] over the ratio, vectorised.
+    tau : array_like, shape (n_tau,)
+        Torque ratios [-].
+    r_g : array_like, shape (n_r,)
+        Geometric ratios [-].
+    points : tuple of (tau, r_g) pairs
+        Operating points to mark on the map (e.g. shipped set-points).
+
+    Returns
+    -------
+    RatioStabilityMap
+        ``S`` of shape (n_r, n_tau) [-] with the grid axes and the points.
+    """
     t = np.atleast_1d(np.asarray(tau, float))
     r = np.atleast_1d(np.asarray(r_g, float))
     S = ratio_stability(kmap, variator, mu_max, r[:, None], t[None, :])

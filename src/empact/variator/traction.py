@@ -71,6 +71,20 @@ class TractionParams(Section):
     ``mu = D sin(C arctan(B nu - E (B nu - arctan(B nu))))``; B, C, D, E are given at the
     LOW, MED and OD ratios and interpolated linearly in log(r_g) in between (held
     constant outside).
+
+    Attributes
+    ----------
+    r_low, r_med, r_od : float
+        The LOW, MED and OD geometric ratios [-] where the ``*_low``, ``*_med`` and ``*_od``
+        coefficients hold, strictly increasing.
+    B_low, B_med, B_od : float
+        Stiffness factor ``B`` [-] at LOW, MED and OD.
+    C_low, C_med, C_od : float
+        Shape factor ``C`` [-] at LOW, MED and OD, in [1, 2] (1: no fall beyond the peak).
+    D_low, D_med, D_od : float
+        Peak traction coefficient ``D`` [-] at LOW, MED and OD.
+    E_low, E_med, E_od : float
+        Curvature factor ``E`` [-] at LOW, MED and OD, in [-10, 1] (the knee's shape).
     """
 
     _name = "traction"
@@ -112,7 +126,14 @@ MIN_POINTS = 3
 
 @runtime_checkable
 class TractionModel(Protocol):
-    """What the slip model needs of a traction curve (see the module docstring)."""
+    """What the slip model needs of a traction curve (see the module docstring).
+
+    Attributes
+    ----------
+    nu_range : (nu_min, nu_max)
+        The slips [-] where the model is valid; ``mu`` and ``dmu`` raise `ParameterError`
+        for a slip outside it.
+    """
 
     nu_range: tuple[float, float]
 
