@@ -35,12 +35,22 @@ CASES = {
 }
 
 
+def _foreground():
+    """In the child before exec: SIGINT's default disposition, as a command started from a
+    terminal has it.  A suite run in the background by a non-interactive shell (``make test
+    &``, a CI runner) inherits SIGINT ignored, and an ignored signal stays ignored across exec:
+    Python would then install no KeyboardInterrupt handler and the command could not be
+    interrupted, which is not what this test is about."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _interrupt(args, marker, group, cwd):
     """Start ``empact ARGS``, wait for `marker` on stderr, send SIGINT; (exit status,
     stderr, seconds from the signal to the exit)."""
     proc = subprocess.Popen([sys.executable, "-c", "from empact.cli import main; main()",
                              *args], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            start_new_session=True, env={**os.environ, "MPLBACKEND": "Agg"})
+                            start_new_session=True, preexec_fn=_foreground,
+                            env={**os.environ, "MPLBACKEND": "Agg"})
     err = b""
     try:
         deadline = time.monotonic() + 120

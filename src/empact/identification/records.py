@@ -108,14 +108,16 @@ def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
     rows = [r for r in reader if r and any(c.strip() for c in r)]
     if not header:
         raise DataError(f"{path}: empty file (expected a header row of column names)")
-    out: dict[str, np.ndarray] = {}
-    for name in columns:
-        if name not in header:
-            raise DataError(f"{path}: no column {name!r} (columns: {', '.join(header)})")
+    # a name given to two columns is ambiguous whichever of them is asked for
+    for name in dict.fromkeys(header):
         where = [k + 1 for k, h in enumerate(header) if h == name]
         if len(where) > 1:
             raise DataError(f"{path}: column {name!r} appears {len(where)} times (columns "
                             f"{', '.join(map(str, where))}); name each column once")
+    out: dict[str, np.ndarray] = {}
+    for name in columns:
+        if name not in header:
+            raise DataError(f"{path}: no column {name!r} (columns: {', '.join(header)})")
         j = header.index(name)
         values = np.empty(len(rows))
         for i, row in enumerate(rows):
