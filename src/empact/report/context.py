@@ -58,7 +58,21 @@ def csv_slip_columns(header: Sequence[str], rows: Sequence[Sequence[object]]
 
     A slip column has a header ``... slip ... [%]``, ``nu [%]`` or ``max |nu - nu*| [pp]``; it
     becomes a fraction ``[-]`` (one unit per quantity in machine-readable output; % is for the
-    page)."""
+    page).
+
+    Parameters
+    ----------
+    header : sequence of str
+        Column headers with their units (``"nu [%]"``, ``"F_s [kN]"``).
+    rows : sequence of sequence
+        The table's rows, one cell per header.
+
+    Returns
+    -------
+    list of list
+        The header, its slip columns' unit ``[%]`` or ``[pp]`` replaced by ``[-]``, then the
+        rows, their numeric slip cells divided by 100 (other cells, and booleans, as given).
+    """
     slip = [bool(_SLIP_PERCENT.match(str(h))) for h in header]
     head = [re.sub(r" \[(%|pp)\]$", " [-]", str(h)) if s else h for h, s in zip(header, slip)]
     return [head] + [[c / 100 if s and isinstance(c, (int, float, np.number))
@@ -67,7 +81,18 @@ def csv_slip_columns(header: Sequence[str], rows: Sequence[Sequence[object]]
 
 
 def fmt_cell(value: object) -> str:
-    """A table cell: floats with 4 significant digits, everything else as text (escaped)."""
+    """A table cell: floats with 4 significant digits, everything else as text (escaped).
+
+    Parameters
+    ----------
+    value : object
+        The cell's value.
+
+    Returns
+    -------
+    str
+        HTML text of the cell (``f"{value:.4g}"`` for a float, else ``str`` HTML-escaped).
+    """
     if isinstance(value, (float, np.floating)):
         return f"{value:.4g}"
     return html.escape(str(value))
@@ -78,6 +103,17 @@ class Context:
     """The parameters, the output folder and the figure formats of a report build.
 
     `figures` collects the figure files written (for the build's completeness check).
+
+    Attributes
+    ----------
+    params : Params
+        The parameter set the report is computed from.
+    out : pathlib.Path
+        The folder the figures and tables are written to.
+    formats : tuple of str
+        The figure formats (`empact.plotting.FORMATS`); the page shows the PNG if there is one.
+    figures : list of pathlib.Path
+        The figure files written so far (by `figure`).
     """
 
     params: Params
