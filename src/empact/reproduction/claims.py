@@ -66,5 +66,16 @@ class Claim:
 
 
 def claims_table(claims: Iterable[Claim]) -> list[dict[str, Any]]:
-    """The claims as plain dictionaries, in order."""
+    """The claims as plain dictionaries, in order.
+
+    Parameters
+    ----------
+    claims : iterable of Claim
+        The claims.
+
+    Returns
+    -------
+    list of dict
+        `Claim.to_dict` of each claim (its fields, ``values`` as a plain dict, and ``verdict``).
+    """
     return [c.to_dict() for c in claims]

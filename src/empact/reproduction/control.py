@@ -116,7 +116,18 @@ class StudiesSection:
 
 
 def shipped_controller(name: str) -> Controller:
-    """A shipped controller (``data/control/<name>.json``)."""
+    """A shipped controller (``data/control/<name>.json``).
+
+    Parameters
+    ----------
+    name : str
+        The file's stem: ``"pi"`` or ``"hinf"``.
+
+    Returns
+    -------
+    Controller
+        The controller as stored.
+    """
     return load_controller(Path(str(resources.files("empact.data").joinpath(
         "control", f"{name}.json"))))
 
@@ -141,7 +152,19 @@ def _prediction(scenario: Scenario, params: Params, run: ClosedLoopResult) -> Pr
 
 def control(params: Params) -> ControlSection:
     """The family, the shipped designs' robustness on the loop, the closed-loop scenarios,
-    their linear predictions and the shift-rate envelope."""
+    their linear predictions and the shift-rate envelope.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    ControlSection
+        The family, the controllers, the loops, the runs, their targets and predictions, the
+        envelope and the claims.
+    """
     family = design_family(params)
     ctrls = {k: shipped_controller(k) for k in ("pi", "hinf")}
     loop = LoopConfig.of(params, **SHIPPED_LOOP)
@@ -167,7 +190,18 @@ def control(params: Params) -> ControlSection:
 def control_studies(params: Params) -> StudiesSection:
     """The 50 % load steps with the feedforward's traction estimate 5 % off, `MC_RUNS` Monte
     Carlo runs of the shipped spread, and the clamping saving against a safety factor of
-    1.3."""
+    1.3.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    StudiesSection
+        The traction-estimate runs' metrics, the Monte Carlo result, the saving rows and the claims.
+    """
     scenarios = {n: load_scenario(control_example_path(n)) for n in control_examples()}
     steps = [n for n in scenarios if n.startswith("slip-load-step")]
     traction_error = {}

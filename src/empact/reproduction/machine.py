@@ -78,7 +78,24 @@ class MachineSection:
 
 def curve_statistics(traction, r_g: float, nu: np.ndarray) -> list[float]:
     """``[r_g, mu_max, nu90 [%], nu_peak [%], mu'(SLOPE_SLIPS)...]`` of a curve on the slip
-    grid `nu` (its resolution is the statistics')."""
+    grid `nu` (its resolution is the statistics').
+
+    Parameters
+    ----------
+    traction : TractionModel
+        The traction law (e.g. `empact.variator.traction.traction_from_params`).
+    r_g : float
+        Ratio [-].
+    nu : array, shape (n,)
+        Ascending slip grid [-].
+
+    Returns
+    -------
+    list of float
+        ``[r_g, mu_max, nu90 [%], nu_peak [%]]`` and the slope ``mu'`` [-] at each of `SLOPE_SLIPS`:
+        ratio [-], peak traction coefficient [-], slip at 90 % of the peak and slip at the peak [%]
+        (the first grid slip reaching them).
+    """
     mu = traction.mu(nu, r_g)
     k = int(np.argmax(mu))
     nu90 = float(nu[np.argmax(mu >= 0.9 * mu[k])])
@@ -97,7 +114,18 @@ def _set_points(params: Params) -> list[tuple[str, OperatingPoint]]:
 
 
 def machine(params: Params) -> MachineSection:
-    """The machine sheet of `params`."""
+    """The machine sheet of `params`.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    MachineSection
+        The curves, the tables, the ratio-stability map and the claims.
+    """
     tr = traction_from_params(params)
     nu = np.linspace(0.0, 0.1, 10001)
     curves = traction_curves(tr, CURVE_RATIOS, nu, label="(magic formula)")
