@@ -45,8 +45,11 @@ class Plot:
     Attributes
     ----------
     figure : matplotlib.figure.Figure
+        The figure drawn into (the caller's, with ``ax=``, or a new one).
     axes : numpy.ndarray of Axes, shape (nrows, ncols)
-    artists : list of the artists drawn (lines, collections, images)
+        The axes drawn into.
+    artists : list
+        The artists drawn (lines, collections, images).
     """
 
     figure: Figure

@@ -30,14 +30,19 @@ class Section:
 
     Attributes
     ----------
-    title : heading
-    anchor : HTML id (also the table-of-contents link); the ids of the page are unique:
+    title : str
+        Heading.
+    anchor : str
+        HTML id (also the table-of-contents link); the ids of the page are unique:
         sections by their anchor, figures ``fig-<stem>``, tables ``tab-<stem>``, claims
-        ``claim-<key>``
-    compute : ``params -> result`` with a ``claims`` attribute (`empact.reproduction`)
-    render : ``(Context, result) -> html``
-    cost : rough build time [s] on one core; the parallel build starts the costly sections
-        first
+        ``claim-<key>``.
+    compute : callable
+        ``params -> result`` with a ``claims`` attribute (`empact.reproduction`).
+    render : callable
+        ``(Context, result) -> html``.
+    cost : float
+        Rough build time [s] on one core; the parallel build starts the costly sections
+        first.
     """
 
     title: str

@@ -71,15 +71,24 @@ class ControlSection:
 
     Attributes
     ----------
-    family : the design family (`DESIGN_GRID`)
-    controllers : ``{"pi": Controller, "hinf": Controller}`` (the shipped files)
-    loop : the shipped loop (`LoopConfig`) the family checks use
-    loops : ``{name: LoopModel}`` over the family
-    runs : ``{scenario: ClosedLoopResult}`` of every shipped closed-loop scenario
-    targets : ``{scenario: [TargetCheck]}``
-    predictions : ``{scenario: Prediction}`` (the linear loop model's)
-    envelope : the shift-rate envelope of the shift scenario
-    claims : the targets checked
+    family : PlantFamily
+        The design family (`DESIGN_GRID`).
+    controllers : dict of str to Controller
+        ``{"pi": Controller, "hinf": Controller}`` (the shipped files).
+    loop : LoopConfig
+        The shipped loop the family checks use.
+    loops : dict of str to LoopModel
+        ``{name: LoopModel}`` over the family.
+    runs : dict of str to ClosedLoopResult
+        ``{scenario: ClosedLoopResult}`` of every shipped closed-loop scenario.
+    targets : dict of str to list of TargetCheck
+        ``{scenario: [TargetCheck]}``.
+    predictions : dict of str to Prediction
+        ``{scenario: Prediction}`` (the linear loop model's).
+    envelope : ShiftEnvelope
+        The shift-rate envelope of the shift scenario.
+    claims : tuple of Claim
+        The targets checked.
     """
 
     family: PlantFamily
@@ -102,11 +111,13 @@ class StudiesSection:
     ----------
     traction_error : dict
         The metrics of the 50 % load steps by ``(scenario, factor)``
-    montecarlo : the Monte Carlo study of `MC_SCENARIO` (`MC_RUNS` runs)
+    montecarlo : MonteCarloResult
+        The Monte Carlo study of `MC_SCENARIO` (`MC_RUNS` runs).
     saving : list of dict
         Rows with the keys ``scenario, strategy, mean_clamping_force, mean_losses, saving,
         r_g, macro_slip``
-    claims : the targets checked
+    claims : tuple of Claim
+        The targets checked.
     """
 
     traction_error: dict[tuple[str, float], dict[str, Any]]

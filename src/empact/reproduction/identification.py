@@ -52,14 +52,20 @@ class Fig2:
 
     Attributes
     ----------
-    results : one `PlantIdentification` per ratio
-    f_hz : frequencies of the figure [Hz]
-    rows : identification table rows (ratio, order, worst fit [%], FRF error [%], RHP zeros)
-    damping_rows : Sec. 3 damping table rows
-    gain_rows : the creep law's magnitude against the damping of the machine's actuation
+    results : list of PlantIdentification
+        One per ratio.
+    f_hz : array, shape (300,)
+        Frequencies of the figure [Hz].
+    rows : list of list
+        Identification table rows (ratio, order, worst fit [%], FRF error [%], RHP zeros).
+    damping_rows : list of list
+        Sec. 3 damping table rows.
+    gain_rows : list of list of float
+        The creep law's magnitude against the damping of the machine's actuation
         modes at r_g = 1 (``shift.gain``, then frequency [Hz] and damping ratio of the two
-        lowest modes, equivalent shift damping [N s/m], corner of the -1 slope [Hz])
-    claims : the checks
+        lowest modes, equivalent shift damping [N s/m], corner of the -1 slope [Hz]).
+    claims : tuple of Claim
+        The checks.
     """
 
     results: list[PlantIdentification]

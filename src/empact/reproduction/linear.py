@@ -92,9 +92,12 @@ class Table2:
 
     Attributes
     ----------
-    frequencies_hz : ``{r_g: array (4,)}``
-    uncoupled_hz : ``{"primary": f, "secondary": f}``
-    claims : the checks
+    frequencies_hz : dict of float to array
+        ``{r_g: array (4,)}``: the eigenfrequencies [Hz] at each ratio of `RATIOS`.
+    uncoupled_hz : dict of str to float
+        ``{"primary": f, "secondary": f}``: the uncoupled sides' natural frequencies [Hz].
+    claims : tuple of Claim
+        The checks.
     """
 
     frequencies_hz: dict[float, np.ndarray]
@@ -276,13 +279,18 @@ class Fig6:
 
     Attributes
     ----------
-    responses : one `FrequencyResponse` per level ("none", "moderate", "large"), the paper's
-        Sec. 2.1 rows (the reading Fig. 6 belongs to)
-    machine : the machine's responses: undamped, moderate (Shafai) and moderate with the creep
-        law linearised at ``params.operating`` as the pulley damping
-    slopes : ``{pair: (low, high)}`` log-log slopes of the large-damping responses
-    f1_hz : first elastic mode [Hz] (the slopes are taken at f1 / 20 and 30 f1)
-    claims : the checks
+    responses : tuple of FrequencyResponse
+        One per level ("none", "moderate", "large"), the paper's Sec. 2.1 rows (the reading
+        Fig. 6 belongs to).
+    machine : tuple of FrequencyResponse
+        The machine's responses: undamped, moderate (Shafai) and moderate with the creep
+        law linearised at ``params.operating`` as the pulley damping.
+    slopes : dict of str to (float, float)
+        ``{pair: (low, high)}`` log-log slopes [-] of the large-damping responses.
+    f1_hz : float
+        First elastic mode [Hz] (the slopes are taken at f1 / 20 and 30 f1).
+    claims : tuple of Claim
+        The checks.
     """
 
     responses: tuple[FrequencyResponse, ...]

@@ -54,18 +54,24 @@ class MachineSection:
 
     Attributes
     ----------
-    curves : traction curves over 0-10 % slip at `CURVE_RATIOS`
-    curve_rows : per ratio: r_g, mu_max, slip at 90 % of the peak [%], peak slip [%], mu' at
-        `SLOPE_SLIPS`
-    creep_rows : per `CREEP_POINTS`: r_g, F_s [kN], K_c [-], creep per primary revolution at a
+    curves : TractionCurves
+        Traction curves over 0-10 % slip at `CURVE_RATIOS`.
+    curve_rows : list of list of float
+        Per ratio: r_g, mu_max, slip at 90 % of the peak [%], peak slip [%], mu' at
+        `SLOPE_SLIPS`.
+    creep_rows : list of list of float
+        Per `CREEP_POINTS`: r_g, F_s [kN], K_c [-], creep per primary revolution at a
         20 % imbalance [mm of R_p], equivalent axial damping [N s/m], creep-to-slip transition
-        rate omega_eff K_c xi_sat [1/s]
-    reserve_rows : per shipped set-point (closed-loop scenarios' starts, the [operating] point
+        rate omega_eff K_c xi_sat [1/s].
+    reserve_rows : list of list
+        Per shipped set-point (closed-loop scenarios' starts, the [operating] point
         at r_g = 0.5, 1, 2): name, r_g, slip [%], tau, torque reserve 1 - tau [%], load [N m],
-        capacity at that clamping force [N m]
-    stability : the map of d ln kappa*/d r_g at fixed load torque over torque ratio and
-        ratio, the shipped set-points marked (`RatioStabilityMap`)
-    claims : the checks
+        capacity at that clamping force [N m].
+    stability : RatioStabilityMap
+        The map of d ln kappa*/d r_g at fixed load torque over torque ratio and
+        ratio, the shipped set-points marked.
+    claims : tuple of Claim
+        The checks.
     """
 
     curves: TractionCurves
