@@ -57,7 +57,20 @@ class Plot:
     artists: list[Any] = field(default_factory=list)
 
     def save(self, path: str | os.PathLike[str], dpi: int = 150) -> Path:
-        """Save to one file whose format follows its suffix (atomic)."""
+        """Save to one file whose format follows its suffix (atomic).
+
+        Parameters
+        ----------
+        path : str or path-like
+            The file; its suffix chooses the format (`FORMATS`).
+        dpi : int
+            Resolution of the raster formats [dots per inch].
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+        """
         return save_plot(self.figure, path, dpi=dpi)
 
 

@@ -120,13 +120,14 @@ def plot_bode(responses: Sequence[FrequencyResponse], pairs: Sequence[tuple[str,
     units : str
         Unit of the response for the magnitude label (e.g. ``"rad/(N m)"``; empty: none).
     ax : array of Axes, shape (2, len(pairs)), optional
-        Or (1, len(pairs)) without phase; default a new figure.
+        The magnitude row over the phase row, one column per pair (shape (1, len(pairs))
+        without phase); default a new figure.
 
     Returns
     -------
     Plot
-        The figure, the axes (shape (2, len(pairs)), or (1, len(pairs)) without phase) and
-        the lines drawn.
+        The figure, the axes (shape (2, len(pairs)), or (1, len(pairs)) without phase) and the lines
+        drawn.
 
     Notes
     -----

@@ -114,8 +114,8 @@ def plot_simulation(result: SimulationResult,
     Returns
     -------
     Plot
-        The figure, the axes (shape (ceil(groups / 2), 2); an unused last panel hidden) and
-        the lines drawn.
+        The figure, the axes (shape (ceil(groups / 2), 2); an unused last panel hidden) and the
+        lines drawn.
     """
     known = set(result.outputs) | set(result.states) | set(result.inputs)
     groups = [[s for s in grp if s in known] for grp in signals]

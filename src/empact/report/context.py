@@ -75,8 +75,8 @@ def csv_slip_columns(header: Sequence[str], rows: Sequence[Sequence[object]]
     Returns
     -------
     list of list
-        The header, its slip columns' unit ``[%]`` or ``[pp]`` replaced by ``[-]``, then the
-        rows, their numeric slip cells divided by 100 (other cells, and booleans, as given).
+        The header, its slip columns' unit ``[%]`` or ``[pp]`` replaced by ``[-]``, then the rows,
+        their numeric slip cells divided by 100 (other cells, and booleans, as given).
     """
     slip = [bool(_SLIP_PERCENT.match(str(h))) for h in header]
     head = [re.sub(r" \[(%|pp)\]$", " [-]", str(h)) if s else h for h, s in zip(header, slip)]
@@ -127,7 +127,22 @@ class Context:
     figures: list[Path] = field(default_factory=list)
 
     def figure(self, plot: Plot, stem: str, caption: str) -> str:
-        """Save a plot in the build's formats; return its HTML (caption is HTML)."""
+        """Save a plot in the build's formats; return its HTML (caption is HTML).
+
+        Parameters
+        ----------
+        plot : Plot
+            The plot (`empact.plotting`); its figure is saved as ``out/<stem>.<fmt>``.
+        stem : str
+            File name without suffix, also the figure's id ``fig-<stem>``.
+        caption : str
+            The caption (HTML).
+
+        Returns
+        -------
+        str
+            A ``<figure>`` showing the PNG (or the first format), linking the other formats.
+        """
         self.figures += save_figure(plot.figure, self.out / stem, self.formats)
         shown = "png" if "png" in self.formats else self.formats[0]
         others = " ".join(f'<a href="{stem}.{fmt}">{fmt.upper()}</a>' for fmt in self.formats
@@ -141,7 +156,24 @@ class Context:
         """Write a CSV table; return it as an HTML table (caption is HTML).
 
         The page shows a slip in % or percentage points where the section gives it so; the
-        CSV, machine-readable, has it as a fraction (`csv_slip_columns`)."""
+        CSV, machine-readable, has it as a fraction (`csv_slip_columns`).
+
+        Parameters
+        ----------
+        stem : str
+            File name of the CSV without suffix, also the table's id ``tab-<stem>``.
+        header : sequence of str
+            Column headers with their units.
+        rows : sequence of sequence
+            The rows, one cell per header.
+        caption : str
+            The caption (HTML).
+
+        Returns
+        -------
+        str
+            A ``<table>`` with its caption and a link to the CSV.
+        """
         buf = io.StringIO()
         writer = csv.writer(buf, lineterminator="\n")
         writer.writerows(csv_slip_columns(header, rows))
@@ -154,13 +186,35 @@ class Context:
 
     @staticmethod
     def verdict(claims: Sequence[Claim]) -> str:
-        """HTML mark for a group of claims: shown when all are."""
+        """HTML mark for a group of claims: shown when all are.
+
+        Parameters
+        ----------
+        claims : sequence of Claim
+            The claims.
+
+        Returns
+        -------
+        str
+            ``shown`` (green) or ``NOT shown`` (red), bold.
+        """
         ok = all(c.shown for c in claims)
         return '<b class="ok">shown</b>' if ok else '<b class="bad">NOT shown</b>'
 
     @staticmethod
     def claims(claims: Sequence[Claim]) -> str:
-        """The claims as an HTML list: claim, computed, verdict, explanation."""
+        """The claims as an HTML list: claim, computed, verdict, explanation.
+
+        Parameters
+        ----------
+        claims : sequence of Claim
+            The claims.
+
+        Returns
+        -------
+        str
+            A ``<ul>`` with one item per claim, its id ``claim-<key>``.
+        """
         items = []
         for c in claims:
             mark = '<b class="ok">shown</b>' if c.shown else '<b class="bad">NOT shown</b>'

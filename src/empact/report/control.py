@@ -38,10 +38,9 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
     Returns
     -------
     str
-        HTML: a note on the loop, the figures of the family's poles and zeros, the
-        loop shapes, the robustness maps, the closed-loop runs and the shift
-        envelope, the tables of the designs, the targets and the envelope, and
-        the claims.
+        HTML: a note on the loop, the figures of the family's poles and zeros, the loop shapes, the
+        robustness maps, the closed-loop runs and the shift envelope, the tables of the designs, the
+        targets and the envelope, and the claims.
     """
     fam = res.family
     spec = res.loop.spec
@@ -140,8 +139,8 @@ def studies(ctx: Context, res: rep.StudiesSection) -> str:
     Returns
     -------
     str
-        HTML: a note, the tables of the traction-estimate runs, the Monte Carlo
-        quantiles and the clamping saving, and the claims.
+        HTML: a note, the tables of the traction-estimate runs, the Monte Carlo quantiles and the
+        clamping saving, and the claims.
     """
     te_rows = [[n, f"{f:.3g}", m["peak_slip_pp"], m["peak_slip_error_pp"],
                 m.get("slip_reserve_pp", float("nan")), _fmt(m.get("macro_slip"))]

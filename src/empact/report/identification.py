@@ -21,8 +21,8 @@ def fig2(ctx: Context, res: rep.Fig2) -> str:
     Returns
     -------
     str
-        HTML: the figure of the identified and exact plants, the claims and the tables
-        of the Sec. 3 damping, the creep-gain sensitivity and the identified models.
+        HTML: the figure of the identified and exact plants, the claims and the tables of the Sec. 3
+        damping, the creep-gain sensitivity and the identified models.
     """
     return (ctx.figure(plot_identified_plant(res.results, res.f_hz,
                                              title="Fig. 2: identified (solid) vs exact "
@@ -70,8 +70,8 @@ def fig14(ctx: Context, res: rep.Fig14) -> str:
     Returns
     -------
     str
-        HTML: one FRF-estimate figure per rig run, the claims and notes on the
-        measured features and the paper's Sec. 4.
+        HTML: one FRF-estimate figure per rig run, the claims and notes on the measured features and
+        the paper's Sec. 4.
     """
     parts = []
     for run in res.runs:

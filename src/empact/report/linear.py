@@ -24,8 +24,8 @@ def table1(ctx: Context, res: rep.Table1) -> str:
     Returns
     -------
     str
-        HTML: the table ``table1`` (eigenfrequencies [Hz] of six modes at r_g = 0.5,
-        1, 2 for each row set), the claims and a note on the calibration.
+        HTML: the table ``table1`` (eigenfrequencies [Hz] of six modes at r_g = 0.5, 1, 2 for each
+        row set), the claims and a note on the calibration.
     """
     kins = (rep.SEC21, rep.MACHINE)
     rows = [[j + 1] + [res.frequencies_hz[k][r][j] for k in kins for r in rep.RATIOS]
@@ -54,8 +54,8 @@ def table2(ctx: Context, res: rep.Table2) -> str:
     Returns
     -------
     str
-        HTML: the table ``table2`` (paper against computed [Hz] and the relative error,
-        then the uncoupled sides), the claims and the note on the side labels.
+        HTML: the table ``table2`` (paper against computed [Hz] and the relative error, then the
+        uncoupled sides), the claims and the note on the side labels.
     """
     rows = []
     for r in rep.RATIOS:
@@ -88,8 +88,8 @@ def fig4_5(ctx: Context, res: rep.ModeFigure) -> str:
     Returns
     -------
     str
-        HTML: the mode-shape and modal-energy figures of both row sets, the table of
-        the mode characters and the claims.
+        HTML: the mode-shape and modal-energy figures of both row sets, the table of the mode
+        characters and the claims.
     """
     out = ""
     for modes, label, key in ((res.modes, "Sec. 2.1 rows as published", ""),
@@ -137,8 +137,8 @@ def fig6(ctx: Context, res: rep.Fig6) -> str:
     Returns
     -------
     str
-        HTML: the Bode figures of the Sec. 2.1 rows and of the machine (servo torque
-        -> servo angle [rad/(N m)]) and the claims.
+        HTML: the Bode figures of the Sec. 2.1 rows and of the machine (servo torque -> servo angle
+        [rad/(N m)]) and the claims.
     """
     pairs = [("theta_mp", "T_mp"), ("theta_ms", "T_ms")]
     return (ctx.figure(plot_bode(res.responses, pairs,

@@ -22,9 +22,8 @@ def machine(ctx: Context, res: rep.MachineSection) -> str:
     Returns
     -------
     str
-        HTML: a note, the traction-reserve figure, the tables of the curve
-        statistics, the creep magnitudes and the torque reserves, the
-        ratio-stability figure and the claims.
+        HTML: a note, the traction-reserve figure, the tables of the curve statistics, the creep
+        magnitudes and the torque reserves, the ratio-stability figure and the claims.
     """
     sh = ctx.params.shift
     return (

@@ -26,9 +26,9 @@ def nmp(ctx: Context, res: rep.NmpSection) -> str:
     Returns
     -------
     str
-        HTML: the geometry-and-zeros figure, the table of the geometry (Delta_x [mm],
-        belt-length change over delta [-]) and right-half-plane zeros [Hz], the
-        claims, a note and the table of the zeros by row set and slip signal.
+        HTML: the geometry-and-zeros figure, the table of the geometry (Delta_x [mm], belt-length
+        change over delta [-]) and right-half-plane zeros [Hz], the claims, a note and the table of
+        the zeros by row set and slip signal.
     """
     r, g = res.result, res.result.geometry
     rows = [[rg, 1e3 * g.delta_x[k], g.dL_exact[k] / g.delta, rep.hz_text(r.rhp_zeros[k])]
@@ -78,8 +78,8 @@ def simulation(ctx: Context, res: rep.SimulationSection) -> str:
     Returns
     -------
     str
-        HTML: the time-history figure with a link to its CSV
-        (``sim_shift_and_load_step.csv``, written too) and the claims.
+        HTML: the time-history figure with a link to its CSV (``sim_shift_and_load_step.csv``,
+        written too) and the claims.
     """
     write_csv(res.result, ctx.out / "sim_shift_and_load_step.csv")
     sc = res.scenario
@@ -103,8 +103,8 @@ def exact_plant(ctx: Context, res: rep.PlantSection) -> str:
     Returns
     -------
     str
-        HTML: the plant-magnitude figure, the tables of the operating points and
-        of the load -> ratio gains [1/(N m)], and the claims.
+        HTML: the plant-magnitude figure, the tables of the operating points and of the load ->
+        ratio gains [1/(N m)], and the claims.
     """
     op = ctx.params.operating
     return (ctx.figure(plot_plant_magnitude(res.responses, title="Exact linearised plant, "

@@ -56,8 +56,8 @@ def fig10(ctx: Context, res: rep.Fig10) -> str:
     Returns
     -------
     str
-        HTML: the traction figure, the claims, the table of the magic-formula
-        coefficients with each curve's peak (slip [%], coefficient [-]) and a note.
+        HTML: the traction figure, the claims, the table of the magic-formula coefficients with each
+        curve's peak (slip [%], coefficient [-]) and a note.
     """
     t = ctx.params.traction
     nu_pk, mu_pk = res.curves.peak()
@@ -94,9 +94,9 @@ def fig11(ctx: Context, res: rep.Fig11) -> str:
     Returns
     -------
     str
-        HTML: the figure of the poles over slip, the claims and the table of the
-        oscillatory poles (slip [%], traction slope [-], belt damping c_b [N m s/rad],
-        real part [1/s], imaginary part [rad/s], frequency [Hz], damping ratio [-]).
+        HTML: the figure of the poles over slip, the claims and the table of the oscillatory poles
+        (slip [%], traction slope [-], belt damping c_b [N m s/rad], real part [1/s], imaginary part
+        [rad/s], frequency [Hz], damping ratio [-]).
     """
     rl = res.locus
     return (ctx.figure(plot_pole_sweep(res.sweep, uncoupled_hz=rl.uncoupled_hz,
@@ -179,8 +179,8 @@ def fig13(ctx: Context, res: rep.Fig13) -> str:
     Returns
     -------
     str
-        HTML: the zero-locus figure (with Table 2's coupled frequencies as
-        reference), the claims and the table of the zeros [Hz].
+        HTML: the zero-locus figure (with Table 2's coupled frequencies as reference), the claims
+        and the table of the zeros [Hz].
     """
     ref = {r: paper.TABLE2_HZ[r][1:3] for r in paper.TABLE2_HZ}
     return (ctx.figure(plot_zero_locus(res.locus, reference_hz=ref), "fig13_zero_locus",
