@@ -45,8 +45,11 @@ class Plot:
     Attributes
     ----------
     figure : matplotlib.figure.Figure
+        The figure drawn into (the caller's, with ``ax=``, or a new one).
     axes : numpy.ndarray of Axes, shape (nrows, ncols)
-    artists : list of the artists drawn (lines, collections, images)
+        The axes drawn into.
+    artists : list
+        The artists drawn (lines, collections, images).
     """
 
     figure: Figure
@@ -54,7 +57,20 @@ class Plot:
     artists: list[Any] = field(default_factory=list)
 
     def save(self, path: str | os.PathLike[str], dpi: int = 150) -> Path:
-        """Save to one file whose format follows its suffix (atomic)."""
+        """Save to one file whose format follows its suffix (atomic).
+
+        Parameters
+        ----------
+        path : str or path-like
+            The file; its suffix chooses the format (`FORMATS`).
+        dpi : int
+            Resolution of the raster formats [dots per inch].
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+        """
         return save_plot(self.figure, path, dpi=dpi)
 
 
@@ -92,6 +108,23 @@ def save_figure(fig: Figure, stem: str | os.PathLike[str],
     The layout is computed by the first format's drawing (constrained layout is about half of
     a figure's drawing time) and frozen for the others: they are drawn once each, with no
     layout pass.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (e.g. ``Plot.figure``); its layout engine is removed after the first
+        format.
+    stem : str or path-like
+        The file path without suffix; ``.<fmt>`` is appended for each format.
+    formats : sequence of {"png", "svg", "pdf"}
+        The formats to write (`FORMATS`), in order.
+    dpi : int
+        Resolution of the raster formats [dots per inch].
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, one per format, in the order of `formats`.
     """
     stem = Path(stem)
     paths = []
@@ -168,7 +201,22 @@ def _lighten_log_axes(fig: Figure) -> None:
 
 
 def save_plot(fig: Figure, path: str | os.PathLike[str], dpi: int = 150) -> Path:
-    """Save `fig` to one file whose format follows its suffix (.png, .svg, .pdf), atomically."""
+    """Save `fig` to one file whose format follows its suffix (.png, .svg, .pdf), atomically.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (e.g. ``Plot.figure``).
+    path : str or path-like
+        The file; its suffix (case-insensitive) chooses the format (`FORMATS`).
+    dpi : int
+        Resolution of the raster formats [dots per inch].
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
     path = Path(path)
     fmt = check_choice("plot file suffix", path.suffix.lstrip(".").lower(), FORMATS)
     return save_figure(fig, path.with_suffix(""), formats=(fmt,), dpi=dpi)[0]
@@ -181,7 +229,18 @@ _GREEK = {"theta": r"\theta", "omega": r"\omega", "nu": r"\nu", "mu": r"\mu", "p
 def symbol(name: str) -> str:
     """A signal name as mathtext: ``T_mp`` -> ``$T_\\mathrm{mp}$``, ``omega_p`` ->
     ``$\\omega_\\mathrm{p}$``, ``nu`` -> ``$\\nu$``; ``_ref`` / ``_act`` become a superscript,
-    ``_dot`` a dot; words (``belt_elongation``) stay words."""
+    ``_dot`` a dot; words (``belt_elongation``) stay words.
+
+    Parameters
+    ----------
+    name : str
+        A signal, state or input name of the models (``r_g``, ``T_ms_act``, ``omega_p_dot``).
+
+    Returns
+    -------
+    str
+        The mathtext label (``$...$``), or for a word the name with spaces for underscores.
+    """
     dot = name.endswith("_dot")
     core = name[:-4] if dot else name
     m = re.fullmatch(r"([A-Za-z]+)(?:_([A-Za-z0-9]+))?(?:_([A-Za-z0-9]+))?", core)

@@ -22,7 +22,25 @@ __all__ = ["plot_family_poles", "plot_loop_shapes", "plot_robustness_maps",
 def plot_family_poles(family: PlantFamily, f_max_hz: float = 60.0, title: str = "",
                       ax: Any = None) -> Plot:
     """Poles (left) and the zeros of T_mp -> r_g and T_ms -> nu (right) of every plant of a
-    family below `f_max_hz` [Hz], coloured by ratio (complex plane in Hz)."""
+    family below `f_max_hz` [Hz], coloured by ratio (complex plane in Hz).
+
+    Parameters
+    ----------
+    family : PlantFamily
+        The family (`empact.plant_family`, `empact.control.family.design_family`); points
+        that did not trim are skipped.
+    f_max_hz : float
+        Poles and zeros of magnitude above this [Hz] are left out.
+    title : str
+        Figure title.
+    ax : array of Axes, shape (1, 2), optional
+        Poles (left) and zeros (right); default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 2)) and the markers drawn.
+    """
     fig, axs = new_axes(ax, 1, 2, size=(11, 4.2))
     r = family.operating["r_g"].ravel()
     norm = (np.log(r) - np.log(r).min()) / max(np.ptp(np.log(r)), 1e-12)
@@ -58,7 +76,26 @@ def plot_loop_shapes(loops: Mapping[str, LoopModel], f_hz: np.ndarray | None = N
                      title: str = "", ax: Any = None) -> Plot:
     """Diagonal loop gains ``|L_ii| = |(K G)_ii|`` of the sampled loops at the servo torques
     (`empact.control.loop.LoopModel`, one thin line per plant of the family) for each
-    controller (one column per loop, one colour per controller)."""
+    controller (one column per loop, one colour per controller).
+
+    Parameters
+    ----------
+    loops : dict of str to LoopModel
+        The loop models by controller name (`empact.control.loop.family_loops`), all
+        sampled at the first one's rate.
+    f_hz : array, shape (n_f,), optional
+        Frequencies [Hz] (default: 150 from 0.01 Hz to 100 Hz or just below the Nyquist
+        frequency, whichever is lower).
+    title : str
+        Figure title.
+    ax : array of Axes, shape (1, 2), optional
+        Ratio loop (left) and slip loop (right); default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 2)) and the lines drawn.
+    """
     first = next(iter(loops.values()))
     nyq = 0.49 / first.dt
     f = np.logspace(-2, np.log10(min(100.0, nyq)), 150) if f_hz is None else np.asarray(f_hz)
@@ -91,7 +128,31 @@ def plot_robustness_maps(family: PlantFamily, loops: Mapping[str, LoopModel],
                          title: str = "", ax: Any = None) -> Plot:
     """Multiloop disk margin of each loop model over the family: one row per controller,
     one panel per value of a third axis (the clamping force), ratio x torque ratio in each
-    (0: unstable)."""
+    (0: unstable).
+
+    Parameters
+    ----------
+    family : PlantFamily
+        The family the loops were built on, with two or three axes (the first two the
+        rows and columns of each panel, the third one panel per value).
+    loops : dict of str to LoopModel
+        The loop models by controller name (`empact.control.loop.family_loops`).
+    title : str
+        Figure title.
+    ax : array of Axes, shape (len(loops), n3), optional
+        ``n3`` the number of values of the third axis (1 with two axes); default a new
+        figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (len(loops), n3)) and the meshes drawn.
+
+    Raises
+    ------
+    ValueError
+        When the family has neither two nor three axes.
+    """
     names = list(family.axes)
     if len(names) not in (2, 3):
         raise ValueError("robustness maps need a family with two or three axes")
@@ -134,7 +195,26 @@ def plot_closed_loop(runs: Sequence[ClosedLoopResult], title: str = "",
                      ax: Any = None) -> Plot:
     """Slip, ratio, clamping force and servo torques over time for closed-loop runs (one
     colour per run, references dash-dot, the linear loop model's prediction dotted where
-    given, by scenario name; the secondary servo's torque limit as thin grey lines)."""
+    given, by scenario name; the secondary servo's torque limit as thin grey lines).
+
+    Parameters
+    ----------
+    runs : sequence of ClosedLoopResult
+        The runs (`empact.run_closed_loop`), one colour each; slip drawn in %, clamping
+        force in kN, servo torques in N m.
+    title : str
+        Figure title.
+    predictions : dict of str to LoopPrediction, optional
+        The linear loop model's predictions (`empact.control.loop.predict_scenario`) by
+        scenario name, drawn over the run of that name.
+    ax : array of Axes, shape (4, 1), optional
+        Slip, ratio, clamping force, servo torques; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (4, 1)) and the lines drawn.
+    """
     fig, axs = new_axes(ax, 4, 1, size=(11, 9.5), sharex=True)
     artists = []
     predictions = predictions or {}
@@ -177,7 +257,26 @@ def plot_closed_loop(runs: Sequence[ClosedLoopResult], title: str = "",
 def plot_shift_envelope(envelope: ShiftEnvelope, runs: Sequence[ClosedLoopResult] = (),
                         title: str = "", ax: Any = None) -> Plot:
     """The shift-rate envelope over the ratio (`empact.control.shifting`), coloured by the
-    limit that binds, with the ratio rate the runs reached (|dr_g/dt| against r_g)."""
+    limit that binds, with the ratio rate the runs reached (|dr_g/dt| against r_g).
+
+    Parameters
+    ----------
+    envelope : ShiftEnvelope
+        The envelope (`empact.control.shifting.shift_envelope`): largest ratio rate [1/s]
+        over the ratio [-] and the limit that binds.
+    runs : sequence of ClosedLoopResult
+        Runs whose ratio rate [1/s] (the gradient of the ratio over time) is drawn against
+        their ratio.
+    title : str
+        Figure title.
+    ax : Axes, optional
+        One Axes; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 1)) and the lines and markers drawn.
+    """
     fig, axs = new_axes(ax, 1, 1, size=(8, 4.2))
     a = axs[0, 0]
     artists = []

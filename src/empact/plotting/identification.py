@@ -22,14 +22,27 @@ def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None 
 
     Parameters
     ----------
-    est : the estimate
-    pairs : ``(output, input)`` names (default: all)
-    models : model responses to overlay (dashed), with the same signal names
-    title : figure title
-    fmin : lowest frequency shown [Hz] (default: the first non-zero bin)
-    min_coherence : the estimate's phase is drawn only where the coherence reaches this
-        (elsewhere noise, unwrapped, runs off by many turns); the magnitude is drawn everywhere
-    ax : shape (3, len(pairs)); default a new figure
+    est : FRFEstimate
+        The estimate (`empact.identification.estimate_frf`, e.g. ``rig_frf(record)``).
+    pairs : sequence of (output, input), optional
+        ``(output, input)`` names (default: all)
+    models : sequence of FrequencyResponse
+        Model responses to overlay (dashed), with the same signal names; a model without a
+        pair's signals is skipped in that column.
+    title : str
+        Figure title.
+    fmin : float, optional
+        Lowest frequency shown [Hz] (default: the first non-zero bin).
+    min_coherence : float
+        The estimate's phase is drawn only where the coherence [-] reaches this
+        (elsewhere noise, unwrapped, runs off by many turns); the magnitude is drawn everywhere.
+    ax : array of Axes, shape (3, len(pairs)), optional
+        Rows magnitude, phase, coherence; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (3, len(pairs))) and the lines drawn.
     """
     pairs = list(pairs or [(o, i) for i in est.inputs for o in est.outputs])
     fig, ax = new_axes(ax, 3, len(pairs), size=(4.4 * len(pairs) + 0.8, 7.2), sharex="col")
@@ -73,10 +86,20 @@ def plot_identified_plant(results, f_hz: np.ndarray, title: str = "", ax: Any = 
 
     Parameters
     ----------
-    results : sequence of `empact.experiments.plant_id.PlantIdentification`
-    f_hz : frequencies [Hz]
-    title : figure title
-    ax : shape (n_outputs, 2); default a new figure
+    results : sequence of PlantIdentification
+        One `empact.experiments.plant_id.PlantIdentification` per ratio (one colour each);
+        all with the inputs and outputs of the first.
+    f_hz : array, shape (n_f,)
+        Frequencies [Hz].
+    title : str
+        Figure title.
+    ax : array of Axes, shape (n_outputs, 2), optional
+        One row per output, one column per input; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (n_outputs, 2)) and the lines drawn.
     """
     names_in = tuple(results[0].realization.inputs)
     names_out = tuple(results[0].realization.outputs)

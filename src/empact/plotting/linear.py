@@ -36,11 +36,21 @@ def plot_mode_shapes(modes: Modes, split: int | None = None, title: str = "",
 
     Parameters
     ----------
-    modes : the modes (`empact.linear.lumped.Modes`)
-    split : modes with index >= `split` (default: none) go to a second panel (the
-        high-frequency modes)
-    title : figure title
-    ax : one Axes, or two (shape (1, 2)) with `split`; default a new figure
+    modes : Modes
+        The modes (`empact.linear.lumped.Modes`, e.g. ``actuation_model(...).modes()``);
+        their ``normalised_shapes`` are drawn.
+    split : int, optional
+        Modes with index >= `split` (default: none) go to a second panel (the
+        high-frequency modes).
+    title : str
+        Figure title.
+    ax : Axes or array of Axes, optional
+        One Axes, or two (shape (1, 2)) with `split`; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 1), or (1, 2) with `split`) and the bars drawn.
     """
     n = modes.shapes.shape[1]
     groups = [list(range(n))] if split is None else [list(range(split)), list(range(split, n))]
@@ -63,6 +73,21 @@ def plot_modal_energy(modes: Modes, title: str = "", ax: Any = None) -> Plot:
     Each bar is ``sign(e) k e^2 / sum k e^2`` for the spring's elongation ``e`` in the mode:
     the magnitudes of a mode add up to 1, the sign says whether the spring is elongated (+) or
     shortened (-).
+
+    Parameters
+    ----------
+    modes : Modes
+        The modes (`empact.linear.lumped.Modes`); their ``energy_fraction`` is drawn for
+        the elastic modes (non-zero natural frequency).
+    title : str
+        Axes title.
+    ax : Axes, optional
+        One Axes; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 1)) and the bars drawn.
     """
     fig, axs = new_axes(ax, size=(7, 3.8))
     a = axs[0, 0]
@@ -84,12 +109,25 @@ def plot_bode(responses: Sequence[FrequencyResponse], pairs: Sequence[tuple[str,
 
     Parameters
     ----------
-    responses : the responses to overlay (one line style each, labelled by ``label``)
-    pairs : ``(output, input)`` pairs, one column of panels each
-    title : figure title
-    phase : draw the phase row under the magnitude row
-    units : unit of the response for the magnitude label (e.g. ``"rad/(N m)"``)
-    ax : axes of shape (2, len(pairs)) (or (1, len(pairs)) without phase); default new
+    responses : sequence of FrequencyResponse
+        The responses to overlay (one line style each, labelled by ``label``).
+    pairs : sequence of (output, input)
+        ``(output, input)`` signal names, one column of panels each.
+    title : str
+        Figure title.
+    phase : bool
+        Draw the phase row under the magnitude row.
+    units : str
+        Unit of the response for the magnitude label (e.g. ``"rad/(N m)"``; empty: none).
+    ax : array of Axes, shape (2, len(pairs)), optional
+        The magnitude row over the phase row, one column per pair (shape (1, len(pairs))
+        without phase); default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (2, len(pairs)), or (1, len(pairs)) without phase) and the lines
+        drawn.
 
     Notes
     -----

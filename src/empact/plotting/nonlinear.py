@@ -26,6 +26,21 @@ def plot_nmp(result: NmpResult, title: str = "", ax: Any = None) -> Plot:
 
     The zeros are drawn in the complex plane [Hz], one colour per ratio; right-half-plane
     zeros filled.
+
+    Parameters
+    ----------
+    result : NmpResult
+        The analysis (`empact.nonlinear.nmp.nmp_analysis`): its geometry (Delta_x drawn in
+        mm, the belt-length change in µm) and its zeros [rad/s] at each ratio.
+    title : str
+        Figure title.
+    ax : array of Axes, shape (1, 2), optional
+        Geometry (left) and zeros (right); default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 2)) and the lines and markers drawn.
     """
     fig, axs = new_axes(ax, 1, 2, size=(11, 4.2))
     g = result.geometry
@@ -80,7 +95,27 @@ def plot_simulation(result: SimulationResult,
     """Time histories, one panel per group of signal names (missing names are skipped).
 
     Each panel's y label gives the unit of its signals (`empact.nonlinear.model` units; slip
-    in %).  `axes`: shape (ceil(groups / 2), 2); default a new figure.
+    in %).
+
+    Parameters
+    ----------
+    result : SimulationResult
+        The simulation (`empact.simulate`, `empact.nonlinear.simulation.run_scenario`); an
+        incomplete one is marked in the title.
+    signals : sequence of tuple of str
+        Groups of output, state or input names, one panel each (one line style per name);
+        forces above 1 kN are drawn in kN.
+    title : str
+        Figure title (default: the scenario's name).
+    ax : array of Axes, shape (ceil(groups / 2), 2), optional
+        Two columns of panels, ``groups`` the groups with a known name; default a new
+        figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (ceil(groups / 2), 2); an unused last panel hidden) and the
+        lines drawn.
     """
     known = set(result.outputs) | set(result.states) | set(result.inputs)
     groups = [[s for s in grp if s in known] for grp in signals]
@@ -117,7 +152,21 @@ def plot_plant_magnitude(responses: Sequence[FrequencyResponse], title: str = ""
     """Magnitudes of the plant (e.g. T_mp, T_ms, T_l -> r_g, nu, nu_r), one line style per
     response (Fig. 2).
 
-    `ax`: shape (n_out, n_in) of the responses; default a new figure.
+    Parameters
+    ----------
+    responses : sequence of FrequencyResponse
+        Plant responses with the outputs and inputs of the first (e.g.
+        ``system_response(plant(...).system, w)``), inputs torques [N m]: the magnitudes are
+        drawn in output units per N m.
+    title : str
+        Figure title.
+    ax : array of Axes, shape (n_out, n_in), optional
+        One panel per output and input of the responses; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (n_out, n_in)) and the lines drawn.
     """
     n_out, n_in = len(responses[0].outputs), len(responses[0].inputs)
     fig, axs = new_axes(ax, n_out, n_in, size=(3.6 * n_in + 1.2, 2.3 * n_out + 1.0),

@@ -50,6 +50,21 @@ def plot_belt_root_locus(rl: BeltRootLocus, title: str = "", ax: Any = None) -> 
     """Root locus over ``c_b`` from 0 (x) to infinity (o), upper half plane (Fig. 9).
 
     The branch that leaves for ``-inf`` is cut at the left edge of the axes.
+
+    Parameters
+    ----------
+    rl : BeltRootLocus
+        The root locus (`empact.slip.belt_root_locus`); its poles [rad/s] are drawn, the
+        natural frequencies of its end points [Hz] as quarter circles.
+    title : str
+        Axes title (default: one naming the ratio).
+    ax : Axes, optional
+        One Axes; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 1)) and the lines drawn.
     """
     fig, axs = new_axes(ax, size=(7.0, 4.8))
     ax = axs[0, 0]
@@ -85,7 +100,25 @@ def plot_belt_root_locus(rl: BeltRootLocus, title: str = "", ax: Any = None) -> 
 @styled
 def plot_traction(curves: TractionCurves, names: Sequence[str] | None = None,
                   title: str = "", ax: Any = None) -> Plot:
-    """Traction coefficient and its slope over slip, one line per ratio (Fig. 10)."""
+    """Traction coefficient and its slope over slip, one line per ratio (Fig. 10).
+
+    Parameters
+    ----------
+    curves : TractionCurves
+        The curves (`empact.variator.traction.traction_curves`): traction coefficient [-]
+        and its slope [-] over slip (drawn in %), one row per ratio.
+    names : sequence of str, optional
+        A name per ratio for the legend (e.g. ``("LOW", "MED", "OD")``), before its value.
+    title : str
+        Figure title (default: one naming the curves' ``label``).
+    ax : array of Axes, shape (1, 2), optional
+        Coefficient (left) and slope (right); default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 2)) and the lines drawn.
+    """
     fig, axs = new_axes(ax, 1, 2, size=(10.0, 3.8))
     x = 100 * curves.nu
     artists = []
@@ -114,6 +147,25 @@ def plot_pole_sweep(sweep: PoleSweep, title: str = "", uncoupled_hz: Sequence[fl
 
     Only the upper half plane near the oscillatory poles is shown; optional quarter circles
     mark the uncoupled and coupled natural frequencies [Hz].
+
+    Parameters
+    ----------
+    sweep : PoleSweep
+        The sweep (`empact.slip.pole_sweep`); poles [rad/s], coloured by the swept value in
+        display units (`DISPLAY`: slip in %, clamping force in kN).
+    title : str
+        Axes title (default: one naming the swept variable and the fixed ones).
+    uncoupled_hz : sequence of float
+        Uncoupled natural frequencies [Hz] to mark (e.g. ``BeltRootLocus.uncoupled_hz``).
+    coupled_hz : sequence of float
+        Coupled natural frequencies [Hz] to mark (e.g. ``BeltRootLocus.coupled_hz``).
+    ax : Axes, optional
+        One Axes; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 1)) and the lines and markers drawn.
     """
     fig, axs = new_axes(ax, size=(7.0, 4.8))
     ax = axs[0, 0]
@@ -171,7 +223,20 @@ def plot_slip_bode(responses: Sequence[FrequencyResponse], title: str = "",
                    ax: Any = None) -> Plot:
     """Bode plot of ``F_s -> nu`` responses (Fig. 12), one line per operating point.
 
-    `ax`: shape (2, 1) (magnitude, phase); default a new figure.
+    Parameters
+    ----------
+    responses : sequence of FrequencyResponse
+        ``F_s -> nu`` responses (`empact.slip.slip_frequency_responses`) [1/N], one line each;
+        the pair drawn is the first response's first output and input.
+    title : str
+        Figure title.
+    ax : array of Axes, shape (2, 1), optional
+        Magnitude and phase; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (2, 1)) and the lines drawn (`plot_bode`).
     """
     return plot_bode(responses, [(responses[0].outputs[0], responses[0].inputs[0])], title=title,
                      units="1/N", ax=ax)
@@ -186,6 +251,23 @@ def plot_zero_locus(zl: ZeroLocus, title: str = "",
     Left: the zeros in the complex plane (upper half), coloured by ``r_g``, arrows for
     increasing ``r_g``.  Right: their magnitudes [Hz] over ``r_g`` with the coupled-limit poles
     (dashed) and optional reference points ``{r_g: [Hz, ...]}`` (e.g. Table 2).
+
+    Parameters
+    ----------
+    zl : ZeroLocus
+        The zero locus (`empact.slip.zero_locus`): zeros [rad/s] and the coupled-limit poles
+        over the ratio.
+    title : str
+        Figure title (default: "Zeros of the slip model over the ratio").
+    reference_hz : dict of float to sequence of float, optional
+        Reference frequencies [Hz] by ratio [-], drawn as open squares on the right.
+    ax : array of Axes, shape (1, 2), optional
+        Complex plane (left) and magnitudes (right); default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 2)) and the lines and markers drawn.
     """
     fig, axs = new_axes(ax, 1, 2, size=(10.5, 4.2))
     ax, ax2 = axs[0]
@@ -237,6 +319,21 @@ def plot_stability_map(sm: StabilityMap, title: str = "", ax: Any = None) -> Plo
     """Smallest damping ratio over the stable part of the grid; unstable region red, hatched.
 
     The outline is the contour ``max_real = tol`` (the stability boundary).
+
+    Parameters
+    ----------
+    sm : StabilityMap
+        The map (`empact.slip.stability_map`); its axes drawn in display units
+        (`DISPLAY`: slip in %, clamping force in kN).
+    title : str
+        Axes title (default: one naming the fixed variables).
+    ax : Axes, optional
+        One Axes; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 1)) and the mesh, hatching and contour drawn.
     """
     fig, axs = new_axes(ax, size=(7.2, 4.8))
     ax = axs[0, 0]

@@ -18,7 +18,24 @@ __all__ = ["plot_traction_reserve", "plot_ratio_stability"]
 @styled
 def plot_traction_reserve(curves: TractionCurves, title: str = "", ax: Any = None) -> Plot:
     """Traction coefficient over slip, one line per ratio, with the slip at 90 % of each
-    curve's peak (circle: the set-point of an 11 % torque reserve) and the peak (dot)."""
+    curve's peak (circle: the set-point of an 11 % torque reserve) and the peak (dot).
+
+    Parameters
+    ----------
+    curves : TractionCurves
+        The curves (`empact.variator.traction.traction_curves`): traction coefficient [-]
+        over slip (drawn in %), one row per ratio; the slip grid's resolution is the
+        markers'.
+    title : str
+        Axes title (default: "Traction curves: micro-slip slope and torque reserve").
+    ax : Axes, optional
+        One Axes; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 1)) and the lines and markers drawn.
+    """
     fig, axs = new_axes(ax, size=(7.2, 4.4))
     ax = axs[0, 0]
     artists = []
@@ -44,7 +61,23 @@ def plot_traction_reserve(curves: TractionCurves, title: str = "", ax: Any = Non
 def plot_ratio_stability(smap: RatioStabilityMap, title: str = "",
                          ax: Any = None) -> Plot:
     """``d ln kappa*/d r_g`` at fixed load torque over torque ratio and ratio (the ratio is
-    statically unstable where it is negative: hatched), the marked points as crosses."""
+    statically unstable where it is negative: hatched), the marked points as crosses.
+
+    Parameters
+    ----------
+    smap : RatioStabilityMap
+        The map (`empact.variator.thrust_ratio.ratio_stability_map`): ``S`` [-] over torque
+        ratio [-] and ratio [-], with its marked ``points`` ``(tau, r_g)``.
+    title : str
+        Axes title (default: one saying the hatched region is unstable).
+    ax : Axes, optional
+        One Axes; default a new figure.
+
+    Returns
+    -------
+    Plot
+        The figure, the axes (shape (1, 1)) and the mesh, hatching and markers drawn.
+    """
     fig, axs = new_axes(ax, size=(7.2, 4.6))
     ax = axs[0, 0]
     lim = float(np.abs(smap.S).max()) or 1.0

@@ -73,12 +73,18 @@ def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool 
 
     Parameters
     ----------
-    params : the parameter set
-    out : the report folder; written in a temporary sibling and moved into place when complete
-    progress : a progress bar on stderr
-    sections : the sections (default: all, `empact.report.sections.SECTIONS`)
-    formats : figure formats (``"png"``, ``"svg"``, ``"pdf"``); the page shows the PNG
-    workers : processes building sections in parallel (default: one per CPU core, at most
+    params : Params
+        The parameter set.
+    out : str or path-like
+        The report folder; written in a temporary sibling and moved into place when complete.
+    progress : bool
+        A progress bar on stderr.
+    sections : sequence of Section, optional
+        The sections (default: all, `empact.report.sections.SECTIONS`).
+    formats : sequence of {"png", "svg", "pdf"}
+        Figure formats; the page shows the PNG.
+    workers : int, optional
+        Processes building sections in parallel (default: one per CPU core, at most
         the number of sections; 1 builds in this process).  Sections are independent: each
         computes its results and draws its figures (the slow part) into its own files.
 

@@ -30,14 +30,19 @@ class Section:
 
     Attributes
     ----------
-    title : heading
-    anchor : HTML id (also the table-of-contents link); the ids of the page are unique:
+    title : str
+        Heading.
+    anchor : str
+        HTML id (also the table-of-contents link); the ids of the page are unique:
         sections by their anchor, figures ``fig-<stem>``, tables ``tab-<stem>``, claims
-        ``claim-<key>``
-    compute : ``params -> result`` with a ``claims`` attribute (`empact.reproduction`)
-    render : ``(Context, result) -> html``
-    cost : rough build time [s] on one core; the parallel build starts the costly sections
-        first
+        ``claim-<key>``.
+    compute : callable
+        ``params -> result`` with a ``claims`` attribute (`empact.reproduction`).
+    render : callable
+        ``(Context, result) -> html``.
+    cost : float
+        Rough build time [s] on one core; the parallel build starts the costly sections
+        first.
     """
 
     title: str
@@ -58,7 +63,21 @@ def csv_slip_columns(header: Sequence[str], rows: Sequence[Sequence[object]]
 
     A slip column has a header ``... slip ... [%]``, ``nu [%]`` or ``max |nu - nu*| [pp]``; it
     becomes a fraction ``[-]`` (one unit per quantity in machine-readable output; % is for the
-    page)."""
+    page).
+
+    Parameters
+    ----------
+    header : sequence of str
+        Column headers with their units (``"nu [%]"``, ``"F_s [kN]"``).
+    rows : sequence of sequence
+        The table's rows, one cell per header.
+
+    Returns
+    -------
+    list of list
+        The header, its slip columns' unit ``[%]`` or ``[pp]`` replaced by ``[-]``, then the rows,
+        their numeric slip cells divided by 100 (other cells, and booleans, as given).
+    """
     slip = [bool(_SLIP_PERCENT.match(str(h))) for h in header]
     head = [re.sub(r" \[(%|pp)\]$", " [-]", str(h)) if s else h for h, s in zip(header, slip)]
     return [head] + [[c / 100 if s and isinstance(c, (int, float, np.number))
@@ -67,7 +86,18 @@ def csv_slip_columns(header: Sequence[str], rows: Sequence[Sequence[object]]
 
 
 def fmt_cell(value: object) -> str:
-    """A table cell: floats with 4 significant digits, everything else as text (escaped)."""
+    """A table cell: floats with 4 significant digits, everything else as text (escaped).
+
+    Parameters
+    ----------
+    value : object
+        The cell's value.
+
+    Returns
+    -------
+    str
+        HTML text of the cell (``f"{value:.4g}"`` for a float, else ``str`` HTML-escaped).
+    """
     if isinstance(value, (float, np.floating)):
         return f"{value:.4g}"
     return html.escape(str(value))
@@ -78,6 +108,17 @@ class Context:
     """The parameters, the output folder and the figure formats of a report build.
 
     `figures` collects the figure files written (for the build's completeness check).
+
+    Attributes
+    ----------
+    params : Params
+        The parameter set the report is computed from.
+    out : pathlib.Path
+        The folder the figures and tables are written to.
+    formats : tuple of str
+        The figure formats (`empact.plotting.FORMATS`); the page shows the PNG if there is one.
+    figures : list of pathlib.Path
+        The figure files written so far (by `figure`).
     """
 
     params: Params
@@ -86,7 +127,22 @@ class Context:
     figures: list[Path] = field(default_factory=list)
 
     def figure(self, plot: Plot, stem: str, caption: str) -> str:
-        """Save a plot in the build's formats; return its HTML (caption is HTML)."""
+        """Save a plot in the build's formats; return its HTML (caption is HTML).
+
+        Parameters
+        ----------
+        plot : Plot
+            The plot (`empact.plotting`); its figure is saved as ``out/<stem>.<fmt>``.
+        stem : str
+            File name without suffix, also the figure's id ``fig-<stem>``.
+        caption : str
+            The caption (HTML).
+
+        Returns
+        -------
+        str
+            A ``<figure>`` showing the PNG (or the first format), linking the other formats.
+        """
         self.figures += save_figure(plot.figure, self.out / stem, self.formats)
         shown = "png" if "png" in self.formats else self.formats[0]
         others = " ".join(f'<a href="{stem}.{fmt}">{fmt.upper()}</a>' for fmt in self.formats
@@ -100,7 +156,24 @@ class Context:
         """Write a CSV table; return it as an HTML table (caption is HTML).
 
         The page shows a slip in % or percentage points where the section gives it so; the
-        CSV, machine-readable, has it as a fraction (`csv_slip_columns`)."""
+        CSV, machine-readable, has it as a fraction (`csv_slip_columns`).
+
+        Parameters
+        ----------
+        stem : str
+            File name of the CSV without suffix, also the table's id ``tab-<stem>``.
+        header : sequence of str
+            Column headers with their units.
+        rows : sequence of sequence
+            The rows, one cell per header.
+        caption : str
+            The caption (HTML).
+
+        Returns
+        -------
+        str
+            A ``<table>`` with its caption and a link to the CSV.
+        """
         buf = io.StringIO()
         writer = csv.writer(buf, lineterminator="\n")
         writer.writerows(csv_slip_columns(header, rows))
@@ -113,13 +186,35 @@ class Context:
 
     @staticmethod
     def verdict(claims: Sequence[Claim]) -> str:
-        """HTML mark for a group of claims: shown when all are."""
+        """HTML mark for a group of claims: shown when all are.
+
+        Parameters
+        ----------
+        claims : sequence of Claim
+            The claims.
+
+        Returns
+        -------
+        str
+            ``shown`` (green) or ``NOT shown`` (red), bold.
+        """
         ok = all(c.shown for c in claims)
         return '<b class="ok">shown</b>' if ok else '<b class="bad">NOT shown</b>'
 
     @staticmethod
     def claims(claims: Sequence[Claim]) -> str:
-        """The claims as an HTML list: claim, computed, verdict, explanation."""
+        """The claims as an HTML list: claim, computed, verdict, explanation.
+
+        Parameters
+        ----------
+        claims : sequence of Claim
+            The claims.
+
+        Returns
+        -------
+        str
+            A ``<ul>`` with one item per claim, its id ``claim-<key>``.
+        """
         items = []
         for c in claims:
             mark = '<b class="ok">shown</b>' if c.shown else '<b class="bad">NOT shown</b>'

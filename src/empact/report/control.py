@@ -26,7 +26,22 @@ def _fmt(v) -> str:
 
 def control(ctx: Context, res: rep.ControlSection) -> str:
     """The family, the loops' robustness, every closed-loop scenario against its targets and
-    its linear prediction, the studies (traction estimate, Monte Carlo, saving, envelope)."""
+    its linear prediction, the studies (traction estimate, Monte Carlo, saving, envelope).
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : ControlSection
+        The result of `empact.reproduction.control.control`.
+
+    Returns
+    -------
+    str
+        HTML: a note on the loop, the figures of the family's poles and zeros, the loop shapes, the
+        robustness maps, the closed-loop runs and the shift envelope, the tables of the designs, the
+        targets and the envelope, and the claims.
+    """
     fam = res.family
     spec = res.loop.spec
     axes = ", ".join(f"{k}: {v.min():.3g}-{v.max():.3g} ({len(v)})" for k, v in fam.axes.items())
@@ -112,7 +127,21 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
 
 
 def studies(ctx: Context, res: rep.StudiesSection) -> str:
-    """The traction-estimate runs, the Monte Carlo quantiles and the saving table."""
+    """The traction-estimate runs, the Monte Carlo quantiles and the saving table.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : StudiesSection
+        The result of `empact.reproduction.control.control_studies`.
+
+    Returns
+    -------
+    str
+        HTML: a note, the tables of the traction-estimate runs, the Monte Carlo quantiles and the
+        clamping saving, and the claims.
+    """
     te_rows = [[n, f"{f:.3g}", m["peak_slip_pp"], m["peak_slip_error_pp"],
                 m.get("slip_reserve_pp", float("nan")), _fmt(m.get("macro_slip"))]
                for (n, f), m in res.traction_error.items()]

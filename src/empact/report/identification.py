@@ -9,7 +9,21 @@ __all__ = ["fig2", "fig14"]
 
 
 def fig2(ctx: Context, res: rep.Fig2) -> str:
-    """Fig. 2 with the Sec. 3 remarks."""
+    """Fig. 2 with the Sec. 3 remarks.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : Fig2
+        The result of `empact.reproduction.identification.fig2`.
+
+    Returns
+    -------
+    str
+        HTML: the figure of the identified and exact plants, the claims and the tables of the Sec. 3
+        damping, the creep-gain sensitivity and the identified models.
+    """
     return (ctx.figure(plot_identified_plant(res.results, res.f_hz,
                                              title="Fig. 2: identified (solid) vs exact "
                                                    "linearisation (dashed)"),
@@ -44,7 +58,21 @@ def fig2(ctx: Context, res: rep.Fig2) -> str:
 
 
 def fig14(ctx: Context, res: rep.Fig14) -> str:
-    """Fig. 14 on the rig."""
+    """Fig. 14 on the rig.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : Fig14
+        The result of `empact.reproduction.identification.fig14`.
+
+    Returns
+    -------
+    str
+        HTML: one FRF-estimate figure per rig run, the claims and notes on the measured features and
+        the paper's Sec. 4.
+    """
     parts = []
     for run in res.runs:
         s = run.record.settings

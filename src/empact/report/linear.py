@@ -12,7 +12,21 @@ __all__ = ["table1", "table2", "fig4_5", "fig6", "fig8"]
 
 
 def table1(ctx: Context, res: rep.Table1) -> str:
-    """Table 1 for both row sets, side by side, with its claims."""
+    """Table 1 for both row sets, side by side, with its claims.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : Table1
+        The result of `empact.reproduction.linear.table1`.
+
+    Returns
+    -------
+    str
+        HTML: the table ``table1`` (eigenfrequencies [Hz] of six modes at r_g = 0.5, 1, 2 for each
+        row set), the claims and a note on the calibration.
+    """
     kins = (rep.SEC21, rep.MACHINE)
     rows = [[j + 1] + [res.frequencies_hz[k][r][j] for k in kins for r in rep.RATIOS]
             for j in range(6)]
@@ -28,7 +42,21 @@ def table1(ctx: Context, res: rep.Table1) -> str:
 
 
 def table2(ctx: Context, res: rep.Table2) -> str:
-    """Table 2, paper against computed, with the uncoupled sides."""
+    """Table 2, paper against computed, with the uncoupled sides.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : Table2
+        The result of `empact.reproduction.linear.table2`.
+
+    Returns
+    -------
+    str
+        HTML: the table ``table2`` (paper against computed [Hz] and the relative error, then the
+        uncoupled sides), the claims and the note on the side labels.
+    """
     rows = []
     for r in rep.RATIOS:
         f = res.frequencies_hz[r]
@@ -47,7 +75,22 @@ def table2(ctx: Context, res: rep.Table2) -> str:
 
 def fig4_5(ctx: Context, res: rep.ModeFigure) -> str:
     """Figs. 4 and 5, for the paper's Sec. 2.1 rows and for the machine, with the mode
-    characters of both."""
+    characters of both.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : ModeFigure
+        The result of `empact.reproduction.linear.fig4_5` (with its
+        ``machine`` modes and ``characters``).
+
+    Returns
+    -------
+    str
+        HTML: the mode-shape and modal-energy figures of both row sets, the table of the mode
+        characters and the claims.
+    """
     out = ""
     for modes, label, key in ((res.modes, "Sec. 2.1 rows as published", ""),
                               (res.machine, "machine (equal translation)", "_machine")):
@@ -82,7 +125,21 @@ def fig4_5(ctx: Context, res: rep.ModeFigure) -> str:
 
 
 def fig6(ctx: Context, res: rep.Fig6) -> str:
-    """Fig. 6 (Sec. 2.1 rows) and the machine with the creep law's pulley damping."""
+    """Fig. 6 (Sec. 2.1 rows) and the machine with the creep law's pulley damping.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : Fig6
+        The result of `empact.reproduction.linear.fig6`.
+
+    Returns
+    -------
+    str
+        HTML: the Bode figures of the Sec. 2.1 rows and of the machine (servo torque -> servo angle
+        [rad/(N m)]) and the claims.
+    """
     pairs = [("theta_mp", "T_mp"), ("theta_ms", "T_ms")]
     return (ctx.figure(plot_bode(res.responses, pairs,
                                  title="Actuation, $r_g$ = 1, Sec. 2.1 rows", units="rad/(N m)"),
@@ -99,7 +156,20 @@ def fig6(ctx: Context, res: rep.Fig6) -> str:
 
 
 def fig8(ctx: Context, res: rep.ModeFigure) -> str:
-    """Fig. 8."""
+    """Fig. 8.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : ModeFigure
+        The result of `empact.reproduction.linear.fig8`.
+
+    Returns
+    -------
+    str
+        HTML: the driveline mode-shape and modal-energy figures and the claims.
+    """
     return (ctx.figure(plot_mode_shapes(res.modes, title="Driveline modes, $r_g$ = 1"),
                        "fig8_driveline_modes", "Fig. 8 (left): normalised undamped eigenvectors")
             + ctx.figure(plot_modal_energy(res.modes, title="Driveline modal energy, $r_g$ = 1"),

@@ -9,7 +9,22 @@ __all__ = ["machine"]
 
 
 def machine(ctx: Context, res: rep.MachineSection) -> str:
-    """Traction statistics, creep magnitudes, torque reserves, the ratio's static stability."""
+    """Traction statistics, creep magnitudes, torque reserves, the ratio's static stability.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats;
+        its ``params.shift.gain`` is named in the note.
+    res : MachineSection
+        The result of `empact.reproduction.machine.machine`.
+
+    Returns
+    -------
+    str
+        HTML: a note, the traction-reserve figure, the tables of the curve statistics, the creep
+        magnitudes and the torque reserves, the ratio-stability figure and the claims.
+    """
     sh = ctx.params.shift
     return (
         "<p>The paper gives no variator laws; these are the shipped defaults, each with its "

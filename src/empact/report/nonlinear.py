@@ -13,7 +13,23 @@ __all__ = ["nmp", "simulation", "exact_plant"]
 
 
 def nmp(ctx: Context, res: rep.NmpSection) -> str:
-    """Sec. 2.3."""
+    """Sec. 2.3.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats;
+        its ``params.operating`` is the point named.
+    res : NmpSection
+        The result of `empact.reproduction.nonlinear.nmp`.
+
+    Returns
+    -------
+    str
+        HTML: the geometry-and-zeros figure, the table of the geometry (Delta_x [mm], belt-length
+        change over delta [-]) and right-half-plane zeros [Hz], the claims, a note and the table of
+        the zeros by row set and slip signal.
+    """
     r, g = res.result, res.result.geometry
     rows = [[rg, 1e3 * g.delta_x[k], g.dL_exact[k] / g.delta, rep.hz_text(r.rhp_zeros[k])]
             for k, rg in enumerate(r.r_g)]
@@ -50,7 +66,21 @@ def nmp(ctx: Context, res: rep.NmpSection) -> str:
 
 
 def simulation(ctx: Context, res: rep.SimulationSection) -> str:
-    """The simulation, its figure and CSV."""
+    """The simulation, its figure and CSV.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : SimulationSection
+        The result of `empact.reproduction.nonlinear.simulation`.
+
+    Returns
+    -------
+    str
+        HTML: the time-history figure with a link to its CSV (``sim_shift_and_load_step.csv``,
+        written too) and the claims.
+    """
     write_csv(res.result, ctx.out / "sim_shift_and_load_step.csv")
     sc = res.scenario
     return (ctx.figure(plot_simulation(res.result), "sim_shift_and_load_step",
@@ -60,7 +90,22 @@ def simulation(ctx: Context, res: rep.SimulationSection) -> str:
 
 
 def exact_plant(ctx: Context, res: rep.PlantSection) -> str:
-    """The exact plant's magnitudes, operating points and the load -> ratio gains."""
+    """The exact plant's magnitudes, operating points and the load -> ratio gains.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats;
+        its ``params.operating`` is the point named.
+    res : PlantSection
+        The result of `empact.reproduction.nonlinear.exact_plant`.
+
+    Returns
+    -------
+    str
+        HTML: the plant-magnitude figure, the tables of the operating points and of the load ->
+        ratio gains [1/(N m)], and the claims.
+    """
     op = ctx.params.operating
     return (ctx.figure(plot_plant_magnitude(res.responses, title="Exact linearised plant, "
                                             + op.label()),

@@ -17,7 +17,20 @@ __all__ = ["fig9", "fig10", "fig11", "fig12a", "fig12b", "fig13", "stability"]
 
 
 def fig9(ctx: Context, res: rep.Fig9) -> str:
-    """Fig. 9."""
+    """Fig. 9.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : Fig9
+        The result of `empact.reproduction.slip.fig9`.
+
+    Returns
+    -------
+    str
+        HTML: the root-locus figure and the claims.
+    """
     rl = res.locus
     return (ctx.figure(plot_belt_root_locus(rl), "fig9_root_locus_cb",
                        "Fig. 9: the paper shows the poles moving from the uncoupled sides "
@@ -30,7 +43,22 @@ def fig9(ctx: Context, res: rep.Fig9) -> str:
 
 
 def fig10(ctx: Context, res: rep.Fig10) -> str:
-    """Fig. 10 and the magic-formula coefficients."""
+    """Fig. 10 and the magic-formula coefficients.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats;
+        its parameters give the magic-formula coefficients.
+    res : Fig10
+        The result of `empact.reproduction.slip.fig10`.
+
+    Returns
+    -------
+    str
+        HTML: the traction figure, the claims, the table of the magic-formula coefficients with each
+        curve's peak (slip [%], coefficient [-]) and a note.
+    """
     t = ctx.params.traction
     nu_pk, mu_pk = res.curves.peak()
     rows = [[name, r, B, C, D, E, 100 * nu_pk[k], mu_pk[k]] for k, (name, r, B, C, D, E) in
@@ -54,7 +82,22 @@ def fig10(ctx: Context, res: rep.Fig10) -> str:
 
 
 def fig11(ctx: Context, res: rep.Fig11) -> str:
-    """Fig. 11 and the table of oscillatory poles."""
+    """Fig. 11 and the table of oscillatory poles.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : Fig11
+        The result of `empact.reproduction.slip.fig11`.
+
+    Returns
+    -------
+    str
+        HTML: the figure of the poles over slip, the claims and the table of the oscillatory poles
+        (slip [%], traction slope [-], belt damping c_b [N m s/rad], real part [1/s], imaginary part
+        [rad/s], frequency [Hz], damping ratio [-]).
+    """
     rl = res.locus
     return (ctx.figure(plot_pole_sweep(res.sweep, uncoupled_hz=rl.uncoupled_hz,
                                        coupled_hz=rl.coupled_hz),
@@ -73,7 +116,20 @@ def fig11(ctx: Context, res: rep.Fig11) -> str:
 
 
 def fig12a(ctx: Context, res: rep.Fig12) -> str:
-    """Fig. 12(a)."""
+    """Fig. 12(a).
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : Fig12
+        The result of `empact.reproduction.slip.fig12a`.
+
+    Returns
+    -------
+    str
+        HTML: the Bode figure of ``F_s -> nu`` over slip and the claims.
+    """
     b = res.base
     title = (rf"$F_s \rightarrow \nu$ at $r_g$ = {b.r_g:g}, $F_{{s0}}$ = {b.F_s / 1e3:g} kN, "
              rf"$\omega_{{p0}}$ = {b.omega_p:g} rad/s")
@@ -86,7 +142,20 @@ def fig12a(ctx: Context, res: rep.Fig12) -> str:
 
 
 def fig12b(ctx: Context, res: rep.Fig12) -> str:
-    """Fig. 12(b)."""
+    """Fig. 12(b).
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : Fig12
+        The result of `empact.reproduction.slip.fig12b`.
+
+    Returns
+    -------
+    str
+        HTML: the Bode figure of ``F_s -> nu`` over the ratio and the claims.
+    """
     b = res.base
     return (ctx.figure(plot_slip_bode(res.responses, title=rf"$F_s \rightarrow \nu$ at $\nu$ = "
                                       f"{100 * b.nu:g} %, $F_{{s0}}$ = {b.F_s / 1e3:g} kN, "
@@ -98,7 +167,21 @@ def fig12b(ctx: Context, res: rep.Fig12) -> str:
 
 
 def fig13(ctx: Context, res: rep.Fig13) -> str:
-    """Fig. 13 and the table of zeros."""
+    """Fig. 13 and the table of zeros.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : Fig13
+        The result of `empact.reproduction.slip.fig13`.
+
+    Returns
+    -------
+    str
+        HTML: the zero-locus figure (with Table 2's coupled frequencies as reference), the claims
+        and the table of the zeros [Hz].
+    """
     ref = {r: paper.TABLE2_HZ[r][1:3] for r in paper.TABLE2_HZ}
     return (ctx.figure(plot_zero_locus(res.locus, reference_hz=ref), "fig13_zero_locus",
                        "Fig. 13: the paper shows the two zeros of the slip model moving with "
@@ -114,7 +197,20 @@ def fig13(ctx: Context, res: rep.Fig13) -> str:
 
 
 def stability(ctx: Context, res: rep.StabilityFigure) -> str:
-    """The stability map."""
+    """The stability map.
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build: figures and CSV tables are written to ``ctx.out`` in its formats.
+    res : StabilityFigure
+        The result of `empact.reproduction.slip.stability`.
+
+    Returns
+    -------
+    str
+        HTML: the stability-map figure and the claims.
+    """
     sm = res.map
     return (ctx.figure(plot_stability_map(sm), "slip_stability_map",
                        "Stability map (not in the paper): the paper says a negative traction "

@@ -20,16 +20,24 @@ class Claim:
 
     Attributes
     ----------
-    key : stable identifier, e.g. ``"table2.max_error"`` (tests and scripts use it)
-    source : where the paper says it, e.g. ``"Sec. 2.2, Fig. 9"``
-    claim : what the paper says (or what empact checks on its behalf), one sentence
-    computed : what empact computed, with numbers and units
-    shown : the verdict: True when the computed result shows the claim
-    explanation : why the verdict is what it is (always given when not shown)
-    reading : which reading of the paper or which model the result belongs to (e.g.
+    key : str
+        Stable identifier, e.g. ``"table2.max_error"`` (tests and scripts use it).
+    source : str
+        Where the paper says it, e.g. ``"Sec. 2.2, Fig. 9"``.
+    claim : str
+        What the paper says (or what empact checks on its behalf), one sentence.
+    computed : str
+        What empact computed, with numbers and units.
+    shown : bool
+        The verdict: True when the computed result shows the claim.
+    explanation : str
+        Why the verdict is what it is (always given when not shown).
+    reading : str
+        Which reading of the paper or which model the result belongs to (e.g.
         ``"machine (equal translation)"``, ``"Sec. 2.1 as published"``); empty when there is
-        only one
-    values : the numbers behind `computed`, by name (SI unless the name says otherwise)
+        only one.
+    values : mapping
+        The numbers behind `computed`, by name (SI unless the name says otherwise).
     """
 
     key: str
@@ -66,5 +74,16 @@ class Claim:
 
 
 def claims_table(claims: Iterable[Claim]) -> list[dict[str, Any]]:
-    """The claims as plain dictionaries, in order."""
+    """The claims as plain dictionaries, in order.
+
+    Parameters
+    ----------
+    claims : iterable of Claim
+        The claims.
+
+    Returns
+    -------
+    list of dict
+        `Claim.to_dict` of each claim (its fields, ``values`` as a plain dict, and ``verdict``).
+    """
     return [c.to_dict() for c in claims]

@@ -71,15 +71,24 @@ class ControlSection:
 
     Attributes
     ----------
-    family : the design family (`DESIGN_GRID`)
-    controllers : ``{"pi": Controller, "hinf": Controller}`` (the shipped files)
-    loop : the shipped loop (`LoopConfig`) the family checks use
-    loops : ``{name: LoopModel}`` over the family
-    runs : ``{scenario: ClosedLoopResult}`` of every shipped closed-loop scenario
-    targets : ``{scenario: [TargetCheck]}``
-    predictions : ``{scenario: Prediction}`` (the linear loop model's)
-    envelope : the shift-rate envelope of the shift scenario
-    claims : the targets checked
+    family : PlantFamily
+        The design family (`DESIGN_GRID`).
+    controllers : dict of str to Controller
+        ``{"pi": Controller, "hinf": Controller}`` (the shipped files).
+    loop : LoopConfig
+        The shipped loop the family checks use.
+    loops : dict of str to LoopModel
+        ``{name: LoopModel}`` over the family.
+    runs : dict of str to ClosedLoopResult
+        ``{scenario: ClosedLoopResult}`` of every shipped closed-loop scenario.
+    targets : dict of str to list of TargetCheck
+        ``{scenario: [TargetCheck]}``.
+    predictions : dict of str to Prediction
+        ``{scenario: Prediction}`` (the linear loop model's).
+    envelope : ShiftEnvelope
+        The shift-rate envelope of the shift scenario.
+    claims : tuple of Claim
+        The targets checked.
     """
 
     family: PlantFamily
@@ -102,11 +111,13 @@ class StudiesSection:
     ----------
     traction_error : dict
         The metrics of the 50 % load steps by ``(scenario, factor)``
-    montecarlo : the Monte Carlo study of `MC_SCENARIO` (`MC_RUNS` runs)
+    montecarlo : MonteCarloResult
+        The Monte Carlo study of `MC_SCENARIO` (`MC_RUNS` runs).
     saving : list of dict
         Rows with the keys ``scenario, strategy, mean_clamping_force, mean_losses, saving,
         r_g, macro_slip``
-    claims : the targets checked
+    claims : tuple of Claim
+        The targets checked.
     """
 
     traction_error: dict[tuple[str, float], dict[str, Any]]
@@ -116,7 +127,18 @@ class StudiesSection:
 
 
 def shipped_controller(name: str) -> Controller:
-    """A shipped controller (``data/control/<name>.json``)."""
+    """A shipped controller (``data/control/<name>.json``).
+
+    Parameters
+    ----------
+    name : str
+        The file's stem: ``"pi"`` or ``"hinf"``.
+
+    Returns
+    -------
+    Controller
+        The controller as stored.
+    """
     return load_controller(Path(str(resources.files("empact.data").joinpath(
         "control", f"{name}.json"))))
 
@@ -141,7 +163,19 @@ def _prediction(scenario: Scenario, params: Params, run: ClosedLoopResult) -> Pr
 
 def control(params: Params) -> ControlSection:
     """The family, the shipped designs' robustness on the loop, the closed-loop scenarios,
-    their linear predictions and the shift-rate envelope."""
+    their linear predictions and the shift-rate envelope.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    ControlSection
+        The family, the controllers, the loops, the runs, their targets and predictions, the
+        envelope and the claims.
+    """
     family = design_family(params)
     ctrls = {k: shipped_controller(k) for k in ("pi", "hinf")}
     loop = LoopConfig.of(params, **SHIPPED_LOOP)
@@ -167,7 +201,18 @@ def control(params: Params) -> ControlSection:
 def control_studies(params: Params) -> StudiesSection:
     """The 50 % load steps with the feedforward's traction estimate 5 % off, `MC_RUNS` Monte
     Carlo runs of the shipped spread, and the clamping saving against a safety factor of
-    1.3."""
+    1.3.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    StudiesSection
+        The traction-estimate runs' metrics, the Monte Carlo result, the saving rows and the claims.
+    """
     scenarios = {n: load_scenario(control_example_path(n)) for n in control_examples()}
     steps = [n for n in scenarios if n.startswith("slip-load-step")]
     traction_error = {}

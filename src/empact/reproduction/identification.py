@@ -52,14 +52,20 @@ class Fig2:
 
     Attributes
     ----------
-    results : one `PlantIdentification` per ratio
-    f_hz : frequencies of the figure [Hz]
-    rows : identification table rows (ratio, order, worst fit [%], FRF error [%], RHP zeros)
-    damping_rows : Sec. 3 damping table rows
-    gain_rows : the creep law's magnitude against the damping of the machine's actuation
+    results : list of PlantIdentification
+        One per ratio.
+    f_hz : array, shape (300,)
+        Frequencies of the figure [Hz].
+    rows : list of list
+        Identification table rows (ratio, order, worst fit [%], FRF error [%], RHP zeros).
+    damping_rows : list of list
+        Sec. 3 damping table rows.
+    gain_rows : list of list of float
+        The creep law's magnitude against the damping of the machine's actuation
         modes at r_g = 1 (``shift.gain``, then frequency [Hz] and damping ratio of the two
-        lowest modes, equivalent shift damping [N s/m], corner of the -1 slope [Hz])
-    claims : the checks
+        lowest modes, equivalent shift damping [N s/m], corner of the -1 slope [Hz]).
+    claims : tuple of Claim
+        The checks.
     """
 
     results: list[PlantIdentification]
@@ -96,7 +102,18 @@ def creep_gain_sweep(params: Params, gains=GAINS) -> list[list[float]]:
 
 
 def fig2(params: Params) -> Fig2:
-    """Fig. 2 by realisation at r_g = 0.5, 1, 2 (``params.operating`` slip, force, speed)."""
+    """Fig. 2 by realisation at r_g = 0.5, 1, 2 (``params.operating`` slip, force, speed).
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    Fig2
+        The identified and exact plants, the tables and the claims.
+    """
     op = params.operating
     results = [identify_plant(params, op.replace(r_g=r)) for r in RATIOS]
     f = np.logspace(-1, np.log10(200), 300)
@@ -238,7 +255,20 @@ def _phase_midpoint(f: np.ndarray, H: np.ndarray) -> tuple[float, float]:
 
 @dataclass(frozen=True)
 class RigRun:
-    """One rig experiment: records, estimate and the linearised model's response."""
+    """One rig experiment: records, estimate and the linearised model's response.
+
+    Attributes
+    ----------
+    record : RigRecord
+        The rig's records (`empact.experiments.rig.run_rig`).
+    estimate : FRFEstimate
+        The H1 estimate from them (`empact.experiments.rig.rig_frf`).
+    model : FrequencyResponse
+        The linearised model without friction, (T_mp, T_ms) -> (theta_mp, theta_ms, nu), at
+        the estimate's non-zero frequencies.
+    pairs : list of (output, input)
+        The signal pairs the figure shows.
+    """
 
     record: RigRecord
     estimate: FRFEstimate
@@ -249,7 +279,20 @@ class RigRun:
 @dataclass(frozen=True)
 class Fig14:
     """Rig runs exciting T_mp and T_ms, the measured features (``slopes``: pair -> (slope
-    1-2 Hz, median coherence, peak 5-30 Hz [Hz])) and the claims."""
+    1-2 Hz, median coherence, peak 5-30 Hz [Hz])) and the claims.
+
+    Attributes
+    ----------
+    runs : list of RigRun
+        The rig runs exciting T_mp and T_ms.
+    slopes : dict of str to (float, float, float)
+        Per pair ``"input -> output"``: the magnitude's slope between 1 and 2 Hz [-]
+        (decades per decade), the median coherence in the excited band [-] and the frequency of
+        the largest peak between 5 and 30 Hz [Hz].
+    claims : tuple of Claim
+        The checks of the paper's statements (``fig14.resonance_13hz``, ``fig14.phase_rise``,
+        ``fig14.slope.*``).
+    """
 
     runs: list[RigRun]
     slopes: dict[str, tuple[float, float, float]]
@@ -257,7 +300,18 @@ class Fig14:
 
 
 def fig14(params: Params) -> Fig14:
-    """Fig. 14 on the virtual rig at r_g = 0.5, nu0 = 0."""
+    """Fig. 14 on the virtual rig at r_g = 0.5, nu0 = 0.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    Fig14
+        The rig runs, the features measured on them and the claims.
+    """
     runs, slopes = [], {}
     for excite, pairs in (("T_mp", [("theta_mp", "T_mp")]),
                           ("T_ms", [("theta_ms", "T_ms"), ("nu", "T_ms")])):

@@ -33,7 +33,16 @@ READING = {MACHINE: "the machine: equal-translation rows, stiffnesses [actuation
 @dataclass(frozen=True)
 class Table1:
     """Actuation eigenfrequencies [Hz] by kinematics and ratio
-    (``frequencies_hz[kinematics][r]``, shape (6,))."""
+    (``frequencies_hz[kinematics][r]``, shape (6,)).
+
+    Attributes
+    ----------
+    frequencies_hz : dict of str to dict of float to array
+        Undamped eigenfrequencies [Hz], shape (6,) each, ascending (the rigid-body mode at 0),
+        by row set (`MACHINE`, `SEC21`) and ratio (`RATIOS`).
+    claims : tuple of Claim
+        The checks of the paper's statements (``table1.r1``, ``table1.machine``).
+    """
 
     frequencies_hz: dict[str, dict[float, np.ndarray]]
     claims: tuple[Claim, ...]
@@ -41,7 +50,18 @@ class Table1:
 
 def table1(params: Params) -> Table1:
     """Table 1: undamped actuation eigenfrequencies at r_g = 0.5, 1, 2, for the machine and
-    for the Sec. 2.1 rows."""
+    for the Sec. 2.1 rows.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    Table1
+        The eigenfrequencies of both row sets and the claims.
+    """
     freqs = {kin: {r: actuation_model(params, r, kinematics=kin).modes().frequencies_hz
                    for r in RATIOS} for kin in (MACHINE, SEC21)}
     ref = np.array(paper.ACTUATION_R1_HZ)
@@ -72,9 +92,12 @@ class Table2:
 
     Attributes
     ----------
-    frequencies_hz : ``{r_g: array (4,)}``
-    uncoupled_hz : ``{"primary": f, "secondary": f}``
-    claims : the checks
+    frequencies_hz : dict of float to array
+        ``{r_g: array (4,)}``: the eigenfrequencies [Hz] at each ratio of `RATIOS`.
+    uncoupled_hz : dict of str to float
+        ``{"primary": f, "secondary": f}``: the uncoupled sides' natural frequencies [Hz].
+    claims : tuple of Claim
+        The checks.
     """
 
     frequencies_hz: dict[float, np.ndarray]
@@ -83,7 +106,18 @@ class Table2:
 
 
 def table2(params: Params) -> Table2:
-    """Table 2: undamped driveline eigenfrequencies, and the uncoupled sides of Sec. 2.2."""
+    """Table 2: undamped driveline eigenfrequencies, and the uncoupled sides of Sec. 2.2.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    Table2
+        The driveline eigenfrequencies, the uncoupled sides and the claims.
+    """
     freqs = {r: driveline_model(params, r).modes().frequencies_hz for r in RATIOS}
     worst = max(abs(freqs[r][j] / ref - 1) for r in RATIOS
                 for j, ref in enumerate(paper.TABLE2_HZ[r]) if ref)
@@ -116,7 +150,21 @@ def table2(params: Params) -> Table2:
 class ModeFigure:
     """Undamped modes at one ratio (Figs. 4-5 for the actuation, Fig. 8 for the driveline);
     for the actuation also the machine's (`machine`) and the mode characters of both
-    (`characters`: rows of mode, frequency and description per kinematics)."""
+    (`characters`: rows of mode, frequency and description per kinematics).
+
+    Attributes
+    ----------
+    modes : Modes
+        The undamped modes at r_g = 1: the actuation with the Sec. 2.1 rows (Figs. 4-5) or the
+        driveline (Fig. 8).
+    claims : tuple of Claim
+        The checks of the paper's statements (one per mode character checked).
+    machine : Modes or None
+        The machine's actuation modes at r_g = 1 (None for Fig. 8).
+    characters : list of list
+        Rows ``[row set, mode number, frequency [Hz], character]`` (`mode_characters`) of both
+        row sets; empty for Fig. 8.
+    """
 
     modes: Modes
     claims: tuple[Claim, ...]
@@ -136,7 +184,20 @@ def _checks(key: str, source: str, checks: dict[str, tuple[bool, str]],
 
 def mode_characters(modes: Modes) -> list[str]:
     """A one-line character of each actuation mode: the springs holding most of its
-    potential energy and, for the rigid-body mode, which coordinates move."""
+    potential energy and, for the rigid-body mode, which coordinates move.
+
+    Parameters
+    ----------
+    modes : Modes
+        Actuation modes (`empact.linear.lumped.Modes` of `empact.actuation_model`: five springs,
+        worm, chain, belt and the two bearings).
+
+    Returns
+    -------
+    list of str
+        One line per mode, in the order of ``modes.omega``: the springs with at least 10 % of the
+        mode's potential energy, largest first, or the rigid-body mode's coordinates that stay.
+    """
     e = modes.energy_fraction
     names = ("worm", "chain", "belt", "primary bearing", "secondary bearing")
     out = []
@@ -155,7 +216,18 @@ def mode_characters(modes: Modes) -> list[str]:
 
 def fig4_5(params: Params) -> ModeFigure:
     """Figs. 4 and 5: actuation mode shapes and modal energy at r_g = 1, for the paper's
-    Sec. 2.1 rows (whose characters the paper describes) and for the machine."""
+    Sec. 2.1 rows (whose characters the paper describes) and for the machine.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    ModeFigure
+        The Sec. 2.1 rows' modes, the machine's, the mode characters of both and the claims.
+    """
     modes = actuation_model(params, 1.0, kinematics=SEC21).modes()
     e = np.abs(modes.energy_fraction)
     V = modes.normalised_shapes
@@ -207,13 +279,18 @@ class Fig6:
 
     Attributes
     ----------
-    responses : one `FrequencyResponse` per level ("none", "moderate", "large"), the paper's
-        Sec. 2.1 rows (the reading Fig. 6 belongs to)
-    machine : the machine's responses: undamped, moderate (Shafai) and moderate with the creep
-        law linearised at ``params.operating`` as the pulley damping
-    slopes : ``{pair: (low, high)}`` log-log slopes of the large-damping responses
-    f1_hz : first elastic mode [Hz] (the slopes are taken at f1 / 20 and 30 f1)
-    claims : the checks
+    responses : tuple of FrequencyResponse
+        One per level ("none", "moderate", "large"), the paper's Sec. 2.1 rows (the reading
+        Fig. 6 belongs to).
+    machine : tuple of FrequencyResponse
+        The machine's responses: undamped, moderate (Shafai) and moderate with the creep
+        law linearised at ``params.operating`` as the pulley damping.
+    slopes : dict of str to (float, float)
+        ``{pair: (low, high)}`` log-log slopes [-] of the large-damping responses.
+    f1_hz : float
+        First elastic mode [Hz] (the slopes are taken at f1 / 20 and 30 f1).
+    claims : tuple of Claim
+        The checks.
     """
 
     responses: tuple[FrequencyResponse, ...]
@@ -225,7 +302,19 @@ class Fig6:
 
 def fig6(params: Params) -> Fig6:
     """Fig. 6: T_mp -> theta_mp and T_ms -> theta_ms with none / moderate / large damping
-    (Sec. 2.1 rows), and the machine with Shafai's and the creep law's pulley damping."""
+    (Sec. 2.1 rows), and the machine with Shafai's and the creep law's pulley damping.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    Fig6
+        The responses [rad/(N m)] of the Sec. 2.1 rows and of the machine, the slopes and the
+        claims.
+    """
     f = np.logspace(-1, 3.5, 800)
     w, pairs = 2 * np.pi * f, (["T_mp", "T_ms"], ["theta_mp", "theta_ms"])
     resps = tuple(actuation_model(params, 1.0, lvl, kinematics=SEC21).frequency_response(
@@ -287,7 +376,18 @@ def fig6(params: Params) -> Fig6:
 
 
 def fig8(params: Params) -> ModeFigure:
-    """Fig. 8: driveline mode shapes and modal energy at r_g = 1."""
+    """Fig. 8: driveline mode shapes and modal energy at r_g = 1.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    ModeFigure
+        The driveline modes at r_g = 1 and the claims (``machine`` None, no ``characters``).
+    """
     modes = driveline_model(params, 1.0).modes()
     e = np.abs(modes.energy_fraction)
     names = modes.springs

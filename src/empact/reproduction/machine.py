@@ -54,18 +54,24 @@ class MachineSection:
 
     Attributes
     ----------
-    curves : traction curves over 0-10 % slip at `CURVE_RATIOS`
-    curve_rows : per ratio: r_g, mu_max, slip at 90 % of the peak [%], peak slip [%], mu' at
-        `SLOPE_SLIPS`
-    creep_rows : per `CREEP_POINTS`: r_g, F_s [kN], K_c [-], creep per primary revolution at a
+    curves : TractionCurves
+        Traction curves over 0-10 % slip at `CURVE_RATIOS`.
+    curve_rows : list of list of float
+        Per ratio: r_g, mu_max, slip at 90 % of the peak [%], peak slip [%], mu' at
+        `SLOPE_SLIPS`.
+    creep_rows : list of list of float
+        Per `CREEP_POINTS`: r_g, F_s [kN], K_c [-], creep per primary revolution at a
         20 % imbalance [mm of R_p], equivalent axial damping [N s/m], creep-to-slip transition
-        rate omega_eff K_c xi_sat [1/s]
-    reserve_rows : per shipped set-point (closed-loop scenarios' starts, the [operating] point
+        rate omega_eff K_c xi_sat [1/s].
+    reserve_rows : list of list
+        Per shipped set-point (closed-loop scenarios' starts, the [operating] point
         at r_g = 0.5, 1, 2): name, r_g, slip [%], tau, torque reserve 1 - tau [%], load [N m],
-        capacity at that clamping force [N m]
-    stability : the map of d ln kappa*/d r_g at fixed load torque over torque ratio and
-        ratio, the shipped set-points marked (`RatioStabilityMap`)
-    claims : the checks
+        capacity at that clamping force [N m].
+    stability : RatioStabilityMap
+        The map of d ln kappa*/d r_g at fixed load torque over torque ratio and
+        ratio, the shipped set-points marked.
+    claims : tuple of Claim
+        The checks.
     """
 
     curves: TractionCurves
@@ -78,7 +84,24 @@ class MachineSection:
 
 def curve_statistics(traction, r_g: float, nu: np.ndarray) -> list[float]:
     """``[r_g, mu_max, nu90 [%], nu_peak [%], mu'(SLOPE_SLIPS)...]`` of a curve on the slip
-    grid `nu` (its resolution is the statistics')."""
+    grid `nu` (its resolution is the statistics').
+
+    Parameters
+    ----------
+    traction : TractionModel
+        The traction law (e.g. `empact.variator.traction.traction_from_params`).
+    r_g : float
+        Ratio [-].
+    nu : array, shape (n,)
+        Ascending slip grid [-].
+
+    Returns
+    -------
+    list of float
+        ``[r_g, mu_max, nu90 [%], nu_peak [%]]`` and the slope ``mu'`` [-] at each of `SLOPE_SLIPS`:
+        ratio [-], peak traction coefficient [-], slip at 90 % of the peak and slip at the peak [%]
+        (the first grid slip reaching them).
+    """
     mu = traction.mu(nu, r_g)
     k = int(np.argmax(mu))
     nu90 = float(nu[np.argmax(mu >= 0.9 * mu[k])])
@@ -97,7 +120,18 @@ def _set_points(params: Params) -> list[tuple[str, OperatingPoint]]:
 
 
 def machine(params: Params) -> MachineSection:
-    """The machine sheet of `params`."""
+    """The machine sheet of `params`.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    MachineSection
+        The curves, the tables, the ratio-stability map and the claims.
+    """
     tr = traction_from_params(params)
     nu = np.linspace(0.0, 0.1, 10001)
     curves = traction_curves(tr, CURVE_RATIOS, nu, label="(magic formula)")

@@ -26,7 +26,19 @@ RATIOS = (0.5, 1.0, 2.0)
 
 
 def hz_text(zeros) -> str:
-    """Zeros [rad/s] as '+re +imj' in Hz, or 'none'."""
+    """Zeros [rad/s] as '+re +imj' in Hz, or 'none'.
+
+    Parameters
+    ----------
+    zeros : array of complex, shape (n,)
+        Zeros [rad/s].
+
+    Returns
+    -------
+    str
+        ``'+re +imj'`` per zero in Hz (3 significant digits), separated by ``'; '``; ``'none'`` for
+        no zeros.
+    """
     return "; ".join(f"{v.real / 2 / np.pi:+.3g} {v.imag / 2 / np.pi:+.3g}j" for v in zeros) \
         or "none"
 
@@ -52,7 +64,20 @@ def _verdict_text(res: NmpResult, idx: list[int]) -> str:
 class NmpSection:
     """Sec. 2.3: zeros over the ratio (the machine, eq. 2's slip: `result`) and the table of
     the kinematics / slip-signal combinations (``combos``: (kinematics, slip, NmpResult,
-    indices of the ratios 0.5, 1, 2))."""
+    indices of the ratios 0.5, 1, 2)).
+
+    Attributes
+    ----------
+    result : NmpResult
+        The zeros of T_mp -> nu (eq. 2's slip) on the machine at 13 ratios from 0.45 to 2.25 and
+        `RATIOS`, with the Sec. 2.3 geometry.
+    combos : list of tuple
+        ``(kinematics, slip, NmpResult, indices)`` per row set (`MACHINE`, `SEC21`) and slip
+        signal (``"nu"``, ``"nu_r"``): the analysis and the indices of r_g = 0.5, 1, 2 in it.
+    claims : tuple of Claim
+        The checks of the paper's statements (``nmp.geometry``, ``nmp.nu``, ``nmp.nu_r``,
+        ``nmp.sec21``).
+    """
 
     result: NmpResult
     combos: list[tuple[str, str, NmpResult, list[int]]]
@@ -61,7 +86,18 @@ class NmpSection:
 
 def nmp(params: Params) -> NmpSection:
     """Sec. 2.3: Delta_x, belt-length change and the zeros of T_mp -> slip over the ratio,
-    for both slip signals and both row sets; the claims judged on the machine."""
+    for both slip signals and both row sets; the claims judged on the machine.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    NmpSection
+        The analyses and the claims (judged on the machine at ``params.operating``).
+    """
     op = params.operating
     ratios = np.geomspace(0.45, 2.25, 13)
     res = nmp_analysis(params, np.unique(np.r_[ratios, RATIOS]))
@@ -129,7 +165,17 @@ def nmp(params: Params) -> NmpSection:
 
 @dataclass(frozen=True)
 class SimulationSection:
-    """The shipped shift-and-load-step scenario and its result."""
+    """The shipped shift-and-load-step scenario and its result.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The shipped ``shift-and-load-step`` scenario.
+    result : SimulationResult
+        Its simulation.
+    claims : tuple of Claim
+        The one check, ``simulation.complete``.
+    """
 
     scenario: Scenario
     result: SimulationResult
@@ -137,7 +183,18 @@ class SimulationSection:
 
 
 def simulation(params: Params) -> SimulationSection:
-    """Simulate the shipped LOW -> OD shift with a load step."""
+    """Simulate the shipped LOW -> OD shift with a load step.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    SimulationSection
+        The scenario, its result and the claim that it ran to the end.
+    """
     sc = load_scenario(example_path("shift-and-load-step"))
     res = run_scenario(sc, params)
     r = res.output("r_g")
@@ -155,7 +212,21 @@ def simulation(params: Params) -> SimulationSection:
 class PlantSection:
     """Exact plants at r_g = 0.5, 1, 2: responses, the operating-point table (``rows``) and
     the static load -> ratio sensitivity on the test bench (``dc_rows``: ratio, load [N m],
-    DC gain T_l -> r_g [1/(N m)], the same from two trims, largest pole real part [1/s])."""
+    DC gain T_l -> r_g [1/(N m)], the same from two trims, largest pole real part [1/s]).
+
+    Attributes
+    ----------
+    responses : list of FrequencyResponse
+        The exact plants' (T_mp, T_ms, T_l) -> (r_g, nu, nu_r) responses at r_g = 0.5, 1, 2,
+        0.1-1000 Hz.
+    rows : list of list of float
+        Per ratio: r_g [-], T_l, T_mp, T_ms [N m] of the trim, largest pole real part [1/s].
+    dc_rows : list of list of float
+        Per ratio: r_g [-], load [N m], DC gain T_l -> r_g [1/(N m)], the same from two trims
+        [1/(N m)], largest pole real part [1/s], on the test bench (speed-controlled drive).
+    claims : tuple of Claim
+        The check ``load.moves_ratio``.
+    """
 
     responses: list[FrequencyResponse]
     rows: list[list[float]]
@@ -206,7 +277,18 @@ def held_servo_ratio(op, dT: float, dr: float) -> float:
 
 def exact_plant(params: Params) -> PlantSection:
     """The exact plant at r_g = 0.5, 1, 2 (``params.operating``) and the load -> ratio
-    sensitivity."""
+    sensitivity.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    PlantSection
+        The responses, the tables and the claim.
+    """
     f = np.logspace(-1, 3, 300)
     resps, rows, dc_rows = [], [], []
     for r in RATIOS:

@@ -37,7 +37,19 @@ FIG12B_SLIP = 0.03
 
 
 def fig11_point(nu: float = 0.03) -> OperatingPoint:
-    """The Fig. 11 operating point (r_g = 1, F_s0 = 10 kN, omega_p0 = 300 rad/s) at slip `nu`."""
+    """The Fig. 11 operating point (r_g = 1, F_s0 = 10 kN, omega_p0 = 300 rad/s) at slip `nu`.
+
+    Parameters
+    ----------
+    nu : float
+        Slip [-].
+
+    Returns
+    -------
+    OperatingPoint
+        Ratio [-], slip [-], clamping force [N] and primary speed [rad/s] of the point
+        (`empact.paper.FIG11_POINT`).
+    """
     f = paper.FIG11_POINT
     return OperatingPoint(r_g=f["r_g"], nu=nu, F_s=f["F_s"], omega_p=f["omega_p"])
 
@@ -62,14 +74,33 @@ def _claims(key: str, source: str, checks: list[tuple[str, str, bool, str]],
 
 @dataclass(frozen=True)
 class Fig9:
-    """Root locus over c_b at r_g = 1 (`locus`) and its claims."""
+    """Root locus over c_b at r_g = 1 (`locus`) and its claims.
+
+    Attributes
+    ----------
+    locus : BeltRootLocus
+        The root locus over the belt damping c_b at r_g = 1 (`empact.slip.belt_root_locus`).
+    claims : tuple of Claim
+        The checks of the paper's statements (``fig9.1`` ... and ``fig9.labels``).
+    """
 
     locus: BeltRootLocus
     claims: tuple[Claim, ...]
 
 
 def fig9(params: Params) -> Fig9:
-    """Fig. 9: root locus of the driveline poles over the belt damping c_b."""
+    """Fig. 9: root locus of the driveline poles over the belt damping c_b.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    Fig9
+        The root locus and the claims.
+    """
     rl = belt_root_locus(params, 1.0)
     P = rl.locus.poles
     unc = np.sort([paper.UNCOUPLED_HZ["secondary"], paper.UNCOUPLED_HZ["primary"]])
@@ -123,14 +154,34 @@ def fig9(params: Params) -> Fig9:
 
 @dataclass(frozen=True)
 class Fig10:
-    """Traction curves at LOW, MED, OD and their claims."""
+    """Traction curves at LOW, MED, OD and their claims.
+
+    Attributes
+    ----------
+    curves : TractionCurves
+        The traction coefficient [-] and its slope [-] at LOW, MED and OD
+        (`empact.paper.FIG10_RATIOS`) over slip 0-10 % [-].
+    claims : tuple of Claim
+        The checks of the paper's statements (``fig10.1`` ...).
+    """
 
     curves: TractionCurves
     claims: tuple[Claim, ...]
 
 
 def fig10(params: Params) -> Fig10:
-    """Fig. 10: traction coefficient over slip at LOW, MED and OD."""
+    """Fig. 10: traction coefficient over slip at LOW, MED and OD.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    Fig10
+        The traction curves of the parameter set's magic formula and the claims.
+    """
     tr = traction_from_params(params)
     nu = np.linspace(0.0, 0.1, 2001)
     curves = traction_curves(tr, paper.FIG10_RATIOS, nu, label="(magic formula)")
@@ -159,7 +210,22 @@ def fig10(params: Params) -> Fig10:
 @dataclass(frozen=True)
 class Fig11:
     """Poles over slip at the Fig. 11 point, the root-locus end points, and the table of the
-    oscillatory poles at the Fig. 12(a) slips (``rows``)."""
+    oscillatory poles at the Fig. 12(a) slips (``rows``).
+
+    Attributes
+    ----------
+    sweep : PoleSweep
+        The poles [rad/s] over slip (`empact.paper.FIG11_SLIPS`, steps of 0.1 %) at
+        `fig11_point`.
+    locus : BeltRootLocus
+        The root locus at r_g = 1, whose end points' frequencies [Hz] the figure marks.
+    rows : list of list of float
+        Per oscillatory pole at the Fig. 12(a) slips: slip [%], traction slope [-], belt damping
+        c_b [N m s/rad], real part [1/s], imaginary part [rad/s], frequency [Hz], damping ratio
+        [-].
+    claims : tuple of Claim
+        The checks of the paper's statements (``fig11.1`` ...).
+    """
 
     sweep: PoleSweep
     locus: BeltRootLocus
@@ -168,7 +234,18 @@ class Fig11:
 
 
 def fig11(params: Params) -> Fig11:
-    """Fig. 11: poles of the slip model over nu at r_g = 1, 10 kN, 300 rad/s."""
+    """Fig. 11: poles of the slip model over nu at r_g = 1, 10 kN, 300 rad/s.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    Fig11
+        The pole sweep, the root locus, the table of oscillatory poles and the claims.
+    """
     base = fig11_point()
     lo, hi = paper.FIG11_SLIPS  # a reading: near the traction peak (the paper gives none)
     nus = np.round(np.linspace(lo, hi, int(round((hi - lo) / 0.001)) + 1), 6)
@@ -223,7 +300,18 @@ def _phase_step(model, f_hz: float, width: float = 0.06) -> float:
 
 @dataclass(frozen=True)
 class Fig12:
-    """``F_s -> nu`` responses at several operating points (Fig. 12 a or b)."""
+    """``F_s -> nu`` responses at several operating points (Fig. 12 a or b).
+
+    Attributes
+    ----------
+    responses : list of FrequencyResponse
+        The ``F_s -> nu`` responses [1/N] at `OMEGA`, one per operating point, labelled by the
+        slip or the ratio that varies.
+    base : OperatingPoint
+        The point the others vary from (`fig11_point`).
+    claims : tuple of Claim
+        The checks of the paper's statements (``fig12a.1`` ... or ``fig12b.1`` ...).
+    """
 
     responses: list[FrequencyResponse]
     base: OperatingPoint
@@ -231,7 +319,18 @@ class Fig12:
 
 
 def fig12a(params: Params) -> Fig12:
-    """Fig. 12(a): F_s -> nu over slip at r_g = 1."""
+    """Fig. 12(a): F_s -> nu over slip at r_g = 1.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    Fig12
+        The responses at the slips `empact.paper.FIG12_SLIPS` (r_g = 1) and the claims.
+    """
     base = fig11_point()
     ops = [base.replace(nu=nu) for nu in paper.FIG12_SLIPS]
     labels = [f"nu = {100 * nu:g} %" for nu in paper.FIG12_SLIPS]
@@ -269,7 +368,18 @@ def fig12a(params: Params) -> Fig12:
 
 
 def fig12b(params: Params) -> Fig12:
-    """Fig. 12(b): F_s -> nu over the ratio at FIG12B_SLIP."""
+    """Fig. 12(b): F_s -> nu over the ratio at FIG12B_SLIP.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    Fig12
+        The responses at r_g = 0.5, 1, 2 (slip `FIG12B_SLIP`) and the claims.
+    """
     base = fig11_point(nu=FIG12B_SLIP)
     ratios = (0.5, 1.0, 2.0)
     ops = [base.replace(r_g=r) for r in ratios]
@@ -295,7 +405,18 @@ def fig12b(params: Params) -> Fig12:
 
 @dataclass(frozen=True)
 class Fig13:
-    """Zero locus over the ratio and the table of zeros at the Table 2 ratios (``rows``)."""
+    """Zero locus over the ratio and the table of zeros at the Table 2 ratios (``rows``).
+
+    Attributes
+    ----------
+    locus : ZeroLocus
+        The zeros [rad/s] over 60 ratios from 0.43 to 2.25 at `fig11_point` with slip
+        `FIG12B_SLIP`.
+    rows : list of list of float
+        Per ratio of Table 2: the ratio [-], the two zeros [Hz], Table 2's modes 2 and 3 [Hz].
+    claims : tuple of Claim
+        The checks of the paper's statements (``fig13.1`` ...).
+    """
 
     locus: ZeroLocus
     rows: list[list[float]]
@@ -303,7 +424,18 @@ class Fig13:
 
 
 def fig13(params: Params) -> Fig13:
-    """Fig. 13: zeros of F_s -> nu over the ratio."""
+    """Fig. 13: zeros of F_s -> nu over the ratio.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    Fig13
+        The zero locus, the table of zeros and the claims.
+    """
     base = fig11_point(nu=FIG12B_SLIP)
     ratios = np.linspace(0.43, 2.25, 60)
     zl = zero_locus(params, ratios, base)
@@ -337,14 +469,34 @@ def fig13(params: Params) -> Fig13:
 
 @dataclass(frozen=True)
 class StabilityFigure:
-    """Stability map over slip and ratio at the Fig. 11 clamping force and speed."""
+    """Stability map over slip and ratio at the Fig. 11 clamping force and speed.
+
+    Attributes
+    ----------
+    map : StabilityMap
+        The map over slip 0.05-6 % (240 points) and ratio 0.43-2.25 (200 points) at the Fig. 11
+        clamping force and speed (`empact.slip.stability_map`).
+    claims : tuple of Claim
+        The checks of the paper's statements (``stability.1``, ``stability.2``).
+    """
 
     map: StabilityMap
     claims: tuple[Claim, ...]
 
 
 def stability(params: Params) -> StabilityFigure:
-    """Stability map over slip and ratio (not in the paper; checks its Sec. 2.2 statement)."""
+    """Stability map over slip and ratio (not in the paper; checks its Sec. 2.2 statement).
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set (e.g. `empact.load_params`).
+
+    Returns
+    -------
+    StabilityFigure
+        The map and the claims.
+    """
     base = fig11_point()
     nu = np.linspace(0.0005, 0.06, 240)
     r = np.linspace(0.43, 2.25, 200)
