@@ -85,10 +85,17 @@ def _names(modname: str) -> list[str]:
     for name in getattr(mod, "__all__", []):
         obj = getattr(mod, name)
         if inspect.isfunction(obj) or inspect.isclass(obj):
-            # list a name where it is defined (a re-export is listed by its own module)
-            if getattr(obj, "__module__", modname) == modname:
+            # list a name where it is defined (a re-export is listed by its own module), or
+            # under the package that re-exports it when its module has no place on any page
+            # (empact.plotting's figures live in private-looking submodules of one concept)
+            home = getattr(obj, "__module__", modname)
+            if home == modname or (home.startswith(modname + ".") and home not in _LISTED):
                 out.append(name)
     return out
+
+
+#: every module that has its own heading on some page
+_LISTED = {m for _, mods in PAGES.values() for m in mods}
 
 
 def write_api_pages(folder: Path) -> list[str]:

@@ -257,7 +257,7 @@ def plot_closed_loop(runs: Sequence[ClosedLoopResult], title: str = "",
 def plot_shift_envelope(envelope: ShiftEnvelope, runs: Sequence[ClosedLoopResult] = (),
                         title: str = "", ax: Any = None) -> Plot:
     """The shift-rate envelope over the ratio (`empact.control.shifting`), coloured by the
-    limit that binds, with the ratio rate the runs reached (|dr_g/dt| against r_g).
+    limit that binds, with the ratio rate the runs reached (the magnitude of dr_g/dt against r_g).
 
     Parameters
     ----------

@@ -81,8 +81,8 @@ def plot_frf_estimate(est: FRFEstimate, pairs: Sequence[tuple[str, str]] | None 
 
 @styled
 def plot_identified_plant(results, f_hz: np.ndarray, title: str = "", ax: Any = None) -> Plot:
-    """Fig. 2: |(T_mp, T_ms) -> (r_g, nu, nu_r)| of identified (solid) and exact (dashed)
-    models, one row per output.
+    """Fig. 2: the magnitude of (T_mp, T_ms) -> (r_g, nu, nu_r) of identified (solid) and exact
+    (dashed) models, one row per output.
 
     Parameters
     ----------
