@@ -23,8 +23,7 @@ from ..errors import ParameterError
 from ..nonlinear.equilibrium import TrimResult, traction_peak
 from ..nonlinear.model import EmpactModel
 from ..nonlinear.scenario import Scenario, example_path, list_examples, load_scenario
-from ..nonlinear.simulation import (SimulationResult, run_scenario, scenario_model,
-                                    scenario_signals)
+from ..nonlinear.simulation import SimulationResult, run_scenario, scenario_model, scenario_signals
 from ..params import OperatingPoint, Params
 from .controller import Controller, load_controller
 from .law import LoopConfig, LoopLaw

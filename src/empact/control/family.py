@@ -50,10 +50,15 @@ from ..errors import ParameterError
 from ..export import jsonable, read_npz, write_arrays
 from ..lti import statespace
 from ..nonlinear.equilibrium import trim_grid
-from ..nonlinear.linearization import (BENCH_OPTIONS, PLANT_INPUTS, PLANT_OUTPUTS, Plant,
-                                       disturbance_input, linearize_many)
-from ..nonlinear.model import (INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel,
-                               nonlinear_model)
+from ..nonlinear.linearization import (
+    BENCH_OPTIONS,
+    PLANT_INPUTS,
+    PLANT_OUTPUTS,
+    Plant,
+    disturbance_input,
+    linearize_many,
+)
+from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
 from ..params import OperatingPoint, Params
 from ..sweep import SweepOptions, plan_chunks, run_chunks
 

@@ -65,7 +65,7 @@ from ..errors import ParameterError
 from ..hardware import SPEED_BAND, SensorParams, ServoLimits
 from ..nonlinear.equilibrium import slip_at_torque_ratio, traction_peak, trim_grid
 from ..nonlinear.model import EmpactModel
-from ..nonlinear.scenario import CLAMPING, MU_DESIGN, REFERENCES, ControllerSpec, Scenario
+from ..nonlinear.scenario import REFERENCES, ControllerSpec, Scenario
 from ..params import Params
 from ..variator.geometry import ratio_range, secondary_radius, variator_state
 from ..variator.shift_law import creep_coefficient

@@ -19,8 +19,7 @@ builds it at every point of a plant family for a controller and a loop configura
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
-from typing import Any, Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray

@@ -25,8 +25,14 @@ from .controller import SCHEDULE_VARIABLES, Controller, Schedule
 from .family import PlantFamily
 from .law import LoopConfig
 from .loop import family_loops
-from .robustness import (OMEGA, disk_gain_phase, frequency_responses, measured_rows,
-                         plant_responses, robustness_map)
+from .robustness import (
+    OMEGA,
+    disk_gain_phase,
+    frequency_responses,
+    measured_rows,
+    plant_responses,
+    robustness_map,
+)
 
 __all__ = ["pi_controller", "design_pi"]
 

@@ -30,8 +30,8 @@ slycot = lazy_module("slycot")
 #: frequencies of the margin computations [rad/s]: 0.01-1000 Hz, 300 points
 OMEGA = 2 * np.pi * np.logspace(-2, 3, 300)
 
-__all__ = ["OMEGA", "frequency_responses", "plant_responses", "disk_margin", "disk_gain_phase", "closed_loop_matrix",
-           "RobustnessMap", "robustness_map", "mu_upper_bound"]
+__all__ = ["OMEGA", "frequency_responses", "plant_responses", "disk_margin", "disk_gain_phase",
+           "closed_loop_matrix", "RobustnessMap", "robustness_map", "mu_upper_bound"]
 
 
 def frequency_responses(A, B, C, D, omega) -> NDArray[np.complex128]:

@@ -13,9 +13,15 @@ from typing import Any
 
 import numpy as np
 
-from ..control.closed_loop import (ClosedLoopResult, TargetCheck, check_targets,
-                                   control_example_path, control_examples, run_closed_loop,
-                                   safety_factor_twin)
+from ..control.closed_loop import (
+    ClosedLoopResult,
+    TargetCheck,
+    check_targets,
+    control_example_path,
+    control_examples,
+    run_closed_loop,
+    safety_factor_twin,
+)
 from ..control.controller import Controller, load_controller
 from ..control.family import DESIGN_GRID, PlantFamily, design_family
 from ..control.law import SHIPPED_LOOP, LoopConfig
