@@ -1,6 +1,6 @@
 """A second library baseline for the simulator's work (benchmark only, not shipped): SUNDIALS
 CVODE (variable-order BDF, dense direct linear solver) through scikit-sundae, driven by the
-SAME compiled right-hand side and exact complex-step Jacobian as `empact.nonlinear.simulation`
+SAME compiled right-hand side and exact Jacobian (forward mode) as `empact.nonlinear.simulation`
 (the numba wrappers of `_odeint_baseline.py`).
 
 An optional benchmark dependency (``pip install -e '.[bench]'``, i.e. scikit-sundae; `make

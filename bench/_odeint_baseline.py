@@ -1,6 +1,6 @@
 """The strongest library route for the simulator's work (benchmark baseline, not shipped):
 `scipy.integrate.odeint` (LSODA) driven by the SAME compiled right-hand side and exact
-complex-step Jacobian as `empact.nonlinear.simulation`, through small numba wrappers.
+Jacobian (forward mode since issue 23) as `empact.nonlinear.simulation`, through numba wrappers.
 
 Inputs are the same piecewise-linear signals; the run is split at their steps (a fresh LSODA
 start each), the other breakpoints are passed as ``tcrit``; outputs are evaluated at the

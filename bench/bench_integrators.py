@@ -5,7 +5,7 @@ Workloads: every shipped open-loop scenario (``empact/data/scenarios``: clamping
 servo-torque-steps, shift-and-load-step) and a rig record (`bench_rig_odeint.workload`: the
 rig's multisine on T_mp at r_g = 0.5 with Coulomb friction and the creep law, 4.096 s, an
 input kink every millisecond).  Routes, all driven by the SAME compiled right-hand side and
-exact complex-step Jacobian, one core:
+exact Jacobian (forward mode since issue 23; complex step before), one core:
 
 * ``ros2``: the order-2 Rosenbrock method (ode23s) of `empact.nonlinear._rosenbrock`, the
   default ("old");

@@ -3,7 +3,7 @@
 Workload: the shipped ``shift-and-load-step`` scenario (LOW -> OD in 1.3 s under ratio
 control, then a load step; 2 s simulated), one core, on the machine with the creep law (issue
 12: eigenvalues down to about -7e6 1/s from the belt's shift resistance).  Both routes are
-driven by the SAME compiled right-hand side and exact complex-step Jacobian:
+driven by the SAME compiled right-hand side and exact Jacobian (forward mode since issue 23):
 
 * empact: the compiled L-stable Rosenbrock method of `empact.nonlinear._rosenbrock`
   (running breakpoint indices, Jacobian columns that cannot change reused; ``method="ros2"``,

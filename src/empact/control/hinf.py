@@ -80,6 +80,11 @@ def residualize(A, B, C, D, f_keep_hz: float | None = None, *,
         f_keep_hz = f_keep
     A, B, C, D = (np.asarray(M, float) for M in (A, B, C, D))
     w = 2 * np.pi * f_keep_hz
+    # balanced first (a diagonal similarity by powers of 2, exact): the machine's rows span
+    # ten decades, and the unbalanced Schur form puts rounding of eps |A| on the slow modes
+    # (a rigid-body mode at the origin came out at +-1e-4 1/s, on either side of the axis)
+    A, (sc, _) = sla.matrix_balance(A, permute=False, separate=True)
+    B, C = B / sc[:, None], C * sc[None, :]
     T, Z, k = sla.schur(A, output="real", sort=lambda re, im: np.hypot(re, im) < w)
     Bt, Ct = Z.T @ B, C @ Z
     A11, A12, A22 = T[:k, :k], T[:k, k:], T[k:, k:]

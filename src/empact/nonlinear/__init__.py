@@ -8,7 +8,7 @@ model
 equilibrium
     Steady operating points (`trim`).
 linearization
-    Exact (complex-step) linearisation; the (T_mp, T_ms) -> (r_g, nu) plant.
+    Exact (forward-mode) linearisation; the (T_mp, T_ms) -> (r_g, nu) plant.
 nmp
     Non-minimum-phase analysis of Sec. 2.3: belt geometry and the zeros of T_mp -> nu.
 scenario

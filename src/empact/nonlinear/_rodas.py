@@ -34,7 +34,8 @@ on that problem.
 Everything else is the order-2 integrator's (`_rosenbrock.integrate`): the same signature and
 semantics, piecewise-linear inputs found by running indices, no step across a breakpoint, the
 explicit time derivative through the inputs (``df/dt = (df/du) du/dt``, exact on a linear
-input piece), the Jacobian exact (complex step) at every step and in full only on the first
+input piece), the Jacobian exact (forward mode, `_kernel._state_jacobian`) at every step and
+in full only on the first
 call of a run, the stop conditions checked at every accepted step, the same status codes.
 The state at the end of a step is evaluated once (for the stop conditions) and reused as the
 first stage of the next step while the inputs are continuous there (first same as last).

@@ -4,7 +4,8 @@
 A linearly implicit (Rosenbrock) method of order 2 with an embedded order-3 error estimate:
 the modified Rosenbrock formula of Shampine & Reichelt (MATLAB's ``ode23s``), L-stable, one
 LU factorisation per step, with its continuous extension for output between steps.  The
-Jacobian is exact (complex step on the compiled right-hand side, `_nonlinear_kernel`), the
+Jacobian is exact (forward-mode derivatives of the compiled right-hand side,
+`_kernel._state_jacobian`), the
 explicit time dependence through the inputs is included (``df/dt = B du/dt``).
 
 Inputs are piecewise linear in time (a repeated time is a step); the integrator never steps

@@ -1,8 +1,10 @@
 """Exact linearisation of the nonlinear model at a trimmed operating point.
 
-The Jacobians are computed by the complex step on the compiled right-hand side
-(``df/dx_j = Im f(x + i h e_j) / h`` with ``h = 1e-30``): no subtraction, so no truncation or
-cancellation error - exact to rounding, unlike a fixed-step difference.
+The Jacobians are exact: forward-mode (tangent) derivatives of the compiled right-hand side,
+hand derived and propagated along all state and input directions in one pass
+(`empact.nonlinear._kernel._eval_tangent`) - no truncation or cancellation error, unlike a
+fixed-step difference; equal to the complex step (``df/dx_j = Im f(x + i h e_j) / h``,
+``h = 1e-30``, kept as the reference) to rounding.
 
 The linear model's states are deviations from the trimmed state.  The driveline is in the
 rotating frame (twists and speeds), so the shaft angles, which grow without bound at speed,

@@ -410,7 +410,8 @@ class EmpactModel:
 
     def jacobian(self, x: ArrayLike, u: ArrayLike) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         """Exact ``A = df/dx`` (n, n), ``B = df/du`` (n, 4), ``C = dy/dx`` (ny, n),
-        ``D = dy/du`` (ny, 4), by the complex step (no truncation error)."""
+        ``D = dy/du`` (ny, 4), exact: forward-mode derivatives of the compiled kernel (no
+        truncation error; equal to the complex step to rounding)."""
         x, u = self._check(x, u)
         A = np.empty((self.n, self.n))
         B = np.empty((self.n, 4))

@@ -110,7 +110,7 @@ def exact_plant(ctx: Context, res: rep.PlantSection) -> str:
     return (ctx.figure(plot_plant_magnitude(res.responses, title="Exact linearised plant, "
                                             + op.label()),
                        "fig2_exact_plant", "Fig. 2 (exact): magnitudes of T_mp, T_ms, T_l -> "
-                       "r_g, nu, nu_r at r_g = 0.5, 1, 2, from the complex-step linearisation of "
+                       "r_g, nu, nu_r at r_g = 0.5, 1, 2, from the exact linearisation of "
                        "the nonlinear model (the machine, creep law)")
             + ctx.table("fig2_operating_points", ["r_g", "T_l [N m]", "T_mp [N m]",
                                                   "T_ms [N m]", "max Re(pole) [1/s]"], res.rows,
