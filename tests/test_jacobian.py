@@ -215,3 +215,25 @@ def test_integrator_routines_and_batch(params, name):
     assert np.array_equal(fm[0], cs[0])
     for k in range(N):
         _check([a[k] for a in fm[1:]], [b[k] for b in cs[1:]], (name, "batch", k))
+
+
+def test_stale_numba_cache_is_dropped(tmp_path):
+    """numba keys a cache on its function's own file: when any source of the folder is newer
+    than the oldest index, every index and data file goes (the suite calls this first)."""
+    import os
+
+    from empact.nonlinear._compile import drop_stale_cache
+
+    cache = tmp_path / "__pycache__"
+    cache.mkdir()
+    (tmp_path / "_kernel.py").write_text("")
+    files = [cache / "a.nbi", cache / "a.1.nbc", cache / "b.nbi"]
+    for f in files:
+        f.write_text("")
+    os.utime(tmp_path / "_kernel.py", (1000.0, 1000.0))
+    for f in files:
+        os.utime(f, (2000.0, 2000.0))
+    assert drop_stale_cache(tmp_path) == 0 and all(f.exists() for f in files)
+    os.utime(files[2], (500.0, 500.0))  # one index older than the source
+    assert drop_stale_cache(tmp_path) == 3 and not any(f.exists() for f in files)
+    assert drop_stale_cache(tmp_path) == 0  # nothing left to drop

@@ -9,6 +9,7 @@ cache (about 1 s) instead of compiling (about 20 s).
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -18,12 +19,47 @@ from .linearization import linearize_many, plant
 from .model import nonlinear_model
 from .simulation import simulate
 
-__all__ = ["compile_all"]
+__all__ = ["compile_all", "drop_stale_cache"]
+
+
+def drop_stale_cache(folder: Path | None = None) -> int:
+    """Delete numba's cache of `empact.nonlinear` when any of its sources is newer than the
+    oldest cache index; returns the number of files deleted.
+
+    numba keys a function's cache on its own file only: the integrators of ``_rodas.py`` and
+    ``_rosenbrock.py`` inline the right-hand side and Jacobian of ``_kernel.py`` and keep the
+    version they were compiled with after ``_kernel.py`` changes (numba issue 6845).  The
+    test session calls this first, so that an edited kernel is never tested through stale
+    integrators; the price is one compile (about 20 s) after a source changed.
+
+    Parameters
+    ----------
+    folder : Path, optional
+        The package folder whose ``__pycache__`` is checked (default: `empact.nonlinear`'s).
+
+    Returns
+    -------
+    int
+        The number of cache files (``.nbi`` and ``.nbc``) deleted; 0 when none was stale.
+    """
+    folder = Path(__file__).resolve().parent if folder is None else Path(folder)
+    cache = folder / "__pycache__"
+    index = list(cache.glob("*.nbi"))
+    if not index:
+        return 0
+    newest_source = max(p.stat().st_mtime for p in folder.glob("*.py"))
+    if newest_source <= min(p.stat().st_mtime for p in index):
+        return 0
+    stale = index + list(cache.glob("*.nbc"))
+    for path in stale:
+        path.unlink(missing_ok=True)
+    return len(stale)
 
 
 def compile_all() -> float:
     """Compile (or load from the cache) every compiled routine; returns the wall time [s]."""
     t0 = time.perf_counter()
+    drop_stale_cache()
     params = default_params()
     for options in ({}, {"drive": "speed"}, {"drive": "speed", "ratio_control": True},
                     {"belt": "locked"}, {"load": "speed"}):
