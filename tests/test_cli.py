@@ -210,6 +210,30 @@ def test_estimate_matches_known_filter(records, tmp_path):
     assert plot.stat().st_size > 1000
 
 
+def test_estimate_text_leaves_out_frequencies_without_input_power(tmp_path):
+    """A multisine excites only its lines: the text table shows the excited frequencies and
+    says how many it left out (no rows of nan); --json keeps every frequency, null there."""
+    fs, n = 100.0, 4096
+    t = np.arange(n) / fs
+    u = sum(np.sin(2 * np.pi * f * t + k) for k, f in enumerate((1.5625, 3.125, 6.25)))
+    path = tmp_path / "ms.csv"
+    np.savetxt(path, np.column_stack([t, u, 2 * u]), delimiter=",", header="time,u,y",
+               comments="")
+    res = run("frf-estimate", path, "--input", "u", "--output", "y", "--time", "time",
+              "--nperseg", "256")
+    assert res.exit_code == 0, res.output
+    lines = res.stdout.strip().splitlines()
+    assert "nan" not in res.stdout
+    assert lines[-1].startswith("(") and "frequencies where the inputs carry no power are " \
+        "left out" in lines[-1]
+    shown = [float(ln.split()[0]) for ln in lines[1:-1]]
+    assert 0 < len(shown) < 129  # some rows left out, the lines' neighbourhoods kept
+    data = json.loads(run("frf-estimate", path, "--input", "u", "--output", "y", "--time",
+                          "time", "--nperseg", "256", "--json").stdout)
+    coh = data["coherence"][0][0]
+    assert len(coh) == 129 and sum(c is None for c in coh) == 129 - len(shown)
+
+
 def test_identify_draws_its_figure_only_when_asked(tmp_path):
     """`identify --out` writes the step responses and models, no figure; --plot FILE draws
     Fig. 2 (format from the suffix)."""

@@ -86,13 +86,21 @@ def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], f
     elif not plot:
         click.echo(f"{'f [Hz]':>10s} " + " ".join(f"{o + '/' + i + ' [dB]':>24s} {'coh':>5s}"
                                                   for i in est.inputs for o in est.outputs))
+        excited = np.isfinite(est.coherence).any(axis=(0, 1))
         for k, f in enumerate(est.frequencies_hz):
+            if not excited[k]:
+                continue
             cells = []
             for j in range(len(est.inputs)):
                 for i in range(len(est.outputs)):
                     cells.append(f"{20 * np.log10(abs(est.H[i, j, k]) + 1e-300):24.3f} "
                                  f"{est.coherence[i, j, k]:5.3f}")
             click.echo(f"{f:10.4g} " + " ".join(cells))
+        if not excited.all():
+            skipped = est.frequencies_hz[~excited]
+            click.echo(f"({skipped.size} frequencies where the inputs carry no power are left "
+                       f"out, {skipped.min():.4g}-{skipped.max():.4g} Hz; --json gives every "
+                       "frequency, null there)")
 
 
 def _ratios(text: str) -> list[float]:
