@@ -104,9 +104,9 @@ class Schedule:
                                         for n, g in axes.items()])
         object.__setattr__(self, "_qlist", [q.tolist() for q in self._q])
         # plain-float copies for `gains_at`
-        object.__setattr__(self, "_flat", self._log.ravel().tolist())
-        object.__setattr__(self, "_strides", [s // gains.itemsize
-                                              for s in self._log.strides[:-1]])
+        table = np.ascontiguousarray(self._log)
+        object.__setattr__(self, "_flat", table.ravel().tolist())
+        object.__setattr__(self, "_strides", [s // table.itemsize for s in table.strides[:-1]])
         object.__setattr__(self, "_log_axis", [n in _LOG_AXES for n in axes])
         object.__setattr__(self, "_sign_list", sign[0].tolist())
         object.__setattr__(self, "_n_e", gains.shape[-1])

@@ -302,7 +302,6 @@ class LoopLaw:
         cfg, spec, refs = self.config, self.config.spec, self.refs
         p = self.model.params
         self._n_last = self.n_k - 1
-        self._noise_rows = self._noise.tolist()
         self._ref_rows = (refs.r_g.tolist(), refs.slip.tolist(), refs.mu.tolist(),
                           refs.rdot.tolist(), refs.decoupling.tolist())
         self._bias_f = self._bias.tolist()
@@ -490,9 +489,8 @@ class LoopLaw:
         nb, nbuf, d, W = self._nb, self._n_buf, self._delay, self._window
         kk = k if k < self._n_last else self._n_last
         sl = s[:nb + 2].tolist()
-        col = np.asarray(raw, float).tolist()
-        if not ideal:
-            col = [a + b for a, b in zip(col, self._noise_rows[kk])]
+        raw = np.asarray(raw, float)
+        col = raw.tolist() if ideal else (raw + self._noise[kk]).tolist()
         # the buffers, newest first: every row moves on by one, the new samples in front
         out[1:nb] = s[:nb - 1]
         out[0:nb:nbuf] = col
@@ -688,6 +686,11 @@ def _pairwise_sum(a: list[float]) -> float:
     if n < 8:
         res = 0.0
         for x in a:
+            res += x
+        return res
+    if n < 16:  # (the common counting window: one block of eight and the rest)
+        res = ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]))
+        for x in a[8:]:
             res += x
         return res
     if n <= 128:
