@@ -20,9 +20,7 @@ as ``schedule_axes`` names, ``schedule_<axis>`` grids and ``schedule_gains``).
 """
 from __future__ import annotations
 
-import bisect
 import json
-import math
 import os
 import warnings
 from dataclasses import dataclass, field
@@ -41,6 +39,7 @@ from ..lti import statespace
 from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS
 
 signal = lazy_module("scipy.signal")
+_core = lazy_module("empact.control._law_core")  # (numba, on first use)
 sio = lazy_module("scipy.io")
 
 __all__ = ["Controller", "Schedule", "load_controller", "SCHEDULE_VARIABLES"]
@@ -103,17 +102,16 @@ class Schedule:
         object.__setattr__(self, "_q", [np.log(g) if n in _LOG_AXES else g
                                         for n, g in axes.items()])
         object.__setattr__(self, "_qlist", [q.tolist() for q in self._q])
-        # plain-float copies for `gains_at`
+        # the packed table of `gains_at` (`empact.control._law_core.pack_schedule`)
         table = np.ascontiguousarray(self._log)
-        object.__setattr__(self, "_flat", table.ravel().tolist())
-        object.__setattr__(self, "_strides", [s // table.itemsize for s in table.strides[:-1]])
-        object.__setattr__(self, "_log_axis", [n in _LOG_AXES for n in axes])
-        object.__setattr__(self, "_sign_list", sign[0].tolist())
+        object.__setattr__(self, "_packed", _core.pack_schedule(
+            self._qlist, [n in _LOG_AXES for n in axes],
+            [s // table.itemsize for s in table.strides[:-1]],
+            [SCHEDULE_VARIABLES.index(n) for n in axes], table.ravel().tolist(),
+            gains.shape[-1]))
         object.__setattr__(self, "_n_e", gains.shape[-1])
+        object.__setattr__(self, "_sign_list", sign[0].tolist())
         object.__setattr__(self, "_positive", bool(np.all(sign[0] > 0)))
-        object.__setattr__(self, "_last_interpolated", bool(axes) and
-                           len(list(axes.values())[-1]) > 1)
-        object.__setattr__(self, "_memo", {})
 
     def __call__(self, point: Mapping[str, float]) -> NDArray[np.float64]:
         """The gains at an operating point (``{name: value}`` for every axis)."""
@@ -121,66 +119,17 @@ class Schedule:
 
     def gains_at(self, values: list[float]) -> list[float]:
         """The gains at the operating point `values` (one per axis, in the order of `axes`),
-        as floats: the multilinear interpolation of the module notes in plain floats on the
-        grid cell's corners only (what a sampled law calls at every sample), axis after
-        axis in the order of `axes`, each value rounded as elementwise array arithmetic
-        would; ``exp`` is numpy's.  The interpolation over all axes but the last (every
-        grid row of the last axis) is kept for the next call at the same values of those
-        axes."""
-        if self._last_interpolated:
-            kept = self._memo.get("rows")
-            if kept is None or kept[0] != values[:-1]:
-                # (one tuple: safe to share between threads)
-                kept = (list(values[:-1]), self._cell(values[:-1]), {})
-                self._memo["rows"] = kept
-            qs = self._qlist[-1]
-            v = values[-1]
-            if self._log_axis[-1]:
-                v = math.log(max(v, 1e-12))
-            i = min(max(bisect.bisect_left(qs, v) - 1, 0), len(qs) - 2)
-            f = min(max((v - qs[i]) / (qs[i + 1] - qs[i]), 0.0), 1.0)
-            (offset, cell), rows = kept[1], kept[2]
-            s_l = self._strides[-1]
-            for j in (i, i + 1):
-                if j not in rows:
-                    rows[j] = self._reduce(offset + j * s_l, cell)
-            g = 1 - f
-            L = [g * a + f * b for a, b in zip(rows[i], rows[i + 1])]
-        else:
-            L = self._reduce(*self._cell(values))
-        gains = np.exp(np.array(L)).tolist()
+        as floats (what a sampled law calls at every sample): the interpolation compiled
+        (`empact.control._law_core.schedule_log_gains`), each value rounded as the array
+        form's elementwise arithmetic would, then `exp_gains`."""
+        out = np.empty(self._n_e)
+        _core.schedule_log_gains(self._packed, np.array(values, float), False, out)
+        return self.exp_gains(out.tolist())
+
+    def exp_gains(self, log_gains: list[float]) -> list[float]:
+        """The gains of the log-gains ``ln |gain|`` (numpy's ``exp``, with the signs)."""
+        gains = np.exp(np.array(log_gains)).tolist()
         return gains if self._positive else [s * x for s, x in zip(self._sign_list, gains)]
-
-    def _cell(self, values: list[float]) -> tuple[int, list[tuple[float, int]]]:
-        """The table position of the grid cell at `values` (the leading axes) and the
-        ``(f, stride)`` of each axis interpolated (held at the grid's edges)."""
-        offset = 0
-        cell = []
-        for qs, stride, log_axis, v in zip(self._qlist, self._strides, self._log_axis,
-                                           values):
-            if log_axis:
-                v = math.log(max(v, 1e-12))
-            if len(qs) == 1:
-                continue
-            i = min(max(bisect.bisect_left(qs, v) - 1, 0), len(qs) - 2)
-            cell.append((min(max((v - qs[i]) / (qs[i + 1] - qs[i]), 0.0), 1.0), stride))
-            offset += i * stride
-        return offset, cell
-
-    def _reduce(self, offset: int, cell: list[tuple[float, int]]) -> list[float]:
-        """The log-gains in the grid cell `cell` at the table position `offset`: its
-        corners, the first axis the slowest-varying; each pass combines the two halves
-        along the first remaining axis (``(1 - f) L[i] + f L[i + 1]``)."""
-        flat, n_e = self._flat, self._n_e
-        corners = [offset]
-        for _, stride in cell:
-            corners = [c + b for c in corners for b in (0, stride)]
-        cur = [flat[c:c + n_e] for c in corners]
-        for f, _ in cell:
-            h = len(cur) // 2
-            g = 1 - f
-            cur = [[g * a + f * b for a, b in zip(cur[c], cur[c + h])] for c in range(h)]
-        return cur[0]
 
     def to_dict(self) -> dict[str, Any]:
         """Plain data (the file layout)."""

@@ -49,11 +49,15 @@ feedforward's share at the trim, computed with the feedforward's own traction es
 `LoopLaw.update` is a pure function of the law's state (a flat vector: sensor buffers,
 feedforward filter, controller state), the raw measurements and the sample index; `step` is
 the stateful `empact.nonlinear.simulation.SampledController` interface around it, and
-`empact.control.loop` linearises the same function for the loop's linear model.
+`empact.control.loop` linearises the same function for the loop's linear model.  Its
+arithmetic on floats (sensors, errors, the schedule's interpolation, the clamping
+feedforward) is compiled (`empact.control._law_core`); numpy keeps what has its own
+vectorised functions or BLAS (the schedule's ``exp``, the shift feedforward's ``tanh`` and
+``expm1``, the controller's matrix products), so that every operation is the one the law's
+array form had and a run gives the same numbers to the last bit.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 from typing import Any, Mapping
 
@@ -63,14 +67,14 @@ from numpy.typing import NDArray
 from .._lazy import lazy_module
 from ..errors import ParameterError
 from ..hardware import SPEED_BAND, SensorParams, ServoLimits
-from ..nonlinear import _kernel as K
 from ..nonlinear.equilibrium import slip_at_torque_ratio, traction_peak, trim_grid
 from ..nonlinear.model import EmpactModel
 from ..nonlinear.scenario import REFERENCES, ControllerSpec, Scenario
 from ..params import Params
 from ..variator.geometry import ratio_range, secondary_radius, variator_state
 from ..variator.shift_law import g_beta
-from .controller import SCHEDULE_VARIABLES, Controller
+from . import _law_core as core
+from .controller import Controller
 
 linalg = lazy_module("scipy.linalg")
 
@@ -296,38 +300,62 @@ class LoopLaw:
         self.reset()
 
     def _pack(self) -> None:
-        """The law's constants as plain floats and lists, once (the per-sample arithmetic of
-        `preprocess` and `update` is on floats; each operation is the one the array form had,
-        in the same order, so that the results are the same to the last bit)."""
+        """The law's constants packed once for the compiled arithmetic
+        (`empact.control._law_core`: ``P``, the per-sample table ``T``, the schedule ``S``)
+        and as floats for the rest."""
         cfg, spec, refs = self.config, self.config.spec, self.refs
         p = self.model.params
+        s = cfg.sensors
+        sched = self.controller.schedule
         self._n_last = self.n_k - 1
         self._ref_rows = (refs.r_g.tolist(), refs.slip.tolist(), refs.mu.tolist(),
                           refs.rdot.tolist(), refs.decoupling.tolist())
-        self._bias_f = self._bias.tolist()
-        self._mask = self.output_mask
-        self._mask_ones = bool(np.all(self._mask == 1.0))  # (x * 1.0 is x)
-        self._slip_nu = self.slip_signal == "nu"
-        s = cfg.sensors
-        self._quantise = s is not None and cfg.quantise
-        self._ratio_quantum = float(s.ratio_quantum) if s is not None else 0.0
-        self._J_s = float(p.driveline.J_s)
+        self._sched = sched is not None
+        P = np.zeros(core.N_P)
+        P[[core._P_NB, core._P_NBUF, core._P_DELAY, core._P_WINDOW]] = (
+            self._nb, self._n_buf, self._delay, self._window)
+        P[core._P_QUANTISE] = s is not None and cfg.quantise
+        P[core._P_SPEED_Q] = self._speed_quantum
+        P[core._P_RATIO_Q] = float(s.ratio_quantum) if s is not None else 0.0
+        P[core._P_SLIP_NU] = self.slip_signal == "nu"
+        P[core._P_R_REF0] = self._r_ref0
+        P[core._P_LOG_R], P[core._P_LOG_S] = self._logs
+        P[core._P_SCHED] = self._sched
+        P[core._P_FEEDFORWARD] = spec.feedforward
+        P[core._P_F_S0] = self.point["F_s"]
+        P[core._P_BIAS0], P[core._P_BIAS1] = self._bias
+        P[core._P_SAFETY] = spec.clamping == "safety-factor"
+        P[core._P_FF_T_DS] = spec.feedforward_signal == "T_ds"
+        P[core._P_SHIFT_FF] = spec.shift_feedforward
+        P[core._P_J_S] = p.driveline.J_s
+        P[core._P_ALPHA_FF] = self._alpha_ff
+        P[core._P_TPF] = self._tpf
+        P[core._P_FF_GAIN] = spec.feedforward_gain
+        P[core._P_FF_DEN] = 2 * spec.traction_error
+        P[core._P_COSB] = self._cosb
+        P[core._P_L_BELT], P[core._P_A] = self._L, self._a
+        P[core._P_N_LAST] = self._n_last
+        self._P = P
+        T = np.zeros((self.n_k, core.T_NOISE + len(RAW_SIGNALS)))
+        T[:, core.T_R], T[:, core.T_SLIP], T[:, core.T_MU] = refs.r_g, refs.slip, refs.mu
+        T[:, core.T_RDOT], T[:, core.T_DEC] = refs.rdot, refs.decoupling
+        if sched is not None:
+            T[:, core.T_MU_MAX] = self.model.mu_max(refs.r_g)
+        T[:, core.T_NOISE:] = self._noise
+        self._T = T
+        self._S = sched._packed if sched is not None else np.zeros(2)
+        self._R_s_cache = np.array([np.nan, np.nan])
+        self._res = np.zeros(core.N_RES)
+        self._no_ref = np.full(5, np.nan)
         self._F_s0 = self.point["F_s"]
         self._safety = spec.clamping == "safety-factor"
-        self._ff_torque_ds = spec.feedforward_signal == "T_ds"
+        self._mask = self.output_mask
+        self._mask_ones = bool(np.all(self._mask == 1.0))  # (x * 1.0 is x)
         self._limited = cfg.limits is not None
         lim = cfg.limits
         if lim is not None:
             self._lim = ((float(lim.T_mp_max), float(lim.omega_mp_max)),
                          (float(lim.T_ms_max), float(lim.omega_ms_max)))
-        # the schedule's variables in its axes' order (0: r_g, 1: tau, 2: F_s)
-        sched = self.controller.schedule
-        self._sched_vars = None if sched is None else [SCHEDULE_VARIABLES.index(n)
-                                                       for n in sched.axes]
-        if self._sched_vars == [0, 1, 2]:
-            self._sched_vars = None  # (in the law's order)
-        self._mu_max_rows = (self.model.mu_max(refs.r_g).tolist() if sched is not None
-                             else None)
         # the shift feedforward's geometry at the reference ratio of every sample where the
         # reference moves (`_shift_torque`)
         a = p.actuation
@@ -444,27 +472,9 @@ class LoopLaw:
         """The measurements the controller sees from the buffers (n_raw, n_buf): each signal
         `delay` samples late, the shaft speeds averaged over the counting window and
         quantised (not when `ideal`)."""
-        d, W = self._delay, self._window
-        rows = np.asarray(buf, float).tolist()
-        return np.array(self._sensed([row[d] for row in rows], rows[1][d:d + W],
-                                     rows[2][d:d + W], ideal))
-
-    def _sensed(self, m: list[float], w_p: list[float], w_s: list[float],
-                ideal: bool) -> list[float]:
-        """`sense` on floats: `m` the delayed samples (changed in place), `w_p`, `w_s` the
-        shaft speeds' counting windows (newest first); the window's sum in numpy's order
-        (`_pairwise_sum`)."""
-        W = self._window
-        if W > 1:
-            m[1] = _pairwise_sum(w_p) / W
-            m[2] = _pairwise_sum(w_s) / W
-        if self._quantise and not ideal:
-            q = self._speed_quantum
-            m[1] = round(m[1] / q) * q
-            m[2] = round(m[2] / q) * q
-            rq = self._ratio_quantum
-            if rq:
-                m[0] = round(m[0] / rq) * rq
+        buf = np.ascontiguousarray(buf, dtype=float)
+        m = np.empty(buf.shape[0])
+        core.sense(buf.ravel(), buf.shape[0], self._P, ideal, m)
         return m
 
     def preprocess(self, s: NDArray, raw: NDArray, k: int, ref: NDArray | None = None,
@@ -475,83 +485,58 @@ class LoopLaw:
         the controller's share (holding torques and feedforwards) and the measurements the
         controller saw; `ref` (``r_g, slip, mu, dr_g/dt``) replaces the references of sample
         `k`; `ideal` drops noise and quantisation."""
-        s = np.asarray(s, float)
+        s = np.ascontiguousarray(s, dtype=float)
         s_next = np.empty(self.n_pre)
         e, u, m = self._pre(s, s_next, raw, k, ref, ideal)
         return s_next, np.array(e), np.array(u), np.array(m)
 
     def _pre(self, s: NDArray, out: NDArray, raw: NDArray, k: int, ref: NDArray | None,
              ideal: bool) -> tuple[list[float], list[float], list[float]]:
-        """`preprocess` on floats: writes the next pre-processing state into ``out[:n_pre]``
-        and returns the errors, the servo torques without the controller's share and the
-        measurements, as lists."""
+        """`preprocess` into ``out[:n_pre]`` (the next pre-processing state), returning the
+        errors, the servo torques without the controller's share and the measurements as
+        floats: the arithmetic compiled (`empact.control._law_core.pre_core`), then the
+        schedule's gains, the safety-factor clamping, the shift feedforward and the
+        primary servo's low-passed share."""
         spec = self.config.spec
-        nb, nbuf, d, W = self._nb, self._n_buf, self._delay, self._window
+        nb = self._nb
         kk = k if k < self._n_last else self._n_last
-        sl = s[:nb + 2].tolist()
-        raw = np.asarray(raw, float)
-        col = raw.tolist() if ideal else (raw + self._noise[kk]).tolist()
-        # the buffers, newest first: every row moves on by one, the new samples in front
-        out[1:nb] = s[:nb - 1]
-        out[0:nb:nbuf] = col
-        if d:
-            m = sl[d - 1:nb:nbuf]
-            i1, i2 = nbuf + d - 1, 2 * nbuf + d - 1
-            win1, win2 = sl[i1:i1 + W], sl[i2:i2 + W]
-        else:
-            m = list(col)
-            win1 = [col[1]] + sl[nbuf:nbuf + W - 1]
-            win2 = [col[2]] + sl[2 * nbuf:2 * nbuf + W - 1]
-        m = self._sensed(m, win1, win2, ideal)
         if ref is None:
+            refv = self._no_ref
             rows = self._ref_rows
-            r_ref, slip_ref, mu_ref, rdot = rows[0][kk], rows[1][kk], rows[2][kk], rows[3][kk]
+            r_ref, rdot, dec = rows[0][kk], rows[3][kk], rows[4][kk]
         else:
-            r_ref, slip_ref, mu_ref, rdot = (float(x) for x in ref)
-        r_m, w_p, w_s, T_ds = m[0], m[1], m[2], m[3]
-        base = r_m if self._slip_nu else self._r_ref0
-        y = 1.0 - w_s / (base * w_p)
-        lg_r, lg_s = self._logs
-        e0 = math.log(max(r_ref, 1e-9)) - math.log(max(r_m, 1e-9)) if lg_r else r_ref - r_m
-        e1 = math.log(max(slip_ref, 1e-9)) - math.log(max(y, 1e-9)) if lg_s else slip_ref - y
-        f = sl[nb]
-        sched = self.controller.schedule
-        if sched is not None:
-            mu_max = self._mu_max_rows[kk] if ref is None else self._mu_max_ref(r_ref)
-            at = [r_m, mu_ref / mu_max, f if spec.feedforward else self._F_s0]
-            g0, g1 = sched.gains_at(at if self._sched_vars is None else
-                                    [at[j] for j in self._sched_vars])
+            r = [float(x) for x in ref]
+            r_ref, rdot, dec = r[0], r[3], self._decoupling0
+            refv = np.array(r + [self._mu_max_ref(r_ref) if self._sched else np.nan])
+        res = self._res
+        core.pre_core(s, out, np.ascontiguousarray(raw, dtype=float), k, ideal, refv,
+                      self._P, self._T, self._S, self._R_s_cache, res)
+        v = res.tolist()
+        e0, e1, u0, u1, f = v[core.R_E0], v[core.R_E1], v[core.R_U0], v[core.R_U1], \
+            v[core.R_F]
+        m = v[core.R_M:]
+        if self._sched:
+            g0, g1 = self.controller.schedule.exp_gains(v[core.R_L0:core.R_L1 + 1])
             e0 = e0 * g0
             e1 = e1 * g1
-        u0, u1 = self._bias_f
         if self._safety:
             e1 = 0.0  # the slip loop is replaced by the open-loop clamping strategy
-            u1 = self._safety_torque(T_ds, r_m)
-            f = 0.0  # unused
-        elif spec.feedforward:
-            T_b = T_ds if self._ff_torque_ds else m[6]
-            if spec.shift_feedforward:  # the secondary pulley's acceleration torque
-                T_b = T_b + self._J_s * w_p * rdot
-            a = self._alpha_ff
-            f = a * f + (1 - a) * self._ff_force(T_b, r_m, mu_ref)
-            u1 += self._tpf * f
-        else:
-            f = 0.0  # unused
+            u1 = self._safety_torque(m[3], m[0])
+        elif spec.feedforward and v[core.R_RS] != v[core.R_RS]:
+            raise ParameterError(f"r_g = {m[0]:g}: no belt geometry at this ratio")
         # the primary servo's feedforward share, low-passed: the decoupler (it follows the
         # feedforward's clamping) and the shift feedforward
-        dec = self._ref_rows[4][kk] if ref is None else self._decoupling0
         t_mp = dec * (u1 - self._T_ms_start)
         if spec.shift_feedforward:
-            t_mp += self._shift_torque(r_ref, rdot, w_p, f if spec.feedforward
+            t_mp += self._shift_torque(r_ref, rdot, m[1], f if spec.feedforward
                                        else self._F_s0, kk if ref is None else None)
-        g = sl[nb + 1]
+        g = s.item(nb + 1)
         if dec or spec.shift_feedforward:
             a = self._alpha_dec
             g = a * g + (1 - a) * t_mp
             u0 += g
         else:
             g = 0.0
-        out[nb] = f
         out[nb + 1] = g
         return [e0, e1], [u0, u1], m
 
@@ -588,7 +573,7 @@ class LoopLaw:
         `ref` replaces the references of sample `k`; `ideal` drops noise, quantisation and
         limits (the linear model's law)."""
         c, n = self.controller, self.n_pre
-        z = np.asarray(z, float)
+        z = np.ascontiguousarray(z, dtype=float)
         z_next = np.empty(self.n_state)
         e, (u0, u1), m = self._pre(z, z_next, raw, k, ref, ideal)
         xc = z[n:]
@@ -645,11 +630,8 @@ class LoopLaw:
         D = sh.D_ref * (1 + sh.k_D * (F_s - sh.F_ref))
         K_c = float(sh.gain * D * self._g_beta * r_ref * rpa * poly)
         if self.model.creep:
-            a = self._creep_args
-            for j, x in enumerate((r_ref, R_p, R_s, phi, F_s, self._tau_ref)):
-                a[j][0] = x
-            K.creep_many(*a[:6], self.model.p, a[6], a[7])
-            keq = float(a[7][0])
+            keq = self.model.static_creep_point(r_ref, R_p, R_s, phi, F_s, self._tau_ref,
+                                                self._creep_args)[1]
         xi = sh.xi_sat * np.tanh(rdot / (w_eff * K_c) / sh.xi_sat)
         return float(self._shift_gain * keq * np.expm1(xi) * F_s)
 
@@ -677,34 +659,3 @@ class LoopLaw:
         self._k += 1
         return u
 
-
-def _pairwise_sum(a: list[float]) -> float:
-    """The sum of `a` in numpy's order (its pairwise summation: eight partial sums over
-    blocks of up to 128, halves above), so that a window summed here equals
-    ``ndarray.sum`` of it to the last bit."""
-    n = len(a)
-    if n < 8:
-        res = 0.0
-        for x in a:
-            res += x
-        return res
-    if n < 16:  # (the common counting window: one block of eight and the rest)
-        res = ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]))
-        for x in a[8:]:
-            res += x
-        return res
-    if n <= 128:
-        r = a[:8]
-        i = 8
-        top = n - n % 8
-        while i < top:
-            for j in range(8):
-                r[j] += a[i + j]
-            i += 8
-        res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
-        for x in a[i:]:
-            res += x
-        return res
-    h = n // 2
-    h -= h % 8
-    return _pairwise_sum(a[:h]) + _pairwise_sum(a[h:])
