@@ -402,3 +402,18 @@ def test_schedule_gains_at_equals_the_array_form(params):
             want = frozen(sched, point)
             assert sched.gains_at([p[j] for j in order]) == want.tolist()
             assert np.array_equal(sched(point), want)
+
+
+def test_the_linear_loop_model_linearises_the_same_law(params):
+    """`linear_preprocess` of the law and of the frozen law are the same matrices to the last
+    bit (the linear loop model differentiates the code the simulation runs), on a load step
+    and a shift (shift feedforward, references replaced by the linearisation's)."""
+    from empact.control.closed_loop import build_law
+
+    for name in ("slip-load-step-r1", "shift-low-od"):
+        sc = load_scenario(control_example_path(name))
+        law = build_law(sc, params, ideal=True)
+        frozen = _frozen_law_module().LoopLaw(law.controller, law.model, law.point, law.u0,
+                                              law.config, sc.references, sc.duration)
+        got, want = linear_preprocess(law), linear_preprocess(frozen)
+        assert all(np.array_equal(got[k], want[k]) for k in want), name
