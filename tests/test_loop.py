@@ -313,3 +313,107 @@ def test_the_controller_knows_the_nominal_machine(params):
         float(slip_at_torque_ratio(nominal_model, 0.9, 1.0)), rel=1e-12)
     assert law.point["nu"] == pytest.approx(scenario_model(sc, machine)[1].nu, rel=1e-12)
     assert abs(law.point["nu"] - law.refs.slip[0]) > 1e-4  # the two curves differ
+
+
+# -- the faster law (issue 23, item 4) against today's, frozen --------------------------------
+def _frozen_law_module():
+    """`bench/_loop_law_baseline.py`: the loop law as it was before the faster one."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "bench" / "_loop_law_baseline.py"
+    if not path.is_file():
+        pytest.skip("bench/_loop_law_baseline.py (the frozen law) is not in this checkout")
+    if "_loop_law_baseline" not in sys.modules:
+        spec = importlib.util.spec_from_file_location("_loop_law_baseline", path)
+        sys.modules["_loop_law_baseline"] = mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+    return sys.modules["_loop_law_baseline"]
+
+
+def _same_runs(sc, machine, nominal=None):
+    """The scenario run on `machine` with today's law and with the frozen one (each built
+    from the same controller, model, point and configuration); the largest deviation of the
+    states, outputs and inputs, each column over its largest magnitude."""
+    from empact.control.closed_loop import build_law
+    from empact.nonlinear.simulation import run_scenario, scenario_model
+
+    model, op = scenario_model(sc, machine)
+    law = build_law(sc, machine, None, model, op, nominal=nominal)
+    frozen = _frozen_law_module().LoopLaw(law.controller, law.model, law.point, law.u0,
+                                          law.config, sc.references, sc.duration)
+    new, ref = (run_scenario(sc, machine, controller=c) for c in (law, frozen))
+    assert new.complete == ref.complete and new.t.shape == ref.t.shape
+    dev = 0.0
+    for a, b in ((new.x, ref.x), (new.y, ref.y), (new.u, ref.u)):
+        scale = np.maximum(np.nanmax(np.abs(b), axis=0), 1e-300)
+        dev = max(dev, float(np.nanmax(np.abs(a - b) / scale)))
+    return dev
+
+
+@pytest.mark.parametrize("name", ["slip-load-step-r0.5", "slip-load-step-r1",
+                                  "slip-load-step-r2", "slip-small-step-r0.5",
+                                  "slip-small-step-r1", "slip-small-step-r2", "shift-low-od",
+                                  "shift-low-od-slow", "shift-low-od-sf13"])
+def test_the_law_equals_the_frozen_law_on_the_shipped_scenarios(params, name):
+    """The law on floats (issue 23) runs every shipped closed-loop scenario as the law before
+    it did (`bench/_loop_law_baseline.py`): states, outputs and inputs equal to 1e-12 of each
+    signal's largest magnitude (in practice to the last bit: a command one unit in the last
+    place off moves the outputs by 1e-11 to 1e-9)."""
+    sc = load_scenario(control_example_path(name))
+    assert _same_runs(sc, params) <= 1e-12
+
+
+def test_the_law_equals_the_frozen_law_on_monte_carlo_runs(params):
+    """The same on three runs of the shipped Monte Carlo spread (`empact montecarlo
+    --example-spread`: the machine drawn, the controller knowing the nominal one) of
+    slip-load-step-r1, seed 1."""
+    from importlib import resources
+
+    from empact.montecarlo import load_spread
+
+    path = resources.files("empact.data").joinpath("montecarlo", "example-spread.toml")
+    spread = load_spread(str(path), params)
+    sc = load_scenario(control_example_path("slip-load-step-r1"))
+    for row in spread.sample(1, [0, 1, 2]):
+        machine = params.from_dotted(dict(zip(spread.names, row.tolist())))
+        assert _same_runs(sc, machine, nominal=params) <= 1e-12
+
+
+def test_schedule_gains_at_equals_the_array_form(params):
+    """`Schedule.gains_at` (floats, the leading axes' interpolation kept between calls)
+    gives the array form's gains (frozen with the law) to the last bit, on and off the grid
+    and beyond its edges, with one-point axes and mixed signs."""
+    frozen = _frozen_law_module()._schedule_gains
+    rng = np.random.default_rng(3)
+    axes = {"r_g": np.geomspace(0.5, 2.0, 5), "tau": np.array([0.6]),
+            "F_s": np.geomspace(5e3, 2e4, 3)}
+    gains = np.exp(rng.normal(size=(5, 1, 3, 2))) * np.array([1.0, -1.0])
+    points = [(r, 0.6, F) for r in (0.3, 0.5, 0.77, 1.0, 3.0) for F in (1e3, 5e3, 7e3, 3e4)]
+    points += [(float(r), float(t), float(F)) for r, t, F in zip(
+        rng.uniform(0.4, 2.5, 50), rng.uniform(0.5, 0.7, 50), rng.uniform(4e3, 2.5e4, 50))]
+    # the last axis interpolated, and (axes reordered) a one-point last axis
+    for sched, order in ((Schedule(axes, gains), (0, 1, 2)),
+                         (Schedule({k: axes[k] for k in ("F_s", "r_g", "tau")},
+                                   gains.transpose(2, 0, 1, 3)), (2, 0, 1))):
+        for p in points + points[::-1]:
+            point = dict(zip(("r_g", "tau", "F_s"), p))
+            want = frozen(sched, point)
+            assert sched.gains_at([p[j] for j in order]) == want.tolist()
+            assert np.array_equal(sched(point), want)
+
+
+def test_the_linear_loop_model_linearises_the_same_law(params):
+    """`linear_preprocess` of the law and of the frozen law are the same matrices to the last
+    bit (the linear loop model differentiates the code the simulation runs), on a load step
+    and a shift (shift feedforward, references replaced by the linearisation's)."""
+    from empact.control.closed_loop import build_law
+
+    for name in ("slip-load-step-r1", "shift-low-od"):
+        sc = load_scenario(control_example_path(name))
+        law = build_law(sc, params, ideal=True)
+        frozen = _frozen_law_module().LoopLaw(law.controller, law.model, law.point, law.u0,
+                                              law.config, sc.references, sc.duration)
+        got, want = linear_preprocess(law), linear_preprocess(frozen)
+        assert all(np.array_equal(got[k], want[k]) for k in want), name

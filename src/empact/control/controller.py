@@ -20,9 +20,7 @@ as ``schedule_axes`` names, ``schedule_<axis>`` grids and ``schedule_gains``).
 """
 from __future__ import annotations
 
-import bisect
 import json
-import math
 import os
 import warnings
 from dataclasses import dataclass, field
@@ -41,6 +39,7 @@ from ..lti import statespace
 from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS
 
 signal = lazy_module("scipy.signal")
+_core = lazy_module("empact.control._law_core")  # (numba, on first use)
 sio = lazy_module("scipy.io")
 
 __all__ = ["Controller", "Schedule", "load_controller", "SCHEDULE_VARIABLES"]
@@ -103,20 +102,34 @@ class Schedule:
         object.__setattr__(self, "_q", [np.log(g) if n in _LOG_AXES else g
                                         for n, g in axes.items()])
         object.__setattr__(self, "_qlist", [q.tolist() for q in self._q])
+        # the packed table of `gains_at` (`empact.control._law_core.pack_schedule`)
+        table = np.ascontiguousarray(self._log)
+        object.__setattr__(self, "_packed", _core.pack_schedule(
+            self._qlist, [n in _LOG_AXES for n in axes],
+            [s // table.itemsize for s in table.strides[:-1]],
+            [SCHEDULE_VARIABLES.index(n) for n in axes], table.ravel().tolist(),
+            gains.shape[-1]))
+        object.__setattr__(self, "_n_e", gains.shape[-1])
+        object.__setattr__(self, "_sign_list", sign[0].tolist())
+        object.__setattr__(self, "_positive", bool(np.all(sign[0] > 0)))
 
     def __call__(self, point: Mapping[str, float]) -> NDArray[np.float64]:
         """The gains at an operating point (``{name: value}`` for every axis)."""
-        L = self._log
-        for q, qs, name in zip(self._q, self._qlist, self.axes):
-            v = float(point[name])
-            v = math.log(max(v, 1e-12)) if name in _LOG_AXES else v
-            if len(qs) == 1:
-                L = L[0]
-                continue
-            i = min(max(bisect.bisect_left(qs, v) - 1, 0), len(qs) - 2)
-            f = min(max((v - qs[i]) / (qs[i + 1] - qs[i]), 0.0), 1.0)
-            L = (1 - f) * L[i] + f * L[i + 1]
-        return self._sign * np.exp(L)
+        return np.array(self.gains_at([float(point[name]) for name in self.axes]))
+
+    def gains_at(self, values: list[float]) -> list[float]:
+        """The gains at the operating point `values` (one per axis, in the order of `axes`),
+        as floats (what a sampled law calls at every sample): the interpolation compiled
+        (`empact.control._law_core.schedule_log_gains`), each value rounded as the array
+        form's elementwise arithmetic would, then `exp_gains`."""
+        out = np.empty(self._n_e)
+        _core.schedule_log_gains(self._packed, np.array(values, float), False, out)
+        return self.exp_gains(out.tolist())
+
+    def exp_gains(self, log_gains: list[float]) -> list[float]:
+        """The gains of the log-gains ``ln |gain|`` (numpy's ``exp``, with the signs)."""
+        gains = np.exp(np.array(log_gains)).tolist()
+        return gains if self._positive else [s * x for s, x in zip(self._sign_list, gains)]
 
     def to_dict(self) -> dict[str, Any]:
         """Plain data (the file layout)."""

@@ -49,11 +49,15 @@ feedforward's share at the trim, computed with the feedforward's own traction es
 `LoopLaw.update` is a pure function of the law's state (a flat vector: sensor buffers,
 feedforward filter, controller state), the raw measurements and the sample index; `step` is
 the stateful `empact.nonlinear.simulation.SampledController` interface around it, and
-`empact.control.loop` linearises the same function for the loop's linear model.
+`empact.control.loop` linearises the same function for the loop's linear model.  Its
+arithmetic on floats (sensors, errors, the schedule's interpolation, the clamping
+feedforward) is compiled (`empact.control._law_core`); numpy keeps what has its own
+vectorised functions or BLAS (the schedule's ``exp``, the shift feedforward's ``tanh`` and
+``expm1``, the controller's matrix products), so that every operation is the one the law's
+array form had and a run gives the same numbers to the last bit.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 from typing import Any, Mapping
 
@@ -68,7 +72,8 @@ from ..nonlinear.model import EmpactModel
 from ..nonlinear.scenario import REFERENCES, ControllerSpec, Scenario
 from ..params import Params
 from ..variator.geometry import ratio_range, secondary_radius, variator_state
-from ..variator.shift_law import creep_coefficient
+from ..variator.shift_law import g_beta
+from . import _law_core as core
 from .controller import Controller
 
 linalg = lazy_module("scipy.linalg")
@@ -291,7 +296,79 @@ class LoopLaw:
         if spec.clamping == "safety-factor":
             self._T_ms_start = self._safety_torque(self.raw0[3], self.raw0[0])
         self.z0 = self.initial_state()
+        self._pack()
         self.reset()
+
+    def _pack(self) -> None:
+        """The law's constants packed once for the compiled arithmetic
+        (`empact.control._law_core`: ``P``, the per-sample table ``T``, the schedule ``S``)
+        and as floats for the rest."""
+        cfg, spec, refs = self.config, self.config.spec, self.refs
+        p = self.model.params
+        s = cfg.sensors
+        sched = self.controller.schedule
+        self._n_last = self.n_k - 1
+        self._ref_rows = (refs.r_g.tolist(), refs.slip.tolist(), refs.mu.tolist(),
+                          refs.rdot.tolist(), refs.decoupling.tolist())
+        self._sched = sched is not None
+        P = np.zeros(core.N_P)
+        P[[core._P_NB, core._P_NBUF, core._P_DELAY, core._P_WINDOW]] = (
+            self._nb, self._n_buf, self._delay, self._window)
+        P[core._P_QUANTISE] = s is not None and cfg.quantise
+        P[core._P_SPEED_Q] = self._speed_quantum
+        P[core._P_RATIO_Q] = float(s.ratio_quantum) if s is not None else 0.0
+        P[core._P_SLIP_NU] = self.slip_signal == "nu"
+        P[core._P_R_REF0] = self._r_ref0
+        P[core._P_LOG_R], P[core._P_LOG_S] = self._logs
+        P[core._P_SCHED] = self._sched
+        P[core._P_FEEDFORWARD] = spec.feedforward
+        P[core._P_F_S0] = self.point["F_s"]
+        P[core._P_BIAS0], P[core._P_BIAS1] = self._bias
+        P[core._P_SAFETY] = spec.clamping == "safety-factor"
+        P[core._P_FF_T_DS] = spec.feedforward_signal == "T_ds"
+        P[core._P_SHIFT_FF] = spec.shift_feedforward
+        P[core._P_J_S] = p.driveline.J_s
+        P[core._P_ALPHA_FF] = self._alpha_ff
+        P[core._P_TPF] = self._tpf
+        P[core._P_FF_GAIN] = spec.feedforward_gain
+        P[core._P_FF_DEN] = 2 * spec.traction_error
+        P[core._P_COSB] = self._cosb
+        P[core._P_L_BELT], P[core._P_A] = self._L, self._a
+        P[core._P_N_LAST] = self._n_last
+        self._P = P
+        T = np.zeros((self.n_k, core.T_NOISE + len(RAW_SIGNALS)))
+        T[:, core.T_R], T[:, core.T_SLIP], T[:, core.T_MU] = refs.r_g, refs.slip, refs.mu
+        T[:, core.T_RDOT], T[:, core.T_DEC] = refs.rdot, refs.decoupling
+        if sched is not None:
+            T[:, core.T_MU_MAX] = self.model.mu_max(refs.r_g)
+        T[:, core.T_NOISE:] = self._noise
+        self._T = T
+        self._S = sched._packed if sched is not None else np.zeros(2)
+        self._R_s_cache = np.array([np.nan, np.nan])
+        self._res = np.zeros(core.N_RES)
+        self._no_ref = np.full(5, np.nan)
+        self._F_s0 = self.point["F_s"]
+        self._safety = spec.clamping == "safety-factor"
+        self._mask = self.output_mask
+        self._mask_ones = bool(np.all(self._mask == 1.0))  # (x * 1.0 is x)
+        self._limited = cfg.limits is not None
+        lim = cfg.limits
+        if lim is not None:
+            self._lim = ((float(lim.T_mp_max), float(lim.omega_mp_max)),
+                         (float(lim.T_ms_max), float(lim.omega_ms_max)))
+        # the shift feedforward's geometry at the reference ratio of every sample where the
+        # reference moves (`_shift_torque`)
+        a = p.actuation
+        self._shift = p.shift
+        self._g_beta = g_beta(p.variator.beta)
+        self._shift_gain = -(a.i_e * a.s / a.i_w)
+        self._creep_args = [np.empty(1) for _ in range(8)]
+        self._shift_rows: dict[int, tuple[float, ...]] = {}
+        if spec.shift_feedforward:
+            ks = np.flatnonzero(refs.rdot != 0.0)
+            if ks.size:
+                self._shift_rows = dict(zip(ks.tolist(),
+                                            self._shift_geometry(refs.r_g[ks])))
 
     # -- set-up ----------------------------------------------------------------------------
     def _references(self, references: Mapping[str, NDArray]) -> _Refs:
@@ -395,17 +472,9 @@ class LoopLaw:
         """The measurements the controller sees from the buffers (n_raw, n_buf): each signal
         `delay` samples late, the shaft speeds averaged over the counting window and
         quantised (not when `ideal`)."""
-        d, W = self._delay, self._window
-        m = buf[:, d].copy()
-        s = self.config.sensors
-        if W > 1:
-            m[1:3] = buf[1:3, d:d + W].sum(axis=1) / W
-        if s is not None and not ideal and self.config.quantise:
-            q = self._speed_quantum
-            m[1] = round(m[1] / q) * q
-            m[2] = round(m[2] / q) * q
-            if s.ratio_quantum:
-                m[0] = round(m[0] / s.ratio_quantum) * s.ratio_quantum
+        buf = np.ascontiguousarray(buf, dtype=float)
+        m = np.empty(buf.shape[0])
+        core.sense(buf.ravel(), buf.shape[0], self._P, ideal, m)
         return m
 
     def preprocess(self, s: NDArray, raw: NDArray, k: int, ref: NDArray | None = None,
@@ -416,62 +485,60 @@ class LoopLaw:
         the controller's share (holding torques and feedforwards) and the measurements the
         controller saw; `ref` (``r_g, slip, mu, dr_g/dt``) replaces the references of sample
         `k`; `ideal` drops noise and quantisation."""
+        s = np.ascontiguousarray(s, dtype=float)
+        s_next = np.empty(self.n_pre)
+        e, u, m = self._pre(s, s_next, raw, k, ref, ideal)
+        return s_next, np.array(e), np.array(u), np.array(m)
+
+    def _pre(self, s: NDArray, out: NDArray, raw: NDArray, k: int, ref: NDArray | None,
+             ideal: bool) -> tuple[list[float], list[float], list[float]]:
+        """`preprocess` into ``out[:n_pre]`` (the next pre-processing state), returning the
+        errors, the servo torques without the controller's share and the measurements as
+        floats: the arithmetic compiled (`empact.control._law_core.pre_core`), then the
+        schedule's gains, the safety-factor clamping, the shift feedforward and the
+        primary servo's low-passed share."""
         spec = self.config.spec
-        nb, nbuf = self._nb, self._n_buf
-        kk = min(k, self.n_k - 1)
-        buf = np.empty((len(RAW_SIGNALS), nbuf))
-        buf[:, 1:] = s[:nb].reshape(len(RAW_SIGNALS), nbuf)[:, :-1]
-        buf[:, 0] = raw if ideal else raw + self._noise[kk]
-        m = self.sense(buf, ideal)
+        nb = self._nb
+        kk = k if k < self._n_last else self._n_last
         if ref is None:
-            r_ref, slip_ref, mu_ref, rdot = (self.refs.r_g[kk], self.refs.slip[kk],
-                                             self.refs.mu[kk], self.refs.rdot[kk])
+            refv = self._no_ref
+            rows = self._ref_rows
+            r_ref, rdot, dec = rows[0][kk], rows[3][kk], rows[4][kk]
         else:
-            r_ref, slip_ref, mu_ref, rdot = ref
-        r_m, w_p, w_s, T_ds = (float(x) for x in m[:4])
-        base = r_m if self.slip_signal == "nu" else self._r_ref0
-        y = (r_m, 1.0 - w_s / (base * w_p))
-        yr = (float(r_ref), float(slip_ref))
-        e = np.array([math.log(max(a, 1e-9)) - math.log(max(b, 1e-9)) if lg else a - b
-                      for a, b, lg in zip(yr, y, self._logs)])
-        f = s[nb]
-        sched = self.controller.schedule
-        if sched is not None:
-            e = e * sched({"r_g": r_m, "tau": mu_ref / self._mu_max_ref(r_ref),
-                           "F_s": f if spec.feedforward else self.point["F_s"]})
-        u = self._bias.copy()
-        if spec.clamping == "safety-factor":
-            e[1] = 0.0  # the slip loop is replaced by the open-loop clamping strategy
-            u[1] = self._safety_torque(T_ds, r_m)
-            f = 0.0  # unused
-        elif spec.feedforward:
-            T_b = T_ds if spec.feedforward_signal == "T_ds" else m[6]
-            if spec.shift_feedforward:  # the secondary pulley's acceleration torque
-                T_b = T_b + self.model.params.driveline.J_s * w_p * rdot
-            a = self._alpha_ff
-            f = a * f + (1 - a) * self._ff_force(T_b, r_m, mu_ref)
-            u[1] += self._tpf * f
-        else:
-            f = 0.0  # unused
+            r = [float(x) for x in ref]
+            r_ref, rdot, dec = r[0], r[3], self._decoupling0
+            refv = np.array(r + [self._mu_max_ref(r_ref) if self._sched else np.nan])
+        res = self._res
+        core.pre_core(s, out, np.ascontiguousarray(raw, dtype=float), k, ideal, refv,
+                      self._P, self._T, self._S, self._R_s_cache, res)
+        v = res.tolist()
+        e0, e1, u0, u1, f = v[core.R_E0], v[core.R_E1], v[core.R_U0], v[core.R_U1], \
+            v[core.R_F]
+        m = v[core.R_M:]
+        if self._sched:
+            g0, g1 = self.controller.schedule.exp_gains(v[core.R_L0:core.R_L1 + 1])
+            e0 = e0 * g0
+            e1 = e1 * g1
+        if self._safety:
+            e1 = 0.0  # the slip loop is replaced by the open-loop clamping strategy
+            u1 = self._safety_torque(m[3], m[0])
+        elif spec.feedforward and v[core.R_RS] != v[core.R_RS]:
+            raise ParameterError(f"r_g = {m[0]:g}: no belt geometry at this ratio")
         # the primary servo's feedforward share, low-passed: the decoupler (it follows the
         # feedforward's clamping) and the shift feedforward
-        d = self.refs.decoupling[kk] if ref is None else self._decoupling0
-        t_mp = d * (u[1] - self._T_ms_start)
+        t_mp = dec * (u1 - self._T_ms_start)
         if spec.shift_feedforward:
-            t_mp += self._shift_torque(r_ref, rdot, w_p, f if spec.feedforward
-                                       else self.point["F_s"])
-        g = s[nb + 1]
-        if d or spec.shift_feedforward:
+            t_mp += self._shift_torque(r_ref, rdot, m[1], f if spec.feedforward
+                                       else self._F_s0, kk if ref is None else None)
+        g = s.item(nb + 1)
+        if dec or spec.shift_feedforward:
             a = self._alpha_dec
             g = a * g + (1 - a) * t_mp
-            u[0] += g
+            u0 += g
         else:
             g = 0.0
-        s_next = np.empty_like(s)
-        s_next[:nb] = buf.ravel()
-        s_next[nb] = f
-        s_next[nb + 1] = g
-        return s_next, e, u, m
+        out[nb + 1] = g
+        return [e0, e1], [u0, u1], m
 
     def _safety_torque(self, T: float, r_m: float) -> float:
         """The safety-factor strategy's secondary servo torque for the torque `T` [N m] a
@@ -506,52 +573,89 @@ class LoopLaw:
         `ref` replaces the references of sample `k`; `ideal` drops noise, quantisation and
         limits (the linear model's law)."""
         c, n = self.controller, self.n_pre
-        s_next, e, u, m = self.preprocess(z[:n], raw, k, ref, ideal)
+        z = np.ascontiguousarray(z, dtype=float)
+        z_next = np.empty(self.n_state)
+        e, (u0, u1), m = self._pre(z, z_next, raw, k, ref, ideal)
         xc = z[n:]
-        du = (c.C @ xc + c.D @ e) * self.output_mask
-        xc_next = c.A @ xc + c.B @ e
-        u = u + du
-        if not ideal and self.config.limits is not None:
-            u_sat = self._limit(u, (m[4], m[5]))
-            if self.config.spec.anti_windup:
-                xc_next = xc_next + self._L_aw @ ((u_sat - u) * self.output_mask)
-            u = u_sat
-        return np.concatenate([s_next, xc_next]), u
+        e = np.array(e)
+        # (``M.dot(v)`` is ``M @ v``: the same BLAS call, cheaper to make)
+        du = c.C.dot(xc) + c.D.dot(e)
+        du0, du1 = (du if self._mask_ones else du * self._mask).tolist()
+        xc_next = c.A.dot(xc) + c.B.dot(e)
+        u0 = u0 + du0
+        u1 = u1 + du1
+        if not ideal and self._limited:
+            s0, s1 = self._limit_f(u0, u1, m[4], m[5])
+            # (without saturation the anti-windup term is zero)
+            if self.config.spec.anti_windup and (s0 != u0 or s1 != u1):
+                xc_next = xc_next + self._L_aw.dot((np.array([s0, s1]) - np.array([u0, u1]))
+                                                   * self._mask)
+            u0, u1 = s0, s1
+        z_next[n:] = xc_next
+        return z_next, np.array([u0, u1])
 
-    def _shift_torque(self, r_ref: float, rdot: float, w_p: float, F_s: float) -> float:
+    def _shift_geometry(self, r: NDArray) -> list[tuple[float, ...]]:
+        """What `_shift_torque` needs of the reference ratios `r` (1-D) alone, per ratio:
+        ``(r, R_p, R_s, phi, R_p / a, a1 + a2 ln(r)^2, kappa*)`` (the creep coefficient's
+        factors; ``kappa*`` the geometric thrust ratio, for Shafai's law)."""
+        p = self.model.params
+        sh = p.shift
+        st = variator_state(r, p.variator)
+        lr = np.log(r)
+        rpa = st.R_p / p.variator.a
+        poly = sh.a1 + sh.a2 * lr**2
+        geo = (np.zeros(r.shape) if self.model.creep else
+               (np.pi + 2 * st.phi) / (np.pi - 2 * st.phi))
+        return list(zip(r.tolist(), st.R_p.tolist(), st.R_s.tolist(), st.phi.tolist(),
+                        rpa.tolist(), poly.tolist(), geo.tolist()))
+
+    def _shift_torque(self, r_ref: float, rdot: float, w_p: float, F_s: float,
+                      k: int | None = None) -> float:
         """Primary servo torque [N m] over its holding value against the creep law's
         resistance at the ratio rate `rdot` [1/s] (at the reference ratio, speed `w_p`,
         clamping force `F_s`): the thrust ratio ``kappa* exp(xi)`` with ``xi = xi_sat
         tanh(rdot / (omega K_c) / xi_sat)`` (`empact.variator.shift_law`) needs the primary
         thrust ``kappa* (exp(xi) - 1) F_s`` more, ``T_mp = -(i_e s / i_w)`` times it (the
-        kernel's ratio-controller gain has the same sign)."""
+        kernel's ratio-controller gain has the same sign); the geometry at the reference
+        ratio of sample `k` is prepared once."""
         if rdot == 0.0:
             return 0.0
-        p = self.model.params
-        a, sh = p.actuation, p.shift
-        st = variator_state(r_ref, p.variator)
+        row = self._shift_rows.get(k) if k is not None else None
+        if row is None or row[0] != r_ref:
+            row = self._shift_geometry(np.array([float(r_ref)]))[0]
+        _, R_p, R_s, phi, rpa, poly, keq = row
+        sh = self._shift
         w_eff = float(np.hypot(w_p, sh.omega_0))
-        K_c = float(creep_coefficient(p, r_ref, F_s, R_p=st.R_p))
-        _, keq = self.model.static_creep(r_ref, st.R_p, st.R_s, st.phi, F_s,
-                                         self._tau_ref)
+        # `creep_coefficient` and `EmpactModel.static_creep`, term by term
+        D = sh.D_ref * (1 + sh.k_D * (F_s - sh.F_ref))
+        K_c = float(sh.gain * D * self._g_beta * r_ref * rpa * poly)
+        if self.model.creep:
+            keq = self.model.static_creep_point(r_ref, R_p, R_s, phi, F_s, self._tau_ref,
+                                                self._creep_args)[1]
         xi = sh.xi_sat * np.tanh(rdot / (w_eff * K_c) / sh.xi_sat)
-        return float(-(a.i_e * a.s / a.i_w) * float(keq) * np.expm1(xi) * F_s)
+        return float(self._shift_gain * keq * np.expm1(xi) * F_s)
 
     def _limit(self, u: NDArray, w: tuple[float, float]) -> NDArray[np.float64]:
         """The servo torques the drives deliver: within the torque limit, and the torque that
         would drive a servo faster falls to zero over the last `SPEED_BAND` of its speed."""
-        lim = self.config.limits
-        out = np.empty(2)
-        for j, (T, T_max, w_m, w_max) in enumerate(((u[0], lim.T_mp_max, w[0], lim.omega_mp_max),
-                                                    (u[1], lim.T_ms_max, w[1], lim.omega_ms_max))):
-            T = min(max(T, -T_max), T_max)
-            if T * w_m > 0:
-                T *= min(max((w_max - abs(w_m)) / (SPEED_BAND * w_max), 0.0), 1.0)
-            out[j] = T
-        return out
+        return np.array(self._limit_f(float(u[0]), float(u[1]), float(w[0]), float(w[1])))
+
+    def _limit_f(self, u0: float, u1: float, w0: float, w1: float) -> tuple[float, float]:
+        """`_limit` on floats (``min(max(T, -T_max), T_max)`` spelt out)."""
+        (T_max, w_max), (S_max, v_max) = self._lim
+        T = -T_max if -T_max > u0 else u0
+        T = T_max if T_max < T else T
+        if T * w0 > 0:
+            T *= min(max((w_max - abs(w0)) / (SPEED_BAND * w_max), 0.0), 1.0)
+        S = -S_max if -S_max > u1 else u1
+        S = S_max if S_max < S else S
+        if S * w1 > 0:
+            S *= min(max((v_max - abs(w1)) / (SPEED_BAND * v_max), 0.0), 1.0)
+        return T, S
 
     def step(self, t: float, measured: NDArray[np.float64]) -> NDArray[np.float64]:
         """Servo torques ``[T_mp, T_ms]`` [N m] over ``[t, t + dt)``."""
-        self._z, u = self.update(self._z, np.asarray(measured, float), self._k)
+        self._z, u = self.update(self._z, measured, self._k)
         self._k += 1
         return u
+

@@ -13,10 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..control.closed_loop import build_law, control_example_path
 from ..params import OperatingPoint, default_params
 from .equilibrium import trim
 from .linearization import linearize_many, plant
 from .model import nonlinear_model
+from .scenario import load_scenario
 from .simulation import simulate
 
 __all__ = ["compile_all", "drop_stale_cache"]
@@ -74,6 +76,15 @@ def compile_all() -> float:
             linearize_many(model, tr.x[None], tr.u[None], np.array([tr.r_g]),
                            np.array([tr.nu]))
     plant(params)
+    # the sampled loop law's compiled arithmetic (`empact.control._law_core`): a sample,
+    # the linearisation's ideal sample, the sensors alone, the gain schedule
+    law = build_law(load_scenario(control_example_path("slip-load-step-r1")), params)
+    law.step(0.0, law.raw0)
+    law.preprocess(law.z0[:law.n_pre], law.raw0, 0, np.array([law.point["r_g"], 0.01, 0.05,
+                                                                 0.0]), ideal=True)
+    law.sense(law.z0[:law.n_pre - 2].reshape(len(law.raw0), -1))
+    if law.controller.schedule is not None:
+        law.controller.schedule.gains_at([1.0] * len(law.controller.schedule.axes))
     return time.perf_counter() - t0
 
 

@@ -454,6 +454,20 @@ class EmpactModel:
         K.creep_many(*args, self.p, lam, keq)
         return lam.reshape(shape), keq.reshape(shape)
 
+    def static_creep_point(self, r_g: float, R_p: float, R_s: float, phi: float,
+                           F_el: float, tau: float,
+                           work: list[NDArray] | None = None) -> tuple[float, float]:
+        """`static_creep` at one point, as floats (what a sampled law calls at every
+        sample): the same compiled loop on one-element arrays, `work` (eight of them) if
+        given."""
+        if not self.creep:
+            return 0.0, float((np.pi + 2 * phi) / (np.pi - 2 * phi))
+        a = work if work is not None else [np.empty(1) for _ in range(8)]
+        for j, v in enumerate((r_g, R_p, R_s, phi, F_el, tau)):
+            a[j][0] = v
+        K.creep_many(a[0], a[1], a[2], a[3], a[4], a[5], self.p, a[6], a[7])
+        return float(a[6][0]), float(a[7][0])
+
     def evaluate_many(self, X: ArrayLike, U: ArrayLike) -> tuple[NDArray, NDArray]:
         """`evaluate` at many points in one compiled loop: `X` (N, n), `U` (N, 4) ->
         derivatives (N, n) and outputs (N, len(outputs))."""

@@ -343,6 +343,8 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
     y = np.empty(len(model.outputs))
     dx = np.empty(model.n)
     meas = np.empty(len(where))
+    # all of them outputs (the loop law's): one indexing per sample
+    out_idx = np.array([j for _, j in where]) if all(kind == 0 for kind, _ in where) else None
     for j in cmd:
         sig_n[j] = 1
     t, h = 0.0, min(1e-5, max_step)
@@ -355,8 +357,11 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
             K._eval(x, u, model.p, model.ix, dx, y)
             if k == 0:
                 Y[0] = y
-            for i, (kind, j) in enumerate(where):
-                meas[i] = y[j] if kind == 0 else (x[j] if kind == 1 else u[j])
+            if out_idx is not None:
+                meas = y[out_idx]
+            else:
+                for i, (kind, j) in enumerate(where):
+                    meas[i] = y[j] if kind == 0 else (x[j] if kind == 1 else u[j])
             c = np.asarray(controller.step(float(t_grid[k]), meas), float)
             commands[k] = c
             u[cmd] = c

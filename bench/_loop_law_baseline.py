@@ -1,0 +1,581 @@
+"""Today's loop law, frozen (empact/control/law.py at commit e0e0caf, before issue 23's
+faster law): the reference of ``bench_closed_loop.py`` and of the equality test in
+``tests/test_loop.py`` (the faster law's closed-loop outputs equal this law's to 1e-12).
+Not part of the package.  The gain schedule's evaluation of that commit
+(`empact.control.controller.Schedule.__call__`) is frozen with it (`_schedule_gains`).
+
+The module notes of the law as it was follow.
+
+The sampled loop law that runs on the machine: sensors, references, controller, clamping
+feedforward, servo limits and anti-windup, as one state-space update.
+
+At each sample ``k`` (period ``dt = 1 / rate``) the law
+
+1. **senses** (`empact.control.hardware.SensorParams`): the ratio ``r_g``, the shaft speeds
+   ``omega_p``, ``omega_s``, the driveshaft torque ``T_ds`` and the servo speeds, each
+   ``delay`` samples late; the shaft speeds as counting encoders give them (the mean over
+   ``speed_window``, quantised), with the configured noise (seeded);
+2. computes the **slip** from the speeds, ``nu = 1 - omega_s / (r_g omega_p)`` (``nu_r`` on
+   the reference ratio), and the tracking errors ``e = reference - measured`` (of their
+   logarithms for ``ln_`` signals);
+3. runs the **controller** (`empact.control.controller.Controller`, discretised by Tustin at
+   the rate when continuous): ``x_c' = A x_c + B e``, ``du = C x_c + D e``;
+4. adds the **clamping feedforward** (``feedforward``): the secondary servo torque that holds
+   the set-point's traction coefficient at the measured driveshaft torque and ratio,
+   ``T_ms,ff = (i_e s / i_c) T_ds cos(beta) / (2 mu_hat R_s(r_g))`` with ``mu_hat =
+   traction_error * mu(nu*, r_g*)`` (times ``feedforward_gain``: below 1 it leaves the belt
+   part of its damping of the driveshaft mode, which a full feedforward of the driveshaft
+   torque cancels), through a first-order low-pass at
+   ``feedforward_filter_hz`` (below the clamping mode near 9.5 Hz); or, with ``clamping =
+   "safety-factor"``, the open-loop clamping of a production CVT (the slip loop off):
+   ``F_s = SF T_l cos(beta) / (2 mu_design R_s)``, ``mu_design`` the smallest traction peak
+   over the ratio range (``mu_design = "ratio-blind"``) or the peak at the measured ratio
+   (``"ratio-aware"``);
+5. with ``decoupling``, makes the primary servo torque follow the feedforward's clamping:
+   ``T_mp += d LP(T_ms,ff - T_ms,ff*)`` with ``d = T_mp* / T_ms*`` the ratio of the holding
+   torques at the reference ratio (`empact.nonlinear.equilibrium.trim_grid`) and ``LP`` a
+   first-order low-pass at ``decoupling_filter_hz`` (below the 17 Hz actuation mode, which
+   a fast primary servo torque excites).  With equal translation the
+   primary servo holds the thrust difference ``F_p - F_s`` (``T_mp = (i_e s / i_w) (F_p -
+   F_s)`` at rest): a clamping change at a held primary torque changes the thrust ratio and
+   the belt creeps to another ratio (and, on a bench, the ratio change accelerates the
+   dynamometers); scaling both servo torques together keeps the thrust ratio;
+6. with ``shift_feedforward``, adds the primary servo torque that makes the creep law shift
+   at the reference's ratio rate (``dr*/dt`` over ``omega K_c``, the inverse of the
+   unsaturated creep law at the reference ratio; `empact.variator.shift_law`) and the
+   clamping for the secondary side's acceleration (``J_s omega_p dr*/dt`` of belt torque);
+7. **limits** each servo torque (`empact.control.hardware.ServoLimits`: the torque limit, and
+   the speed limiter) and feeds the difference back to the controller state (observer-form
+   anti-windup, Astrom & Wittenmark, *Computer-Controlled Systems*, 3rd ed., Sec. 9.4:
+   ``x_c' = A x_c + B e + L (u_applied - u_controller)``, ``L`` the steady Kalman gain of
+   the controller's ``(A, C)``, so that ``A - L C`` is stable).
+
+The servo torques are the trim's holding torques plus these terms: the controller starts in
+its steady state at the trim (its integrators hold the holding torques less the
+feedforward's share at the trim, computed with the feedforward's own traction estimate).
+
+`LoopLaw.update` is a pure function of the law's state (a flat vector: sensor buffers,
+feedforward filter, controller state), the raw measurements and the sample index; `step` is
+the stateful `empact.nonlinear.simulation.SampledController` interface around it, and
+`empact.control.loop` linearises the same function for the loop's linear model.
+"""
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass, replace
+from typing import Any, Mapping
+
+import numpy as np
+from numpy.typing import NDArray
+
+from empact._lazy import lazy_module
+from empact.errors import ParameterError
+from empact.hardware import SPEED_BAND, SensorParams, ServoLimits
+from empact.nonlinear.equilibrium import slip_at_torque_ratio, traction_peak, trim_grid
+from empact.nonlinear.model import EmpactModel
+from empact.nonlinear.scenario import REFERENCES, ControllerSpec, Scenario
+from empact.params import Params
+from empact.variator.geometry import ratio_range, secondary_radius, variator_state
+from empact.variator.shift_law import creep_coefficient
+from empact.control.controller import _LOG_AXES, Controller
+
+linalg = lazy_module("scipy.linalg")
+
+__all__ = ["LoopConfig", "LoopLaw", "RAW_SIGNALS", "SHIPPED_LOOP", "reference_table"]
+
+
+def _schedule_gains(sched, point: Mapping[str, float]) -> NDArray[np.float64]:
+    """`Schedule.__call__` at commit e0e0caf: the gains at an operating point."""
+    L = sched._log
+    for q, qs, name in zip(sched._q, sched._qlist, sched.axes):
+        v = float(point[name])
+        v = math.log(max(v, 1e-12)) if name in _LOG_AXES else v
+        if len(qs) == 1:
+            L = L[0]
+            continue
+        i = min(max(bisect.bisect_left(qs, v) - 1, 0), len(qs) - 2)
+        f = min(max((v - qs[i]) / (qs[i + 1] - qs[i]), 0.0), 1.0)
+        L = (1 - f) * L[i] + f * L[i + 1]
+    return sched._sign * np.exp(L)
+
+#: the loop of the shipped scenarios and designs (`ControllerSpec` keys): the clamping
+#: feedforward of the driveshaft torque at 0.9 of it, unfiltered but for noise, and the
+#: primary servo following it through a 5 Hz low-pass (see the module notes)
+SHIPPED_LOOP = {"feedforward": True, "feedforward_gain": 0.9, "feedforward_filter_hz": 100.0,
+                "decoupling": True, "decoupling_filter_hz": 5.0}
+
+#: what the law reads from the machine, in this order (model outputs)
+RAW_SIGNALS = ("r_g", "omega_p", "omega_s", "T_ds", "omega_mp", "omega_ms", "T_l_act")
+_SPEEDS = (1, 2)  # RAW_SIGNALS indices counted by encoders
+
+
+@dataclass(frozen=True)
+class LoopConfig:
+    """How the law runs: a scenario's ``[controller]`` table (`ControllerSpec`) with the
+    servo limits and sensors resolved (the parameter set's ``[servo]`` and ``[sensors]``
+    under the scenario's ``[limits]`` and ``[sensors]``).
+
+    Attributes
+    ----------
+    spec : ControllerSpec
+    limits : ServoLimits or None
+        None: no servo limits.
+    sensors : SensorParams or None
+        None: ideal sensors (no delay, counting window, quantisation or noise).
+    quantise : bool
+        Quantise the measurements (False: the delay and counting window only).
+    """
+
+    spec: ControllerSpec
+    limits: ServoLimits | None = None
+    sensors: SensorParams | None = None
+    quantise: bool = True
+
+    @property
+    def dt(self) -> float:
+        """Sample period [s]."""
+        return 1.0 / self.spec.rate
+
+    @classmethod
+    def for_scenario(cls, scenario: Scenario, params: Params) -> "LoopConfig":
+        """The loop of a closed-loop scenario on the parameter set."""
+        spec = scenario.controller
+        if spec is None:
+            raise ParameterError(f"scenario {scenario.name!r} has no [controller] table")
+        return cls(spec, replace(params.servo, **scenario.limits) if spec.limits else None,
+                   replace(params.sensors, **scenario.sensors) if spec.sensors else None)
+
+    @classmethod
+    def of(cls, params: Params, **spec: Any) -> "LoopConfig":
+        """A loop on the parameter set's servos and sensors with the `ControllerSpec` keys
+        `spec` (no file: for design and analysis)."""
+        sp = ControllerSpec(file="", **spec)
+        return cls(sp, params.servo if sp.limits else None,
+                   params.sensors if sp.sensors else None)
+
+    def ideal(self) -> "LoopConfig":
+        """The same loop without limits, quantisation and noise (the delay and the counting
+        window, which are linear, stay): what `empact.control.loop` linearises."""
+        if self.sensors is None:
+            return replace(self, limits=None, quantise=False)
+        s = replace(self.sensors, speed_noise=0.0, ratio_quantum=0.0, torque_noise=0.0)
+        return replace(self, limits=None, sensors=s, quantise=False)
+
+
+def reference_table(references: Mapping[str, NDArray], t: NDArray) -> dict[str, NDArray]:
+    """Piecewise-linear references ``{name: [[t, v], ...]}`` at times `t` (right-continuous:
+    a repeated time is a step; held before the first and after the last point).
+
+    Parameters
+    ----------
+    references : dict str -> ndarray, shape (k, 2)
+        Each reference as rows ``[t, value]`` (times [s] non-decreasing; values in the
+        reference's units, e.g. ``r_g`` [-], ``nu`` [-]).
+    t : ndarray, shape (n_t,)
+        Times to evaluate at [s].
+
+    Returns
+    -------
+    dict str -> ndarray, shape (n_t,)
+        Each reference's value at `t`, by name.
+    """
+    out = {}
+    tt = np.asarray(t, float)
+    for name, arr in references.items():
+        ts, vs = arr[:, 0], arr[:, 1]
+        n = len(ts)
+        i = np.clip(np.searchsorted(ts, tt, side="right") - 1, 0, max(n - 2, 0))
+        j = np.minimum(i + 1, n - 1)
+        span = ts[j] - ts[i]
+        frac = np.divide(tt - ts[i], span, out=np.ones_like(tt), where=span > 0)
+        out[name] = np.where(tt < ts[0], vs[0], np.where(tt >= ts[-1], vs[-1],
+                                                          vs[i] + (vs[j] - vs[i]) * frac))
+    return out
+
+
+def _antiwindup_gain(A: NDArray, C: NDArray) -> NDArray:
+    """Observer gain ``L`` of the discrete controller ``(A, C)``: the steady Kalman gain for
+    unit state and output noise (``A - L C`` stable whenever ``(A, C)`` is detectable)."""
+    n, m = A.shape[0], C.shape[0]
+    if n == 0:
+        return np.zeros((0, m))
+    P = linalg.solve_discrete_are(A.T, C.T, np.eye(n), np.eye(m))
+    return A @ P @ C.T @ np.linalg.inv(C @ P @ C.T + np.eye(m))
+
+
+@dataclass(frozen=True, eq=False)
+class _Refs:
+    """References on the sample grid: ratio, slip set-point, its traction coefficient, the
+    ratio reference's rate."""
+
+    r_g: NDArray[np.float64]
+    slip: NDArray[np.float64]
+    mu: NDArray[np.float64]
+    rdot: NDArray[np.float64]
+    decoupling: NDArray[np.float64]
+
+
+class LoopLaw:
+    """The loop law of the module notes, with the step interface of
+    `empact.nonlinear.simulation.SampledController`.
+
+    Parameters
+    ----------
+    controller : Controller
+        From the errors of ``r_g`` and a slip signal (``nu``, ``nu_r``, or ``ln_`` of them)
+        to ``T_mp``, ``T_ms``; continuous (discretised by Tustin at the rate) or discrete at
+        the rate.
+    model : EmpactModel
+    point : mapping
+        The operating point the loop starts at: ``r_g``, ``nu``, ``omega_p``, ``T_l``
+        (``T_ds`` at rest), ``F_s``.
+    u0 : array, shape (2,)
+        The servo torques that hold it [N m].
+    config : LoopConfig
+    references : dict name -> array (k, 2), optional
+        ``r_g`` and one of ``nu``, ``nu_r``, ``tau``; a signal not given holds the point's
+        value.
+    duration : float
+        Length of the run [s] (the references and noise are prepared for it).
+    """
+
+    commands = ("T_mp", "T_ms")
+
+    def __init__(self, controller: Controller, model: EmpactModel, point: Mapping[str, float],
+                 u0: NDArray, config: LoopConfig,
+                 references: Mapping[str, NDArray] | None = None,
+                 duration: float = 0.0) -> None:
+        self.config = cfg = config
+        self.dt = dt = cfg.dt
+        spec = cfg.spec
+        if controller.outputs != ("T_mp", "T_ms"):
+            raise ParameterError(f"controller outputs {controller.outputs}: must drive T_mp, "
+                                 "T_ms")
+        cd = controller.discretize(dt) if not controller.dt else controller
+        if abs(cd.dt - dt) > 1e-12:
+            raise ParameterError(f"controller sample time {cd.dt:g} s differs from the "
+                                 f"loop's rate {spec.rate:g} Hz")
+        self.controller = cd
+        signals = [m[3:] if m.startswith("ln_") else m for m in cd.measured]
+        if len(signals) != 2 or signals[0] != "r_g" or signals[1] not in ("nu", "nu_r"):
+            raise ParameterError(f"the controller measures {cd.measured}: the loop tracks "
+                                 "(r_g, nu or nu_r), or their logarithms (ln_)")
+        self.slip_signal = signals[1]
+        self.logs = np.array([m.startswith("ln_") for m in cd.measured])
+        self._logs = tuple(bool(x) for x in self.logs)
+        self.model = model
+        v, a = model.params.variator, model.params.actuation
+        self._L, self._a = v.L_belt, v.a
+        self._cosb = float(np.cos(v.beta))
+        self._tpf = a.i_e * a.s * model.constants.sheave_sense / a.i_c  # T_ms per N of F_s
+        self._r_ref0 = float(model.options.reference_ratio or point["r_g"])
+        self.point = {k: float(point[k]) for k in ("r_g", "nu", "omega_p", "T_l", "F_s")}
+        self.u0 = np.asarray(u0, float)[:2].copy()
+        # references on the sample grid
+        references = dict(references or {})
+        for key in references:
+            if key not in REFERENCES:
+                raise ParameterError(f"reference {key!r}: choose from {', '.join(REFERENCES)}")
+        if sum(k in references for k in ("nu", "nu_r", "tau")) > 1:
+            raise ParameterError("give one slip set-point: references.nu, nu_r or tau")
+        self.n_k = max(int(round(duration / dt)), 0) + 2
+        self.t_k = np.arange(self.n_k) * dt
+        self.references = references
+        self.refs = self._references(references)
+        # the safety-factor strategy's traction coefficient
+        self._mu_design = None
+        if spec.mu_design == "ratio-blind":
+            rr = np.geomspace(*ratio_range(v), 41)
+            self._mu_design = float(np.min(model.mu_max(rr)))
+        # sensors: buffers of delay + window samples per raw signal
+        s = cfg.sensors
+        self._delay = int(s.delay) if s is not None else 0
+        self._window = max(1, int(round(s.speed_window / dt))) if s is not None else 1
+        self._n_buf = self._delay + self._window
+        self._speed_quantum = (2 * np.pi / (s.speed_counts * self._window * dt)
+                               if s is not None else 0.0)
+        self._noise = self._make_noise()
+        # the law's state: buffers, feedforward filter, controller
+        self._nb = len(RAW_SIGNALS) * self._n_buf
+        self._mu_max_cache = (float("nan"), float("nan"))
+        self._R_s_last = (float("nan"), float("nan"))
+        self.n_state = self._nb + 2 + cd.n
+        self._alpha_ff = float(np.exp(-2 * np.pi * spec.feedforward_filter_hz * dt))
+        self._alpha_dec = float(np.exp(-2 * np.pi * spec.decoupling_filter_hz * dt))
+        self._decoupling0 = float(self.refs.decoupling[0])
+        self._L_aw = _antiwindup_gain(cd.A, cd.C) if spec.anti_windup else \
+            np.zeros((cd.n, 2))
+        self.raw0 = self.raw_at_rest(self.point)
+        F0 = self._ff_force(self.raw0[3], self.raw0[0], self.refs.mu[0])  # T_ds = T_l
+        self._F0 = F0 if spec.feedforward else 0.0
+        self._bias = np.array([self.u0[0], self.u0[1] - self._tpf * self._F0])
+        # the pre-processing's secondary servo torque at rest (the decoupler's zero)
+        self._T_ms_start = self.u0[1]
+        if spec.clamping == "safety-factor":
+            self._T_ms_start = self._safety_torque(self.raw0[3], self.raw0[0])
+        self.z0 = self.initial_state()
+        self.reset()
+
+    # -- set-up ----------------------------------------------------------------------------
+    def _references(self, references: Mapping[str, NDArray]) -> _Refs:
+        t = self.t_k
+        tab = reference_table(references, t)
+        r = tab.get("r_g", np.full(t.shape, self.point["r_g"]))
+        lo, hi = ratio_range(self.model.params.variator)
+        if np.any((r < lo) | (r > hi)):
+            bad = r[(r < lo) | (r > hi)][0]
+            raise ParameterError(f"references.r_g = {bad:g}: outside the variator's ratio "
+                                 f"range [{lo:.4g}, {hi:.4g}]")
+        if "tau" in tab:
+            pairs, inv = np.unique(np.column_stack([tab["tau"], r]), axis=0,
+                                   return_inverse=True)
+            slip = slip_at_torque_ratio(self.model, pairs[:, 0], pairs[:, 1])[inv.ravel()]
+        else:
+            slip = tab.get(self.slip_signal if self.slip_signal in tab else
+                           ("nu" if "nu" in tab else "nu_r"),
+                           np.full(t.shape, self.point["nu"]))
+        ru, inv = np.unique(r, return_inverse=True)
+        nu_pk = np.atleast_1d(traction_peak(self.model, ru)[0])[inv]
+        if np.any(~((slip > 0) & (slip < nu_pk))):
+            k = int(np.flatnonzero(~((slip > 0) & (slip < nu_pk)))[0])
+            raise ParameterError(f"slip set-point {slip[k]:g} at r_g = {r[k]:g}: must lie on "
+                                 f"the rising traction curve (0, {nu_pk[k]:.4g})")
+        pairs, inv = np.unique(np.column_stack([slip, r]), axis=0, return_inverse=True)
+        mu = self.model.traction(pairs[:, 0], pairs[:, 1])[inv.ravel()]
+        self._tau_ref = float(mu[0] / self.model.mu_max(r[0]))
+        self._tau_ref = min(max(self._tau_ref, 1e-3), 0.999)
+        # the rate of the reference over each sample period (no smearing across a corner)
+        rdot = np.append(np.diff(r) / np.diff(t), 0.0) if len(t) > 1 else np.zeros_like(t)
+        dec = np.zeros_like(t)
+        if self.config.spec.decoupling:
+            # the holding torques' ratio T_mp* / T_ms* at the reference ratios (at the
+            # set-point's torque ratio and the starting clamping force)
+            ru, inv = np.unique(r, return_inverse=True)
+            g = trim_grid(self.model, ru, self.point["omega_p"],
+                          tau=np.full(ru.shape, self._tau_ref), F_s=self.point["F_s"])
+            if not np.all(g.ok):
+                bad = ru[~g.ok][0]
+                raise ParameterError(f"decoupling: the machine does not trim at the reference "
+                                     f"ratio {bad:g} ({g.reason[~g.ok][0]})")
+            dec = (g.u[:, 0] / g.u[:, 1])[inv]
+        return _Refs(r_g=r, slip=np.asarray(slip, float), mu=np.asarray(mu, float), rdot=rdot,
+                     decoupling=dec)
+
+    def _make_noise(self) -> NDArray[np.float64]:
+        s = self.config.sensors
+        noise = np.zeros((self.n_k, len(RAW_SIGNALS)))
+        if s is None:
+            return noise
+        rng = np.random.default_rng(self.config.spec.seed)
+        if s.speed_noise:
+            noise[:, list(_SPEEDS)] = s.speed_noise * rng.standard_normal((self.n_k, 2))
+        if s.torque_noise:
+            noise[:, 3] = s.torque_noise * rng.standard_normal(self.n_k)
+        return noise
+
+    def raw_at_rest(self, point: Mapping[str, float]) -> NDArray[np.float64]:
+        """The raw measurements at a steady operating point (`RAW_SIGNALS` order)."""
+        w_p = point["omega_p"]
+        return np.array([point["r_g"], w_p, point["r_g"] * w_p * (1 - point["nu"]),
+                         point["T_l"], 0.0, 0.0, point["T_l"]])
+
+    def initial_state(self) -> NDArray[np.float64]:
+        """The law's state at rest at the starting point (buffers full of the point's
+        measurements, the feedforward filter settled, the controller state zero)."""
+        z = np.zeros(self.n_state)
+        z[:self._nb] = np.repeat(self.raw0, self._n_buf)
+        z[self._nb] = self._ff_force(self.raw0[3], self.raw0[0], self.refs.mu[0])
+        return z
+
+    def reset(self) -> None:
+        """Back to the first sample at rest."""
+        self._z = self.z0.copy()
+        self._k = 0
+
+    @property
+    def measured(self) -> tuple[str, ...]:
+        """What the simulator hands the law at each sample (`RAW_SIGNALS`)."""
+        return RAW_SIGNALS
+
+    # -- the law ---------------------------------------------------------------------------
+    def _R_s(self, r_g: float) -> float:
+        """Secondary running radius [m] at the measured ratio (unstretched belt; a function
+        of the ratio alone, to the last bit: the last value is reused only for the same
+        ratio)."""
+        r = min(max(float(r_g), 1e-3), 1e3)
+        if r != self._R_s_last[0]:
+            self._R_s_last = (r, secondary_radius(r, self._L, self._a))
+        return self._R_s_last[1]
+
+    def _ff_force(self, T_ds: float, r_g: float, mu_ref: float) -> float:
+        """Clamping force [N] that holds the traction coefficient ``traction_error * mu_ref``
+        at driveshaft torque `T_ds` and ratio `r_g`."""
+        spec = self.config.spec
+        return spec.feedforward_gain * T_ds * self._cosb / (2 * spec.traction_error * mu_ref
+                                                            * self._R_s(r_g))
+
+    def sense(self, buf: NDArray, ideal: bool = False) -> NDArray[np.float64]:
+        """The measurements the controller sees from the buffers (n_raw, n_buf): each signal
+        `delay` samples late, the shaft speeds averaged over the counting window and
+        quantised (not when `ideal`)."""
+        d, W = self._delay, self._window
+        m = buf[:, d].copy()
+        s = self.config.sensors
+        if W > 1:
+            m[1:3] = buf[1:3, d:d + W].sum(axis=1) / W
+        if s is not None and not ideal and self.config.quantise:
+            q = self._speed_quantum
+            m[1] = round(m[1] / q) * q
+            m[2] = round(m[2] / q) * q
+            if s.ratio_quantum:
+                m[0] = round(m[0] / s.ratio_quantum) * s.ratio_quantum
+        return m
+
+    def preprocess(self, s: NDArray, raw: NDArray, k: int, ref: NDArray | None = None,
+                   ideal: bool = False) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """Everything of one sample but the controller: from the sensor and feedforward
+        state `s` (``n_pre``), the raw measurements `raw` (`RAW_SIGNALS`) and the sample
+        index `k`, the next state, the controller's errors ``e``, the servo torques without
+        the controller's share (holding torques and feedforwards) and the measurements the
+        controller saw; `ref` (``r_g, slip, mu, dr_g/dt``) replaces the references of sample
+        `k`; `ideal` drops noise and quantisation."""
+        spec = self.config.spec
+        nb, nbuf = self._nb, self._n_buf
+        kk = min(k, self.n_k - 1)
+        buf = np.empty((len(RAW_SIGNALS), nbuf))
+        buf[:, 1:] = s[:nb].reshape(len(RAW_SIGNALS), nbuf)[:, :-1]
+        buf[:, 0] = raw if ideal else raw + self._noise[kk]
+        m = self.sense(buf, ideal)
+        if ref is None:
+            r_ref, slip_ref, mu_ref, rdot = (self.refs.r_g[kk], self.refs.slip[kk],
+                                             self.refs.mu[kk], self.refs.rdot[kk])
+        else:
+            r_ref, slip_ref, mu_ref, rdot = ref
+        r_m, w_p, w_s, T_ds = (float(x) for x in m[:4])
+        base = r_m if self.slip_signal == "nu" else self._r_ref0
+        y = (r_m, 1.0 - w_s / (base * w_p))
+        yr = (float(r_ref), float(slip_ref))
+        e = np.array([math.log(max(a, 1e-9)) - math.log(max(b, 1e-9)) if lg else a - b
+                      for a, b, lg in zip(yr, y, self._logs)])
+        f = s[nb]
+        sched = self.controller.schedule
+        if sched is not None:
+            e = e * _schedule_gains(sched, {"r_g": r_m, "tau": mu_ref / self._mu_max_ref(r_ref),
+                           "F_s": f if spec.feedforward else self.point["F_s"]})
+        u = self._bias.copy()
+        if spec.clamping == "safety-factor":
+            e[1] = 0.0  # the slip loop is replaced by the open-loop clamping strategy
+            u[1] = self._safety_torque(T_ds, r_m)
+            f = 0.0  # unused
+        elif spec.feedforward:
+            T_b = T_ds if spec.feedforward_signal == "T_ds" else m[6]
+            if spec.shift_feedforward:  # the secondary pulley's acceleration torque
+                T_b = T_b + self.model.params.driveline.J_s * w_p * rdot
+            a = self._alpha_ff
+            f = a * f + (1 - a) * self._ff_force(T_b, r_m, mu_ref)
+            u[1] += self._tpf * f
+        else:
+            f = 0.0  # unused
+        # the primary servo's feedforward share, low-passed: the decoupler (it follows the
+        # feedforward's clamping) and the shift feedforward
+        d = self.refs.decoupling[kk] if ref is None else self._decoupling0
+        t_mp = d * (u[1] - self._T_ms_start)
+        if spec.shift_feedforward:
+            t_mp += self._shift_torque(r_ref, rdot, w_p, f if spec.feedforward
+                                       else self.point["F_s"])
+        g = s[nb + 1]
+        if d or spec.shift_feedforward:
+            a = self._alpha_dec
+            g = a * g + (1 - a) * t_mp
+            u[0] += g
+        else:
+            g = 0.0
+        s_next = np.empty_like(s)
+        s_next[:nb] = buf.ravel()
+        s_next[nb] = f
+        s_next[nb + 1] = g
+        return s_next, e, u, m
+
+    def _safety_torque(self, T: float, r_m: float) -> float:
+        """The safety-factor strategy's secondary servo torque for the torque `T` [N m] a
+        production controller knows (the engine's torque estimate; here the driveshaft
+        torque) at the measured ratio `r_m`: ``F_s = SF |T| cos(beta) / (2 mu_design R_s)``."""
+        mu_d = self._mu_design if self._mu_design is not None else float(self.model.mu_max(r_m))
+        return self._tpf * self.config.spec.safety_factor * abs(T) * self._cosb / (
+            2 * mu_d * self._R_s(r_m))
+
+    def _mu_max_ref(self, r_ref: float) -> float:
+        """Peak traction coefficient at the reference ratio (cached per ratio)."""
+        if r_ref != self._mu_max_cache[0]:
+            self._mu_max_cache = (r_ref, float(self.model.mu_max(r_ref)))
+        return self._mu_max_cache[1]
+
+    @property
+    def n_pre(self) -> int:
+        """Size of the sensor, feedforward and decoupler state (`preprocess`)."""
+        return self._nb + 2
+
+    @property
+    def output_mask(self) -> NDArray[np.float64]:
+        """Which controller outputs reach the servos (the safety-factor strategy's clamping
+        replaces the controller's secondary servo torque)."""
+        return np.array([1.0, 0.0 if self.config.spec.clamping == "safety-factor" else 1.0])
+
+    def update(self, z: NDArray, raw: NDArray, k: int, ref: NDArray | None = None,
+               ideal: bool = False) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """One sample of the law: the next state and the servo torques ``[T_mp, T_ms]``
+        [N m] held over the period, from the state `z` (`preprocess`'s, then the
+        controller's), the raw measurements `raw` (`RAW_SIGNALS`) and the sample index `k`;
+        `ref` replaces the references of sample `k`; `ideal` drops noise, quantisation and
+        limits (the linear model's law)."""
+        c, n = self.controller, self.n_pre
+        s_next, e, u, m = self.preprocess(z[:n], raw, k, ref, ideal)
+        xc = z[n:]
+        du = (c.C @ xc + c.D @ e) * self.output_mask
+        xc_next = c.A @ xc + c.B @ e
+        u = u + du
+        if not ideal and self.config.limits is not None:
+            u_sat = self._limit(u, (m[4], m[5]))
+            if self.config.spec.anti_windup:
+                xc_next = xc_next + self._L_aw @ ((u_sat - u) * self.output_mask)
+            u = u_sat
+        return np.concatenate([s_next, xc_next]), u
+
+    def _shift_torque(self, r_ref: float, rdot: float, w_p: float, F_s: float) -> float:
+        """Primary servo torque [N m] over its holding value against the creep law's
+        resistance at the ratio rate `rdot` [1/s] (at the reference ratio, speed `w_p`,
+        clamping force `F_s`): the thrust ratio ``kappa* exp(xi)`` with ``xi = xi_sat
+        tanh(rdot / (omega K_c) / xi_sat)`` (`empact.variator.shift_law`) needs the primary
+        thrust ``kappa* (exp(xi) - 1) F_s`` more, ``T_mp = -(i_e s / i_w)`` times it (the
+        kernel's ratio-controller gain has the same sign)."""
+        if rdot == 0.0:
+            return 0.0
+        p = self.model.params
+        a, sh = p.actuation, p.shift
+        st = variator_state(r_ref, p.variator)
+        w_eff = float(np.hypot(w_p, sh.omega_0))
+        K_c = float(creep_coefficient(p, r_ref, F_s, R_p=st.R_p))
+        _, keq = self.model.static_creep(r_ref, st.R_p, st.R_s, st.phi, F_s,
+                                         self._tau_ref)
+        xi = sh.xi_sat * np.tanh(rdot / (w_eff * K_c) / sh.xi_sat)
+        return float(-(a.i_e * a.s / a.i_w) * float(keq) * np.expm1(xi) * F_s)
+
+    def _limit(self, u: NDArray, w: tuple[float, float]) -> NDArray[np.float64]:
+        """The servo torques the drives deliver: within the torque limit, and the torque that
+        would drive a servo faster falls to zero over the last `SPEED_BAND` of its speed."""
+        lim = self.config.limits
+        out = np.empty(2)
+        for j, (T, T_max, w_m, w_max) in enumerate(((u[0], lim.T_mp_max, w[0], lim.omega_mp_max),
+                                                    (u[1], lim.T_ms_max, w[1], lim.omega_ms_max))):
+            T = min(max(T, -T_max), T_max)
+            if T * w_m > 0:
+                T *= min(max((w_max - abs(w_m)) / (SPEED_BAND * w_max), 0.0), 1.0)
+            out[j] = T
+        return out
+
+    def step(self, t: float, measured: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Servo torques ``[T_mp, T_ms]`` [N m] over ``[t, t + dt)``."""
+        self._z, u = self.update(self._z, np.asarray(measured, float), self._k)
+        self._k += 1
+        return u
