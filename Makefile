@@ -23,7 +23,7 @@ $(STAMP): pyproject.toml
 	   echo "error: pip install printed the warnings above ($(VENV)/install.log)"; exit 1; fi
 	@grep -E "^Successfully installed" $(VENV)/install.log
 	# numba's cache, built once here: the first command after install is as fast as the second
-	$(BIN)/python -m empact.nonlinear._compile
+	$(BIN)/python -m empact._compile
 	touch $(STAMP)
 
 reproduce: $(STAMP)

@@ -4,7 +4,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 import pytest  # noqa: E402
 
-from empact.nonlinear._compile import drop_stale_cache  # noqa: E402
+from empact._compile import drop_stale_cache  # noqa: E402
 from empact.params import default_params  # noqa: E402
 
 # an edited kernel must not be tested through integrators compiled against its old version

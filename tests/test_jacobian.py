@@ -222,7 +222,7 @@ def test_stale_numba_cache_is_dropped(tmp_path):
     than the oldest index, every index and data file goes (the suite calls this first)."""
     import os
 
-    from empact.nonlinear._compile import drop_stale_cache
+    from empact._compile import drop_stale_cache
 
     cache = tmp_path / "__pycache__"
     cache.mkdir()

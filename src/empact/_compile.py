@@ -1,10 +1,12 @@
-"""Compile the nonlinear model's numba code once, ahead of the first command (private).
+"""Compile the package's numba code once, ahead of the first command (private).
 
 `compile_all` calls every compiled entry point of `empact.nonlinear` with the argument types
 the package uses (real and complex right-hand sides, Jacobians, the integrator, the batch
-routines of trims and families), so that numba writes its cache (``cache=True``) beside the
-sources.  ``make`` runs it right after installing; a later first command then loads the
-cache (about 1 s) instead of compiling (about 20 s).
+routines of trims and families) and the sampled loop law's core (`empact.control._law_core`),
+so that numba writes its cache (``cache=True``) beside the sources.  It sits above both
+subpackages (the model must not import the control layer).  ``make`` runs it right after
+installing; a later first command then loads the cache (about 1 s) instead of compiling
+(about 20 s).
 """
 from __future__ import annotations
 
@@ -13,13 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..control.closed_loop import build_law, control_example_path
-from ..params import OperatingPoint, default_params
-from .equilibrium import trim
-from .linearization import linearize_many, plant
-from .model import nonlinear_model
-from .scenario import load_scenario
-from .simulation import simulate
+from .control.closed_loop import build_law, control_example_path
+from .nonlinear.equilibrium import trim
+from .nonlinear.linearization import linearize_many, plant
+from .nonlinear.model import nonlinear_model
+from .nonlinear.scenario import load_scenario
+from .nonlinear.simulation import simulate
+from .params import OperatingPoint, default_params
 
 __all__ = ["compile_all", "drop_stale_cache"]
 
@@ -44,7 +46,7 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     int
         The number of cache files (``.nbi`` and ``.nbc``) deleted; 0 when none was stale.
     """
-    folder = Path(__file__).resolve().parent if folder is None else Path(folder)
+    folder = Path(__file__).resolve().parent / "nonlinear" if folder is None else Path(folder)
     cache = folder / "__pycache__"
     index = list(cache.glob("*.nbi"))
     if not index:
@@ -88,5 +90,5 @@ def compile_all() -> float:
     return time.perf_counter() - t0
 
 
-if __name__ == "__main__":  # pragma: no cover - ``python -m empact.nonlinear._compile``
-    print(f"compiled the nonlinear model in {compile_all():.1f} s")
+if __name__ == "__main__":  # pragma: no cover - ``python -m empact._compile``
+    print(f"compiled the nonlinear model and the loop law in {compile_all():.1f} s")
