@@ -577,11 +577,11 @@ class LoopLaw:
         z_next = np.empty(self.n_state)
         e, (u0, u1), m = self._pre(z, z_next, raw, k, ref, ideal)
         xc = z[n:]
-        e = np.array(e)
+        ev = np.array(e)
         # (``M.dot(v)`` is ``M @ v``: the same BLAS call, cheaper to make)
-        du = c.C.dot(xc) + c.D.dot(e)
+        du = c.C.dot(xc) + c.D.dot(ev)
         du0, du1 = (du if self._mask_ones else du * self._mask).tolist()
-        xc_next = c.A.dot(xc) + c.B.dot(e)
+        xc_next = c.A.dot(xc) + c.B.dot(ev)
         u0 = u0 + du0
         u1 = u1 + du1
         if not ideal and self._limited:
