@@ -880,3 +880,39 @@ def test_output_folder_never_clobbered(tmp_path, monkeypatch, name):
         res = run(*(FOLDER_COMMANDS[name] + ["--out", target, "--force"]))
         assert res.exit_code == 2 and "current folder" in res.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["work"]
+
+
+def test_control_check_strict_gates_a_script(tmp_path):
+    """`control check --strict` exits 0 when every plant is stable and the worst disk margin
+    reaches --min-disk-margin, 1 with one error line when it does not (issue 21, item 7); the
+    margin it prints is the one it judges."""
+    pi = resources.files("empact") / "data" / "control" / "pi.json"
+    fam = tmp_path / "family.npz"
+    res = run("plants", "--ratio", "0.8,1.25", "--tau", "0.9", "--clamp", "16000", "--out", fam,
+              "--quiet")
+    assert res.exit_code == 0, res.output
+    res = run("control", "check", pi, "--family", fam, "--strict", "--quiet", "--json")
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    worst = data["worst"]["disk_margin"]
+    assert data["passed"] is True and data["worst"]["all_stable"] is True
+    assert worst == pytest.approx(min(data["disk_margin"]), rel=0, abs=0)  # what it judges
+    assert 0.3 <= worst < 1.0  # the shipped PI's floor over its design family is 0.30
+    res = run("control", "check", pi, "--family", fam, "--strict", "--quiet",
+              "--min-disk-margin", f"{worst + 0.01:.3f}")
+    assert res.exit_code == 1
+    assert res.output.strip().splitlines()[-1].startswith("error: check failed: 0 unstable "
+                                                          "plants, worst disk margin")
+    # without --strict it reports and exits 0
+    res = run("control", "check", pi, "--family", fam, "--quiet", "--min-disk-margin", "0.99")
+    assert res.exit_code == 0, res.output
+
+
+@pytest.mark.parametrize("example, status", [("slip-small-step-r1", 0), ("shift-low-od", 1)])
+def test_control_simulate_strict_exits_1_on_a_missed_target(example, status):
+    """`control simulate --strict` exits 1 when a [targets] entry is missed (shift-low-od's
+    ratio rate of 1 /s: the servo limits stop it at 0.33 /s), 0 when all are met."""
+    res = run("control", "simulate", "--example", example, "--strict", "--quiet")
+    assert res.exit_code == status, res.output
+    if status:
+        assert "ratio_rate" in res.output and "MISSED" in res.output.upper()
