@@ -1,6 +1,7 @@
 """The simulator's integrators (`empact.nonlinear._rosenbrock`, `empact.nonlinear._rodas`):
 orders, dense output, agreement with a tight reference, stops and status codes, the
 ``method`` choice."""
+import hashlib
 import importlib.util
 import sys
 import types
@@ -86,7 +87,16 @@ def linear_stepper():
     f = _rodas._run.py_func
     g = dict(f.__globals__, _eval=_lin_eval, _state_jacobian=_lin_jacobian,
              _input_direction=_lin_direction, stop_status=_lin_stop, NY=4)
-    run = njit(types.FunctionType(f.__code__, g, f.__name__, f.__defaults__, f.__closure__))
+    # cached beside `_rodas`'s own (about 10 s to compile): under a name of its own that
+    # carries a hash of this problem's functions, so that an edited problem compiles anew;
+    # numba's index checks `_run`'s bytecode and `_rodas.py`'s stamp, and the session's
+    # `drop_stale_cache` drops it with the rest when a source of `empact.nonlinear` changes
+    problem = hashlib.sha256(b"".join(
+        fn.py_func.__code__.co_code + repr(fn.py_func.__code__.co_consts).encode()
+        for fn in (_lin_eval, _lin_jacobian, _lin_direction, _lin_stop))).hexdigest()[:16]
+    name = f"_run_linear_test_{problem}"
+    code = f.__code__.replace(co_name=name, co_qualname=name)
+    run = njit(cache=True)(types.FunctionType(code, g, name, f.__defaults__, f.__closure__))
     # start on the slow manifold (the polynomial particular solution plus the oscillator's
     # modes), so that the solution is smooth: no fast transient of the stiff components
     b = -np.linalg.solve(A_LIN, B_LIN[:, 0] * U1)

@@ -30,9 +30,19 @@ CASES = {
         ["montecarlo", "--spread", "spread.toml", "--runs", "2000", "--analysis",
          "closed-loop", "--example", "slip-load-step-r1", "--out", "mc", "--scheduler",
          "local", "--workers", "2"], "monte carlo", True),
-    "simulate": (["simulate", "--example", "servo-torque-steps", "--duration", "2400",
-                  "--out", "sim"], "simulate servo-torque-steps", True),
+    # the shipped example with 10 output samples per second (its 2000 would allocate 4.8
+    # million output rows, seconds of work before the run starts)
+    "simulate": (["simulate", "long.toml", "--duration", "2400", "--out", "sim"],
+                 "simulate servo-torque-steps", True),
 }
+
+
+def _long_scenario() -> str:
+    from empact.nonlinear.scenario import example_path
+
+    text = example_path("servo-torque-steps").read_text()
+    assert "sample_rate = 2000.0" in text
+    return text.replace("sample_rate = 2000.0", "sample_rate = 10.0")
 
 
 def _foreground():
@@ -79,9 +89,11 @@ def test_ctrl_c_stops_at_once_and_writes_nothing(tmp_path, name):
         pytest.importorskip("distributed")
     args, marker, group = CASES[name]
     (tmp_path / "spread.toml").write_text(SPREAD)
+    (tmp_path / "long.toml").write_text(_long_scenario())
     status, err, seconds = _interrupt(args, marker, group, tmp_path)
     print(f"{name}: SIGINT to exit {seconds:.2f} s")
     assert status == 130, err
     assert err.splitlines()[-1] == "error: interrupted", err
     assert err.count("error:") == 1 and "Traceback" not in err, err
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["spread.toml"]  # nothing written
+    # nothing written
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["long.toml", "spread.toml"]

@@ -332,6 +332,10 @@ def _frozen_law_module():
     return sys.modules["_loop_law_baseline"]
 
 
+#: today's runs of the shipped scenarios (`_same_runs`), by name: (model, result)
+_SHIPPED_RUNS: dict = {}
+
+
 def _same_runs(sc, machine, nominal=None):
     """The scenario run on `machine` with today's law and with the frozen one (each built
     from the same controller, model, point and configuration); the largest deviation of the
@@ -345,6 +349,8 @@ def _same_runs(sc, machine, nominal=None):
                                           law.config, sc.references, sc.duration)
     new, ref = (run_scenario(sc, machine, controller=c) for c in (law, frozen))
     assert new.complete == ref.complete and new.t.shape == ref.t.shape
+    if nominal is None:
+        _SHIPPED_RUNS[sc.name] = (model, new)
     dev = 0.0
     for a, b in ((new.x, ref.x), (new.y, ref.y), (new.u, ref.u)):
         scale = np.maximum(np.nanmax(np.abs(b), axis=0), 1e-300)
@@ -352,10 +358,12 @@ def _same_runs(sc, machine, nominal=None):
     return dev
 
 
-@pytest.mark.parametrize("name", ["slip-load-step-r0.5", "slip-load-step-r1",
-                                  "slip-load-step-r2", "slip-small-step-r0.5",
-                                  "slip-small-step-r1", "slip-small-step-r2", "shift-low-od",
-                                  "shift-low-od-slow", "shift-low-od-sf13"])
+SHIPPED = ["slip-load-step-r0.5", "slip-load-step-r1", "slip-load-step-r2",
+           "slip-small-step-r0.5", "slip-small-step-r1", "slip-small-step-r2", "shift-low-od",
+           "shift-low-od-slow", "shift-low-od-sf13"]
+
+
+@pytest.mark.parametrize("name", SHIPPED)
 def test_the_law_equals_the_frozen_law_on_the_shipped_scenarios(params, name):
     """The law on floats (issue 23) runs every shipped closed-loop scenario as the law before
     it did (`bench/_loop_law_baseline.py`): states, outputs and inputs equal to 1e-12 of each
@@ -363,6 +371,28 @@ def test_the_law_equals_the_frozen_law_on_the_shipped_scenarios(params, name):
     place off moves the outputs by 1e-11 to 1e-9)."""
     sc = load_scenario(control_example_path(name))
     assert _same_runs(sc, params) <= 1e-12
+
+
+def test_smallest_slip_reserve_is_the_per_sample_search(params):
+    """`smallest_slip_reserve` (129 searches interpolated, 16 refined; the closed-loop
+    metrics' ``slip_reserve_pp``) against the traction peak searched at every sample, on
+    every shipped closed-loop run (the runs of the test above, when it ran): the same
+    reserve, bitwise, at the same sample."""
+    from empact.control.closed_loop import build_law
+    from empact.nonlinear.equilibrium import smallest_slip_reserve, traction_peak
+    from empact.nonlinear.simulation import run_scenario, scenario_model
+
+    for name in SHIPPED:
+        if name not in _SHIPPED_RUNS:  # this test run alone
+            sc = load_scenario(control_example_path(name))
+            model, op = scenario_model(sc, params)
+            _SHIPPED_RUNS[name] = (model, run_scenario(
+                sc, params, controller=build_law(sc, params, None, model, op)))
+        model, res = _SHIPPED_RUNS[name]
+        r, nu = np.clip(res.output("r_g"), 0.3, 3.0), res.output("nu")
+        full = np.asarray(traction_peak(model, r)[0]) - nu
+        assert r.size > 2000, name  # the interpolation is used
+        assert smallest_slip_reserve(model, r, nu) == (float(full.min()), int(full.argmin()))
 
 
 def test_the_law_equals_the_frozen_law_on_monte_carlo_runs(params):

@@ -1,10 +1,13 @@
 """Forked worker processes that stop at once on Ctrl-C (private).
 
 `run_forked` computes independent items in forked processes (they start with everything the
-parent imported).  The workers ignore SIGINT: a Ctrl-C at a terminal reaches the whole
-process group, and the workers would each print a traceback and carry on with the next item;
-the parent alone handles it and, on any exception (KeyboardInterrupt included), terminates
-the workers instead of waiting for the items they have started and queued.
+parent imported), each on one BLAS thread: two workers on a two-core machine with OpenBLAS's
+default of a thread per core each spent 1.8x the CPU time of the same items on one thread
+(``empact reproduce`` 58 s against 34 s; `bench/RESULTS.md`).  The workers ignore SIGINT:
+a Ctrl-C at a terminal reaches the whole process group, and the workers would each print a
+traceback and carry on with the next item; the parent alone handles it and, on any exception
+(KeyboardInterrupt included), terminates the workers instead of waiting for the items they
+have started and queued.
 
 The module is also the Dask preload of the local clusters `empact.sweep` starts
 (`dask_setup`): their worker processes ignore SIGINT likewise.
@@ -17,12 +20,20 @@ import threading
 from contextlib import contextmanager
 from typing import Any, Callable, Iterator, Sequence
 
+from threadpoolctl import threadpool_limits
+
 __all__ = ["run_forked", "ignore_sigint", "sigint_held", "dask_setup"]
 
 
 def ignore_sigint() -> None:
     """Ignore SIGINT in this process (a worker's initializer: its parent handles Ctrl-C)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _worker_init() -> None:
+    """A forked worker's start: SIGINT ignored, one BLAS thread (the workers share the cores)."""
+    ignore_sigint()
+    threadpool_limits(1)
 
 
 def dask_setup(worker: Any = None) -> None:
@@ -74,7 +85,7 @@ def run_forked(fn: Callable[..., Any], calls: Sequence[tuple[Any, ...]], workers
     pool = None
     try:
         with sigint_held():
-            pool = multiprocessing.get_context("fork").Pool(workers, initializer=ignore_sigint)
+            pool = multiprocessing.get_context("fork").Pool(workers, initializer=_worker_init)
         for index, result in pool.imap_unordered(
                 _call, [(fn, k, tuple(args)) for k, args in enumerate(calls)], chunksize=1):
             results[index] = result

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ParameterError
-from ..nonlinear.equilibrium import TrimResult, traction_peak
+from ..nonlinear.equilibrium import TrimResult, smallest_slip_reserve
 from ..nonlinear.model import EmpactModel
 from ..nonlinear.scenario import Scenario, example_path, list_examples, load_scenario
 from ..nonlinear.simulation import SimulationResult, run_scenario, scenario_model, scenario_signals
@@ -315,10 +315,9 @@ def metrics(run: ClosedLoopResult) -> dict[str, Any]:
     out["slip_setpoint_pp"] = float(100 * np.max(nu_ref))
     model = run.op.model  # the machine's own traction curve (not the controller's knowledge)
     if model is not None:
-        nu_pk, _ = traction_peak(model, np.clip(r, 0.3, 3.0))
-        res_pp = 100 * (np.asarray(nu_pk) - res.output("nu"))
-        out["slip_reserve_pp"] = float(np.min(res_pp))
-        out["macro_slip"] = bool(np.min(res_pp) <= 0.0 or not res.complete)
+        reserve = 100 * smallest_slip_reserve(model, np.clip(r, 0.3, 3.0), res.output("nu"))[0]
+        out["slip_reserve_pp"] = reserve
+        out["macro_slip"] = bool(reserve <= 0.0 or not res.complete)
     out["ratio_error"] = float(np.max(np.abs(r - r_ref)[window] / r_ref[window]))
     if sc.shift_window is not None:
         w = (t >= sc.shift_window[0]) & (t <= sc.shift_window[1])

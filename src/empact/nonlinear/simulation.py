@@ -284,7 +284,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     wall = time.perf_counter() - wall
     complete = status == 0
     if complete:
-        message = f"completed: {n_steps} steps ({n_rej} rejected), {wall:.2f} s wall time"
+        message = f"completed: {n_steps} steps ({n_rej} rejected)"  # wall time: stats
     else:
         state = ", ".join(f"{s} = {v:.6g}" for s, v in zip(model.states, x))
         message = (f"stopped at t = {t:.6g} s: {STATUS[status]}; state: {state}")
