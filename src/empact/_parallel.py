@@ -1,9 +1,9 @@
 """Forked worker processes that stop at once on Ctrl-C (private).
 
 `run_forked` computes independent items in forked processes (they start with everything the
-parent imported), each on one BLAS thread: two workers on a two-core machine with OpenBLAS's
-default of a thread per core each spent 1.8x the CPU time of the same items on one thread
-(``empact reproduce`` 58 s against 34 s; `bench/RESULTS.md`).  The workers ignore SIGINT:
+parent imported), each on one BLAS thread: the workers share the cores, and OpenBLAS's
+default of a thread per core in each made ``empact reproduce`` 1.12x slower on two cores
+(`bench/RESULTS.md`; the items are small matrices).  The workers ignore SIGINT:
 a Ctrl-C at a terminal reaches the whole process group, and the workers would each print a
 traceback and carry on with the next item; the parent alone handles it and, on any exception
 (KeyboardInterrupt included), terminates the workers instead of waiting for the items they
