@@ -339,7 +339,12 @@ _SHIPPED_RUNS: dict = {}
 def _same_runs(sc, machine, nominal=None):
     """The scenario run on `machine` with today's law and with the frozen one (each built
     from the same controller, model, point and configuration); the largest deviation of the
-    states, outputs and inputs, each column over its largest magnitude."""
+    states, outputs and inputs, each column over its largest magnitude, and the bound it
+    must keep: 1e-12 where the law runs `update` (its float arithmetic is the frozen law's,
+    operation for operation: in practice the last bit), 1e-8 where it runs the compiled sample
+    (`LoopLaw.compiled`: the C library's ``exp`` and products summed in index order round the
+    last bit differently, and the runs' own floor - the frozen law from an initial ratio one
+    ulp off - is 1.2e-10 to 1.9e-9 on the shipped load steps, measured, `bench/RESULTS.md`)."""
     from empact.control.closed_loop import build_law
     from empact.nonlinear.simulation import run_scenario, scenario_model
 
@@ -355,7 +360,7 @@ def _same_runs(sc, machine, nominal=None):
     for a, b in ((new.x, ref.x), (new.y, ref.y), (new.u, ref.u)):
         scale = np.maximum(np.nanmax(np.abs(b), axis=0), 1e-300)
         dev = max(dev, float(np.nanmax(np.abs(a - b) / scale)))
-    return dev
+    return dev, (1e-8 if law.compiled else 1e-12)
 
 
 SHIPPED = ["slip-load-step-r0.5", "slip-load-step-r1", "slip-load-step-r2",
@@ -365,12 +370,47 @@ SHIPPED = ["slip-load-step-r0.5", "slip-load-step-r1", "slip-load-step-r2",
 
 @pytest.mark.parametrize("name", SHIPPED)
 def test_the_law_equals_the_frozen_law_on_the_shipped_scenarios(params, name):
-    """The law on floats (issue 23) runs every shipped closed-loop scenario as the law before
-    it did (`bench/_loop_law_baseline.py`): states, outputs and inputs equal to 1e-12 of each
-    signal's largest magnitude (in practice to the last bit: a command one unit in the last
-    place off moves the outputs by 1e-11 to 1e-9)."""
+    """The law on floats and its compiled sample (issue 23) run every shipped closed-loop
+    scenario as the law before them did (`bench/_loop_law_baseline.py`): states, outputs and
+    inputs equal to the bound of `_same_runs` of each signal's largest magnitude; the load
+    steps run compiled, the shifts (a moving shift feedforward calls the model) do not."""
     sc = load_scenario(control_example_path(name))
-    assert _same_runs(sc, params) <= 1e-12
+    dev, bound = _same_runs(sc, params)
+    assert bound == (1e-12 if name.startswith("shift") else 1e-8)
+    assert dev <= bound
+
+
+@pytest.mark.parametrize("name", [n for n in SHIPPED if not n.startswith("shift")])
+def test_the_compiled_sample_is_update(params, name):
+    """`LoopLaw.step` compiled (`_law_core.step_core`) against `LoopLaw.update` (what the
+    linear loop model linearises) from the same state at every sample of a shipped load step:
+    the servo torques within 1e-14 and every entry of the next state within 1e-12 of its own
+    magnitude (measured: the torques equal, the states 2e-14 - the controller's products
+    summed in another order)."""
+    from empact.control.closed_loop import build_law
+    from empact.nonlinear.simulation import run_scenario, scenario_model
+
+    sc = load_scenario(control_example_path(name))
+    model, op = scenario_model(sc, params)
+    law = build_law(sc, params, None, model, op)
+    assert law.compiled
+    worst = {"u": 0.0, "z": 0.0, "n": 0}
+
+    class Both:
+        dt, commands, measured = law.dt, law.commands, law.measured
+
+        def step(self, t, m):
+            z_ref, u_ref = law.update(law._z.copy(), m, law._k)
+            u = law.step(t, m)
+            worst["u"] = max(worst["u"], float(np.max(np.abs(u - u_ref) / np.abs(u_ref))))
+            worst["z"] = max(worst["z"], float(np.max(
+                np.abs(law._z - z_ref) / np.maximum(np.abs(z_ref), 1e-300))))
+            worst["n"] += 1
+            return u
+
+    assert run_scenario(sc, params, controller=Both()).complete
+    assert worst["n"] == round(sc.duration / law.dt)
+    assert worst["u"] <= 1e-14 and worst["z"] <= 1e-12, worst
 
 
 def test_smallest_slip_reserve_is_the_per_sample_search(params):
@@ -408,7 +448,8 @@ def test_the_law_equals_the_frozen_law_on_monte_carlo_runs(params):
     sc = load_scenario(control_example_path("slip-load-step-r1"))
     for row in spread.sample(1, [0, 1, 2]):
         machine = params.from_dotted(dict(zip(spread.names, row.tolist())))
-        assert _same_runs(sc, machine, nominal=params) <= 1e-12
+        dev, bound = _same_runs(sc, machine, nominal=params)
+        assert dev <= bound == 1e-8
 
 
 def test_schedule_gains_at_equals_the_array_form(params):

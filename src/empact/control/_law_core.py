@@ -266,3 +266,90 @@ def pre_core(s, out, raw, k, ideal, ref, P, T, S, cache, res):
     res[R_U1] = u1
     res[R_F] = f
     out[nb] = f
+
+
+# Q: the constants of a whole sample (`step_core`)
+(_Q_N_PRE, _Q_SCHED, _Q_SIGN0, _Q_SIGN1, _Q_ALPHA_DEC, _Q_T_MS_START, _Q_SHIFT_FF, _Q_MASK0,
+ _Q_MASK1, _Q_MASK_ONES, _Q_LIMITED, _Q_T_MAX, _Q_W_MAX, _Q_S_MAX, _Q_V_MAX, _Q_BAND,
+ _Q_ANTI_WINDUP) = range(17)
+N_Q = 17
+
+
+@njit(cache=True)
+def _speed_limited(T, w, T_max, w_max, band):
+    """`LoopLaw._limit_f` for one servo: within +-T_max, and the torque that would drive the
+    servo faster falls to zero over the last `band` of its speed (Python's ``min``/``max``
+    spelt out, NaN passing as there)."""
+    T = -T_max if -T_max > T else T
+    T = T_max if T_max < T else T
+    if T * w > 0:
+        v = (w_max - abs(w)) / (band * w_max)
+        v = 0.0 if 0.0 > v else v
+        v = 1.0 if 1.0 < v else v
+        T *= v
+    return T
+
+
+@njit(cache=True)
+def step_core(z, z_next, raw, k, no_ref, P, T, S, cache, res, Q, A, B, C, D, L, u):
+    """`LoopLaw.update` at sample `k` (its references, noise and limits, not ideal) for a law
+    whose samples need no model call (no safety-factor clamping; a shift feedforward only
+    where the reference ratio stands still, so that its torque is zero): the next state into
+    `z_next`, the servo torques into ``u[:2]``; returns 1 when the clamping feedforward finds
+    no belt geometry at the measured ratio (``res[R_M]``), else 0.
+
+    The same operations as `LoopLaw.update` in the same order, but the schedule's ``exp``
+    (the C library's here, numpy's SIMD loop there) and the controller's products (summed
+    here in index order, by BLAS there) may round differently in the last bit."""
+    n = int(Q[_Q_N_PRE])
+    nb = n - 2
+    pre_core(z, z_next, raw, k, False, no_ref, P, T, S, cache, res)
+    e0, e1, u0, u1 = res[R_E0], res[R_E1], res[R_U0], res[R_U1]
+    if Q[_Q_SCHED] != 0.0:
+        e0 = e0 * (Q[_Q_SIGN0] * math.exp(res[R_L0]))
+        e1 = e1 * (Q[_Q_SIGN1] * math.exp(res[R_L1]))
+    if P[_P_FEEDFORWARD] != 0.0 and res[R_RS] != res[R_RS]:
+        return 1
+    n_last = int(P[_P_N_LAST])
+    kk = k if k < n_last else n_last
+    dec = T[kk, T_DEC]
+    t_mp = dec * (u1 - Q[_Q_T_MS_START])
+    g = z[nb + 1]
+    if dec != 0.0 or Q[_Q_SHIFT_FF] != 0.0:
+        a = Q[_Q_ALPHA_DEC]
+        g = a * g + (1 - a) * t_mp
+        u0 += g
+    else:
+        g = 0.0
+    z_next[nb + 1] = g
+    nc = z.shape[0] - n
+    du0 = 0.0
+    du1 = 0.0
+    for j in range(nc):
+        du0 += C[0, j] * z[n + j]
+        du1 += C[1, j] * z[n + j]
+    du0 = du0 + (D[0, 0] * e0 + D[0, 1] * e1)
+    du1 = du1 + (D[1, 0] * e0 + D[1, 1] * e1)
+    if Q[_Q_MASK_ONES] == 0.0:
+        du0 = du0 * Q[_Q_MASK0]
+        du1 = du1 * Q[_Q_MASK1]
+    for i in range(nc):
+        acc = 0.0
+        for j in range(nc):
+            acc += A[i, j] * z[n + j]
+        z_next[n + i] = acc + (B[i, 0] * e0 + B[i, 1] * e1)
+    u0 = u0 + du0
+    u1 = u1 + du1
+    if Q[_Q_LIMITED] != 0.0:
+        w0, w1 = res[R_M + 4], res[R_M + 5]
+        s0 = _speed_limited(u0, w0, Q[_Q_T_MAX], Q[_Q_W_MAX], Q[_Q_BAND])
+        s1 = _speed_limited(u1, w1, Q[_Q_S_MAX], Q[_Q_V_MAX], Q[_Q_BAND])
+        if Q[_Q_ANTI_WINDUP] != 0.0 and (s0 != u0 or s1 != u1):
+            d0 = (s0 - u0) * Q[_Q_MASK0]
+            d1 = (s1 - u1) * Q[_Q_MASK1]
+            for i in range(nc):
+                z_next[n + i] = z_next[n + i] + (L[i, 0] * d0 + L[i, 1] * d1)
+        u0, u1 = s0, s1
+    u[0] = u0
+    u[1] = u1
+    return 0

@@ -332,20 +332,22 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
     step = integrate if step is None else step
     dt = float(check_number("controller dt", controller.dt, 0.0, duration, lo_open=True,
                             unit="s"))
-    cmd = [model.input_index(c) for c in controller.commands]
-    free = [j for j in range(4) if j not in cmd]
+    cmd_list = [model.input_index(c) for c in controller.commands]
+    cmd = _as_index(cmd_list)  # a slice where the indices run on (indexing with a list costs
+    free = _as_index([j for j in range(4) if j not in cmd_list])  # ~1-2 us a sample)
     where = _measurement(model, tuple(controller.measured))
     n_k = int(round(duration / dt))
     t_grid = np.minimum(np.arange(n_k + 1) * dt, duration)
-    U_grid = _inputs_at(t_grid, sig_t, sig_v, sig_n)  # the free inputs, right-continuous
-    commands = np.empty((n_k, len(cmd)))
+    U_free = _inputs_at(t_grid, sig_t, sig_v, sig_n)[:, free]  # right-continuous
+    t_list = t_grid.tolist()
+    commands = np.empty((n_k, len(cmd_list)))
     u = np.array(u0, float)
     y = np.empty(len(model.outputs))
     dx = np.empty(model.n)
     meas = np.empty(len(where))
     # all of them outputs (the loop law's): one indexing per sample
     out_idx = np.array([j for _, j in where]) if all(kind == 0 for kind, _ in where) else None
-    for j in cmd:
+    for j in cmd_list:
         sig_n[j] = 1
     t, h = 0.0, min(1e-5, max_step)
     status, n_steps, n_rej, filled, k = 0, 0, 0, 1, 0
@@ -353,7 +355,7 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
     with progress_bar(total=n_k, desc=f"simulate {name}".strip(), unit="samples",
                       enabled=progress) as bar:
         for k in range(n_k):
-            u[free] = U_grid[k, free]
+            u[free] = U_free[k]
             K._eval(x, u, model.p, model.ix, dx, y)
             if k == 0:
                 Y[0] = y
@@ -362,12 +364,12 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
             else:
                 for i, (kind, j) in enumerate(where):
                     meas[i] = y[j] if kind == 0 else (x[j] if kind == 1 else u[j])
-            c = np.asarray(controller.step(float(t_grid[k]), meas), float)
+            c = np.asarray(controller.step(t_list[k], meas), float)
             commands[k] = c
             u[cmd] = c
             sig_v[cmd, 0] = c
             status, t, h, filled, ns, nr = step(
-                x, t, float(t_grid[k + 1]), h, samples, model.p, model.ix, sig_t, sig_v,
+                x, t, t_list[k + 1], h, samples, model.p, model.ix, sig_t, sig_v,
                 sig_n, brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps,
                 X, Y, cols, J, k == 0)
             n_steps += ns
@@ -384,6 +386,13 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
     U[:, cmd] = commands[idx]
     U[0, cmd] = u0[cmd]
     return status, t, filled, n_steps, n_rej, U
+
+
+def _as_index(idx: list[int]) -> slice | NDArray[np.intp]:
+    """`idx` as a slice when it is a run of consecutive indices, else as an index array."""
+    if idx and idx == list(range(idx[0], idx[-1] + 1)):
+        return slice(idx[0], idx[-1] + 1)
+    return np.array(idx, dtype=np.intp)
 
 
 def _inputs_at(t, sig_t, sig_v, sig_n) -> NDArray[np.float64]:
