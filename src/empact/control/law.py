@@ -377,7 +377,7 @@ class LoopLaw:
                 self._shift_rows = dict(zip(ks.tolist(),
                                             self._shift_geometry(refs.r_g[ks])))
         # a whole sample compiled (`_law_core.step_core`) where no sample calls the model
-        self._fast: tuple | None = None
+        self._fast: tuple[Any, ...] | None = None
         self._u_out = np.zeros(2)
         if not self._safety and not (spec.shift_feedforward and np.any(refs.rdot != 0.0)):
             c = self.controller
@@ -697,8 +697,9 @@ class LoopLaw:
         state, compiled when `compiled`."""
         if self._fast is not None:
             z_next = self._z_spare
-            if core.step_core(self._z, z_next, np.ascontiguousarray(measured, dtype=float),
-                              self._k, *self._fast, self._u_out):
+            step_core: Any = core.step_core  # (numba's Dispatcher type: no signature)
+            if step_core(self._z, z_next, np.ascontiguousarray(measured, dtype=float),
+                         self._k, *self._fast, self._u_out):
                 raise ParameterError(f"r_g = {self._res[core.R_M]:g}: no belt geometry at "
                                      "this ratio")
             self._z_spare, self._z = self._z, z_next
