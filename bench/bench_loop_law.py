@@ -6,7 +6,9 @@ Rodas4) with today's `empact.control.law.LoopLaw` and with the law as it was bef
 configuration; then the 200-run closed-loop Monte Carlo of the shipped example spread
 (slip-load-step-r1, serial, in process), once with each law.  Per scenario: the law's own
 cost per 1 ms sample (the time inside ``step``), the whole run's wall time, and whether the
-two runs' states, outputs and inputs are bitwise equal.  Warm timings: median of REPEATS
+two runs' states, outputs and inputs are bitwise equal (else their largest difference over
+each signal's largest magnitude: the compiled sample, `LoopLaw.compiled`, rounds the last bit
+differently).  Warm timings: median of REPEATS
 after a warm-up, one process, the two laws alternated.
 
 Run: ``.venv/bin/python bench/bench_loop_law.py [--no-montecarlo]``
@@ -69,6 +71,8 @@ def main() -> None:
         a, b = run_scenario(sc, params, controller=new), run_scenario(sc, params, controller=old)
         equal = all(np.array_equal(getattr(a, k), getattr(b, k), equal_nan=True)
                     for k in ("x", "y", "u"))
+        dev = max(float(np.nanmax(np.abs(getattr(a, k) - getattr(b, k)) / np.maximum(
+            np.nanmax(np.abs(getattr(b, k)), axis=0), 1e-300))) for k in ("x", "y", "u"))
         per = {"new": [], "old": []}
         wall = {"new": [], "old": []}
         for _ in range(REPEATS):
@@ -82,7 +86,8 @@ def main() -> None:
         pn, po = statistics.median(per["new"]), statistics.median(per["old"])
         wn, wo = statistics.median(wall["new"]), statistics.median(wall["old"])
         print(f"{name:22s} {1e6 * po:23.1f} {1e6 * pn:16.1f} {po / pn:6.2f}  {wo:14.3f} "
-              f"{wn:8.3f} {wo / wn:6.2f}  {equal}", flush=True)
+              f"{wn:8.3f} {wo / wn:6.2f}  {equal} ({dev:.1e}; compiled: {new.compiled})",
+              flush=True)
     if "--no-montecarlo" in sys.argv:
         return
     from importlib import resources
@@ -105,9 +110,11 @@ def main() -> None:
             closed_loop.LoopLaw = LoopLaw
     (to, ro), (tn, rn) = out["frozen"], out["law"]
     same = np.array_equal(ro.values, rn.values, equal_nan=True)
+    rel = float(np.nanmax(np.abs(ro.values - rn.values) / np.maximum(np.abs(ro.values),
+                                                                      1e-300)))
     print(f"Monte Carlo, 200 closed-loop runs of slip-load-step-r1, serial: frozen law "
           f"{to:.1f} s, law {tn:.1f} s, ratio {to / tn:.2f} ({rn.failures} failed; metrics "
-          f"bitwise equal: {same}); load average {os.getloadavg()[0]:.2f}")
+          f"bitwise equal: {same}, largest relative difference {rel:.1e}); load average {os.getloadavg()[0]:.2f}")
 
 
 if __name__ == "__main__":
