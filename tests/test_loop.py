@@ -488,3 +488,35 @@ def test_the_linear_loop_model_linearises_the_same_law(params):
                                               law.config, sc.references, sc.duration)
         got, want = linear_preprocess(law), linear_preprocess(frozen)
         assert all(np.array_equal(got[k], want[k]) for k in want), name
+
+
+def test_a_slip_set_point_past_the_traction_peak_is_refused(params):
+    """The law refuses slip references on or past the traction peak at their ratio, or not
+    positive, naming the set-point, the ratio and the peak's slip (`LoopLaw._references`,
+    now from `smallest_slip_reserve`): a constant 20 % at r_g = 1, 3 % on a shift to r_g = 2
+    (the peak falls below 3 % on the way: the worst sample, at the end, is named), zero."""
+    from empact.control.closed_loop import build_law
+    from empact.control.law import LoopLaw
+    from empact.nonlinear.equilibrium import traction_peak
+    from empact.nonlinear.simulation import scenario_model
+
+    sc = load_scenario(control_example_path("slip-load-step-r1"))
+    model, op = scenario_model(sc, params)
+    law = build_law(sc, params, None, model, op)
+
+    def refuse(references):
+        with pytest.raises(ParameterError) as err:
+            LoopLaw(law.controller, law.model, law.point, law.u0, law.config, references, 1.0)
+        return str(err.value)
+
+    pk1, pk2 = traction_peak(model, 1.0)[0], traction_peak(model, 2.0)[0]
+    assert pk2 < 0.03 < pk1 < 0.2  # the cases below cross the peak where they say
+    msg = refuse({"nu": np.array([[0.0, 0.2], [1.0, 0.2]])})
+    assert msg == f"slip set-point 0.2 at r_g = 1: must lie on the rising traction curve " \
+                  f"(0, {pk1:.4g})"
+    msg = refuse({"r_g": np.array([[0.0, 1.0], [1.0, 2.0]]),
+                  "nu": np.array([[0.0, 0.03], [1.0, 0.03]])})
+    assert msg == f"slip set-point 0.03 at r_g = 2: must lie on the rising traction curve " \
+                  f"(0, {pk2:.4g})"
+    assert refuse({"nu": np.array([[0.0, 0.01], [0.5, 0.0], [1.0, 0.0]])}).startswith(
+        "slip set-point 0 at r_g = 1: must lie")

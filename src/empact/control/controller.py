@@ -185,6 +185,7 @@ class Controller:
         object.__setattr__(self, "measured", tuple(self.measured))
         object.__setattr__(self, "outputs", tuple(self.outputs))
         object.__setattr__(self, "dt", check_number("dt", self.dt, 0.0, unit="s"))
+        object.__setattr__(self, "_discrete", {})  # `discretize`'s results, by (dt, method)
         if self.schedule is not None and self.schedule.gains.shape[-1] != len(self.measured):
             raise ParameterError(f"controller schedule: {self.schedule.gains.shape[-1]} gains "
                                  f"per point for {len(self.measured)} inputs")
@@ -222,17 +223,24 @@ class Controller:
 
     def discretize(self, dt: float, method: str = "tustin") -> "Controller":
         """The controller at sample time `dt` [s] (Tustin by default; by
-        ``scipy.signal.cont2discrete``)."""
+        ``scipy.signal.cont2discrete``); computed once per `dt` and `method` (a loop law
+        built at every point of a family discretizes the same controller each time)."""
         if self.dt:
             raise ParameterError(f"controller is already discrete (dt = {self.dt:g} s)")
         dt = check_number("dt", dt, 0.0, 1.0, lo_open=True, unit="s")
+        done = self._discrete.get((dt, method))
+        if done is not None:
+            return done
         if self.n == 0:
-            return Controller(self.A, self.B, self.C, self.D, self.measured, self.outputs,
+            done = Controller(self.A, self.B, self.C, self.D, self.measured, self.outputs,
                               dt, self.method, self.design, self.schedule)
-        Ad, Bd, Cd, Dd, _ = signal.cont2discrete((self.A, self.B, self.C, self.D), dt,
-                                                 method=method)
-        return Controller(Ad, Bd, Cd, Dd, self.measured, self.outputs, dt, self.method,
-                          {**self.design, "discretized": method}, self.schedule)
+        else:
+            Ad, Bd, Cd, Dd, _ = signal.cont2discrete((self.A, self.B, self.C, self.D), dt,
+                                                     method=method)
+            done = Controller(Ad, Bd, Cd, Dd, self.measured, self.outputs, dt, self.method,
+                              {**self.design, "discretized": method}, self.schedule)
+        self._discrete[(dt, method)] = done
+        return done
 
     def to_dict(self) -> dict[str, Any]:
         """Plain data (the file layout)."""

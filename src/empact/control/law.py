@@ -74,7 +74,12 @@ from numpy.typing import NDArray
 from .._lazy import lazy_module
 from ..errors import ParameterError
 from ..hardware import SPEED_BAND, SensorParams, ServoLimits
-from ..nonlinear.equilibrium import slip_at_torque_ratio, traction_peak, trim_grid
+from ..nonlinear.equilibrium import (
+    slip_at_torque_ratio,
+    smallest_slip_reserve,
+    traction_peak,
+    trim_grid,
+)
 from ..nonlinear.model import EmpactModel
 from ..nonlinear.scenario import REFERENCES, ControllerSpec, Scenario
 from ..params import Params
@@ -420,12 +425,15 @@ class LoopLaw:
             slip = tab.get(self.slip_signal if self.slip_signal in tab else
                            ("nu" if "nu" in tab else "nu_r"),
                            np.full(t.shape, self.point["nu"]))
-        ru, inv = np.unique(r, return_inverse=True)
-        nu_pk = np.atleast_1d(traction_peak(self.model, ru)[0])[inv]
-        if np.any(~((slip > 0) & (slip < nu_pk))):
-            k = int(np.flatnonzero(~((slip > 0) & (slip < nu_pk)))[0])
+        # below the traction peak at every sample: its closest approach to the peak
+        # (`smallest_slip_reserve`, not a search per sample of a shift's moving ratio)
+        slip = np.asarray(slip, float)
+        reserve, k = smallest_slip_reserve(self.model, r, slip)
+        if np.any(~(slip > 0)) or not reserve > 0:
+            k = int(np.flatnonzero(~(slip > 0))[0]) if np.any(~(slip > 0)) else k
+            nu_pk = float(traction_peak(self.model, r[k])[0])
             raise ParameterError(f"slip set-point {slip[k]:g} at r_g = {r[k]:g}: must lie on "
-                                 f"the rising traction curve (0, {nu_pk[k]:.4g})")
+                                 f"the rising traction curve (0, {nu_pk:.4g})")
         pairs, inv = np.unique(np.column_stack([slip, r]), axis=0, return_inverse=True)
         mu = self.model.traction(pairs[:, 0], pairs[:, 1])[inv.ravel()]
         self._tau_ref = float(mu[0] / self.model.mu_max(r[0]))
