@@ -428,13 +428,14 @@ class LoopLaw:
         # below the traction peak at every sample: its closest approach to the peak
         # (`smallest_slip_reserve`, not a search per sample of a shift's moving ratio)
         slip = np.asarray(slip, float)
-        reserve, k = smallest_slip_reserve(self.model, r, slip)
+        pairs, inv = np.unique(np.column_stack([slip, r]), axis=0, return_inverse=True)
+        reserve, j = smallest_slip_reserve(self.model, pairs[:, 1], pairs[:, 0])
         if np.any(~(slip > 0)) or not reserve > 0:
-            k = int(np.flatnonzero(~(slip > 0))[0]) if np.any(~(slip > 0)) else k
+            k = int(np.flatnonzero(~(slip > 0) if np.any(~(slip > 0)) else
+                                   inv.ravel() == j)[0])
             nu_pk = float(traction_peak(self.model, r[k])[0])
             raise ParameterError(f"slip set-point {slip[k]:g} at r_g = {r[k]:g}: must lie on "
                                  f"the rising traction curve (0, {nu_pk:.4g})")
-        pairs, inv = np.unique(np.column_stack([slip, r]), axis=0, return_inverse=True)
         mu = self.model.traction(pairs[:, 0], pairs[:, 1])[inv.ravel()]
         self._tau_ref = float(mu[0] / self.model.mu_max(r[0]))
         self._tau_ref = min(max(self._tau_ref, 1e-3), 0.999)
