@@ -440,3 +440,25 @@ def test_compiled_traction_peak_is_bitwise_the_vectorised_search(params):
     assert traction_peak(model, r[:502].reshape(2, -1))[0].shape == (2, 251)
     with pytest.raises(ValueError, match="must be positive"):
         traction_peak(model, [1.0, 0.0])
+
+
+def test_smallest_slip_reserve_short_records_and_bad_input(params):
+    """`smallest_slip_reserve` on a record no longer than its searches is the per-sample
+    search itself (bitwise), on a long smooth record (a ratio sweep 0.45 -> 2.2 with a slip
+    near each peak) it finds the per-sample search's sample and value bitwise, and records of
+    unequal or zero length are refused with their lengths."""
+    from empact.nonlinear.equilibrium import smallest_slip_reserve, traction_peak
+
+    model = nonlinear_model(params)
+    r = np.geomspace(0.45, 2.2, 100)
+    nu = 0.9 * np.asarray(traction_peak(model, r)[0])
+    full = np.asarray(traction_peak(model, r)[0]) - nu
+    assert smallest_slip_reserve(model, r, nu) == (float(full.min()), int(full.argmin()))
+    r = np.geomspace(0.45, 2.2, 5000)
+    nu = 0.02 + 0.002 * np.sin(np.linspace(0.0, 40.0, r.size))
+    full = np.asarray(traction_peak(model, r)[0]) - nu
+    assert smallest_slip_reserve(model, r, nu) == (float(full.min()), int(full.argmin()))
+    with pytest.raises(ValueError, match=r"equal, non-empty lengths \(got 3, 2\)"):
+        smallest_slip_reserve(model, [1.0, 1.1, 1.2], [0.01, 0.01])
+    with pytest.raises(ValueError, match=r"\(got 0, 0\)"):
+        smallest_slip_reserve(model, [], [])
