@@ -1,7 +1,8 @@
 """Builds the suite's one full report (`empact reproduce`) in the background: the test session
 starts it as soon as it knows a test reads it (`conftest.py`), so it overlaps the rest of the
 suite.  ``python report_build.py OUT RESULTS [STEM ...]`` runs ``empact reproduce --out OUT
---quiet`` in this process and writes its exit status and output to RESULTS (JSON).  Every
+--quiet --formats png,svg`` (the vector figures on request, so that the tests read both) in
+this process and writes its exit status and output to RESULTS (JSON).  Every
 section is computed and every table, page and claim written; of the figures only the STEMs
 given (the ones the tests read) are drawn to files, the others keep their place in the page.
 """
@@ -26,7 +27,8 @@ def main(out: str, results: str, stems: list[str]) -> None:
             return save(fig, stem, formats, **kw) if Path(stem).name in keep else []
 
         context.save_figure = some_figures  # the forked section builders inherit it
-    res = CliRunner().invoke(cli, ["reproduce", "--out", out, "--quiet"])
+    res = CliRunner().invoke(cli, ["reproduce", "--out", out, "--quiet", "--formats",
+                                   "png,svg"])
     Path(results).write_text(json.dumps({"exit_code": res.exit_code, "output": res.output}))
 
 

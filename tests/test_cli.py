@@ -321,6 +321,18 @@ def test_json_has_schema_and_units_for_every_quantity(args, tmp_path):
     assert json.loads(out.read_text())["schema"] == doc["schema"]
 
 
+def test_reproduce_draws_vector_figures_on_request(tmp_path):
+    """`reproduce` writes PNG figures by default (the page's) and SVG or PDF beside them only
+    when --formats asks (issue 23: drawing them is about a sixth of a build)."""
+    for formats, want in ((None, {".png"}), ("png,svg", {".png", ".svg"}),
+                          ("png,pdf", {".png", ".pdf"})):
+        out = tmp_path / f"rep-{formats}"
+        res = run("reproduce", "--out", out, "--sections", "fig10", "--quiet",
+                  *(["--formats", formats] if formats else []))
+        assert res.exit_code == 0, res.output
+        assert {p.suffix for p in out.glob("fig10_*")} - {".csv"} == want, formats
+
+
 def test_files_are_world_readable(tmp_path):
     old = os.umask(0o022)
     try:

@@ -18,8 +18,9 @@ REPORT_RATIOS = (*paper.FIG10_RATIOS, *paper.TABLE2_HZ)
               type=click.Path(file_okay=False),
               help="Report folder; new or empty unless --force (then only empact's own files "
                    "in it are replaced).")
-@click.option("--formats", default="png,svg", show_default=True,
-              help="Figure formats, comma-separated: png, svg, pdf (the page shows PNG).")
+@click.option("--formats", default="png", show_default=True,
+              help="Figure formats, comma-separated: png, svg, pdf (the page shows PNG; "
+                   "png,svg or png,pdf adds vector figures for print).")
 @click.option("--sections", default=None,
               help="Only these sections, comma-separated anchors (default: all; e.g. "
                    "table1,table2,fig9).")

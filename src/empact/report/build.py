@@ -68,7 +68,7 @@ def _build_section(sec: Section, params: Params, out: Path,
 
 def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool = True,
                  sections: Sequence[Section] | None = None,
-                 formats: Sequence[str] = ("png", "svg"), workers: int | None = None) -> Path:
+                 formats: Sequence[str] = ("png",), workers: int | None = None) -> Path:
     """Compute every section and write ``out/index.html`` with its figures and tables.
 
     Parameters
@@ -82,7 +82,8 @@ def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool 
     sections : sequence of Section, optional
         The sections (default: all, `empact.report.sections.SECTIONS`).
     formats : sequence of {"png", "svg", "pdf"}
-        Figure formats; the page shows the PNG.
+        Figure formats; the page shows the PNG (vector formats on request: drawing them is
+        about a sixth of a build, `bench/RESULTS.md`).
     workers : int, optional
         Processes building sections in parallel (default: one per CPU core, at most
         the number of sections; 1 builds in this process).  Sections are independent: each

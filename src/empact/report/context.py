@@ -123,7 +123,7 @@ class Context:
 
     params: Params
     out: Path
-    formats: tuple[str, ...] = ("png", "svg")
+    formats: tuple[str, ...] = ("png",)
     figures: list[Path] = field(default_factory=list)
 
     def figure(self, plot: Plot, stem: str, caption: str) -> str:
