@@ -82,8 +82,8 @@ def build_report(params: Params, out: str | os.PathLike[str], *, progress: bool 
     sections : sequence of Section, optional
         The sections (default: all, `empact.report.sections.SECTIONS`).
     formats : sequence of {"png", "svg", "pdf"}
-        Figure formats; the page shows the PNG (vector formats on request: drawing them is
-        about a sixth of a build, `bench/RESULTS.md`).
+        Figure formats; the page shows the PNG (vector formats on request: the SVGs add
+        about 13 % to a whole build, `bench/RESULTS.md`).
     workers : int, optional
         Processes building sections in parallel (default: one per CPU core, at most
         the number of sections; 1 builds in this process).  Sections are independent: each
