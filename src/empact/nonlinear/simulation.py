@@ -246,8 +246,10 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     sig_t, sig_v, sig_n, brk_arr = _signal_table(model, signals, u0, duration)
     n_t = int(np.floor(duration * sample_rate + 1e-9)) + 1
     samples = np.arange(n_t) / sample_rate
-    X = np.full((n_t, model.n), np.nan)
-    Y = np.full((n_t, len(model.outputs)), np.nan)
+    # rows past the last filled one are never returned: not written before the run (a NaN
+    # fill of 2400 s at 2000 Hz, 4.8 million rows, took 6 s before the first step)
+    X = np.empty((n_t, model.n))
+    Y = np.empty((n_t, len(model.outputs)))
     X[0] = x
     y = np.empty(len(model.outputs))
     dx = np.empty(model.n)
