@@ -82,6 +82,7 @@ def compile_all() -> float:
     # the linearisation's ideal sample, the sensors alone, the gain schedule
     law = build_law(load_scenario(control_example_path("slip-load-step-r1")), params)
     law.step(0.0, law.raw0)
+    law._limit(np.zeros(2), (0.0, 0.0))  # the servo limits as `update` calls them
     law.preprocess(law.z0[:law.n_pre], law.raw0, 0, np.array([law.point["r_g"], 0.01, 0.05,
                                                                  0.0]), ideal=True)
     law.sense(law.z0[:law.n_pre - 2].reshape(len(law.raw0), -1))

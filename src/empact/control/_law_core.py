@@ -269,17 +269,17 @@ def pre_core(s, out, raw, k, ideal, ref, P, T, S, cache, res):
 
 
 # Q: the constants of a whole sample (`step_core`)
-(_Q_N_PRE, _Q_SCHED, _Q_SIGN0, _Q_SIGN1, _Q_ALPHA_DEC, _Q_T_MS_START, _Q_SHIFT_FF, _Q_MASK0,
- _Q_MASK1, _Q_MASK_ONES, _Q_LIMITED, _Q_T_MAX, _Q_W_MAX, _Q_S_MAX, _Q_V_MAX, _Q_BAND,
- _Q_ANTI_WINDUP) = range(17)
-N_Q = 17
+(_Q_N_PRE, _Q_SCHED, _Q_SIGN0, _Q_SIGN1, _Q_ALPHA_DEC, _Q_T_MS_START, _Q_SHIFT_FF,
+ _Q_LIMITED, _Q_T_MAX, _Q_W_MAX, _Q_S_MAX, _Q_V_MAX, _Q_BAND, _Q_ANTI_WINDUP) = range(14)
+N_Q = 14
 
 
 @njit(cache=True)
-def _speed_limited(T, w, T_max, w_max, band):
-    """`LoopLaw._limit_f` for one servo: within +-T_max, and the torque that would drive the
-    servo faster falls to zero over the last `band` of its speed (Python's ``min``/``max``
-    spelt out, NaN passing as there)."""
+def servo_limited(T, w, T_max, w_max, band):
+    """The torque servo `T` [N m] delivers at speed `w`: within +-T_max, and the torque that
+    would drive it faster falls to zero over the last `band` of its speed limit `w_max`
+    (``min(max(x, 0), 1)`` as Python evaluates it, NaN passing; `LoopLaw._limit_f` calls
+    this too)."""
     T = -T_max if -T_max > T else T
     T = T_max if T_max < T else T
     if T * w > 0:
@@ -293,8 +293,9 @@ def _speed_limited(T, w, T_max, w_max, band):
 @njit(cache=True)
 def step_core(z, z_next, raw, k, no_ref, P, T, S, cache, res, Q, A, B, C, D, L, u):
     """`LoopLaw.update` at sample `k` (its references, noise and limits, not ideal) for a law
-    whose samples need no model call (no safety-factor clamping; a shift feedforward only
-    where the reference ratio stands still, so that its torque is zero): the next state into
+    whose samples need no model call (no safety-factor clamping, so every controller output
+    reaches its servo; a shift feedforward only where the reference ratio stands still, so
+    that its torque is zero): the next state into
     `z_next`, the servo torques into ``u[:2]``; returns 1 when the clamping feedforward finds
     no belt geometry at the measured ratio (``res[R_M]``), else 0.
 
@@ -330,9 +331,6 @@ def step_core(z, z_next, raw, k, no_ref, P, T, S, cache, res, Q, A, B, C, D, L, 
         du1 += C[1, j] * z[n + j]
     du0 = du0 + (D[0, 0] * e0 + D[0, 1] * e1)
     du1 = du1 + (D[1, 0] * e0 + D[1, 1] * e1)
-    if Q[_Q_MASK_ONES] == 0.0:
-        du0 = du0 * Q[_Q_MASK0]
-        du1 = du1 * Q[_Q_MASK1]
     for i in range(nc):
         acc = 0.0
         for j in range(nc):
@@ -342,11 +340,11 @@ def step_core(z, z_next, raw, k, no_ref, P, T, S, cache, res, Q, A, B, C, D, L, 
     u1 = u1 + du1
     if Q[_Q_LIMITED] != 0.0:
         w0, w1 = res[R_M + 4], res[R_M + 5]
-        s0 = _speed_limited(u0, w0, Q[_Q_T_MAX], Q[_Q_W_MAX], Q[_Q_BAND])
-        s1 = _speed_limited(u1, w1, Q[_Q_S_MAX], Q[_Q_V_MAX], Q[_Q_BAND])
+        s0 = servo_limited(u0, w0, Q[_Q_T_MAX], Q[_Q_W_MAX], Q[_Q_BAND])
+        s1 = servo_limited(u1, w1, Q[_Q_S_MAX], Q[_Q_V_MAX], Q[_Q_BAND])
         if Q[_Q_ANTI_WINDUP] != 0.0 and (s0 != u0 or s1 != u1):
-            d0 = (s0 - u0) * Q[_Q_MASK0]
-            d1 = (s1 - u1) * Q[_Q_MASK1]
+            d0 = s0 - u0
+            d1 = s1 - u1
             for i in range(nc):
                 z_next[n + i] = z_next[n + i] + (L[i, 0] * d0 + L[i, 1] * d1)
         u0, u1 = s0, s1

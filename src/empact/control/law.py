@@ -92,6 +92,8 @@ linalg = lazy_module("scipy.linalg")
 
 __all__ = ["LoopConfig", "LoopLaw", "RAW_SIGNALS", "SHIPPED_LOOP", "reference_table"]
 
+_step_core: Any = core.step_core  # (numba's Dispatcher is typed without a call signature)
+
 #: the loop of the shipped scenarios and designs (`ControllerSpec` keys): the clamping
 #: feedforward of the driveshaft torque at 0.9 of it, unfiltered but for noise, and the
 #: primary servo following it through a 5 Hz low-pass (see the module notes)
@@ -394,8 +396,6 @@ class LoopLaw:
             Q[core._Q_ALPHA_DEC] = self._alpha_dec
             Q[core._Q_T_MS_START] = self._T_ms_start
             Q[core._Q_SHIFT_FF] = spec.shift_feedforward
-            Q[core._Q_MASK0], Q[core._Q_MASK1] = self._mask
-            Q[core._Q_MASK_ONES] = self._mask_ones
             Q[core._Q_LIMITED] = self._limited
             if lim is not None:
                 (Q[core._Q_T_MAX], Q[core._Q_W_MAX]), (Q[core._Q_S_MAX], Q[core._Q_V_MAX]) = \
@@ -430,9 +430,9 @@ class LoopLaw:
         slip = np.asarray(slip, float)
         pairs, inv = np.unique(np.column_stack([slip, r]), axis=0, return_inverse=True)
         reserve, j = smallest_slip_reserve(self.model, pairs[:, 1], pairs[:, 0])
-        if np.any(~(slip > 0)) or not reserve > 0:
-            k = int(np.flatnonzero(~(slip > 0) if np.any(~(slip > 0)) else
-                                   inv.ravel() == j)[0])
+        bad = np.flatnonzero(~(slip > 0))
+        if bad.size or not reserve > 0:
+            k = int(bad[0]) if bad.size else int(np.flatnonzero(inv.ravel() == j)[0])
             nu_pk = float(traction_peak(self.model, r[k])[0])
             raise ParameterError(f"slip set-point {slip[k]:g} at r_g = {r[k]:g}: must lie on "
                                  f"the rising traction curve (0, {nu_pk:.4g})")
@@ -683,17 +683,10 @@ class LoopLaw:
         return np.array(self._limit_f(float(u[0]), float(u[1]), float(w[0]), float(w[1])))
 
     def _limit_f(self, u0: float, u1: float, w0: float, w1: float) -> tuple[float, float]:
-        """`_limit` on floats (``min(max(T, -T_max), T_max)`` spelt out)."""
+        """`_limit` on floats (`_law_core.servo_limited`, as the compiled sample)."""
         (T_max, w_max), (S_max, v_max) = self._lim
-        T = -T_max if -T_max > u0 else u0
-        T = T_max if T_max < T else T
-        if T * w0 > 0:
-            T *= min(max((w_max - abs(w0)) / (SPEED_BAND * w_max), 0.0), 1.0)
-        S = -S_max if -S_max > u1 else u1
-        S = S_max if S_max < S else S
-        if S * w1 > 0:
-            S *= min(max((v_max - abs(w1)) / (SPEED_BAND * v_max), 0.0), 1.0)
-        return T, S
+        return (core.servo_limited(u0, w0, T_max, w_max, SPEED_BAND),
+                core.servo_limited(u1, w1, S_max, v_max, SPEED_BAND))
 
     @property
     def compiled(self) -> bool:
@@ -706,8 +699,7 @@ class LoopLaw:
         state, compiled when `compiled`."""
         if self._fast is not None:
             z_next = self._z_spare
-            step_core: Any = core.step_core  # (numba's Dispatcher type: no signature)
-            if step_core(self._z, z_next, np.ascontiguousarray(measured, dtype=float),
+            if _step_core(self._z, z_next, np.ascontiguousarray(measured, dtype=float),
                          self._k, *self._fast, self._u_out):
                 raise ParameterError(f"r_g = {self._res[core.R_M]:g}: no belt geometry at "
                                      "this ratio")

@@ -189,7 +189,7 @@ def smallest_slip_reserve(model: EmpactModel, r_g: ArrayLike, nu: ArrayLike,
     searched exactly, and the smallest exact reserve among them is returned.  The answer is
     the per-sample search's unless a sample outside the candidates lies closer to the peak
     than they do by more than the interpolation's error (below 1e-9 in slip on the shipped
-    curves; `tests/test_nonlinear.py` compares the two on every shipped closed-loop run).
+    curves; `tests/test_loop.py` compares the two on every shipped closed-loop run).
 
     Parameters
     ----------
