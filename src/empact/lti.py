@@ -9,6 +9,8 @@ named state-space objects, and root loci over any parameter.
 * `damping_ratio`, `oscillatory` - damping ratio ``-Re(p) / |p|`` and the oscillatory
   poles (or zeros) as natural frequency [Hz] and damping ratio.
 * `statespace` - a named `control.StateSpace` (python-control is imported on first use).
+* `cont2discrete` - a continuous state space at a sample time (Tustin, zero- or first-order
+  hold): ``scipy.signal.cont2discrete``'s formulas, without importing ``scipy.signal``.
 * `root_locus`, `track_branches`, `match_branches` - eigenvalues of ``A(p)`` along a scalar
   parameter with continuous branches.  python-control draws a root locus over a feedback gain
   only; here the parameter may enter ``A`` in any way:
@@ -33,6 +35,7 @@ from typing import Callable, Literal, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy import linalg
 from scipy.linalg import eigvals as generalized_eigvals
 
 from ._lazy import lazy_module
@@ -43,7 +46,8 @@ optimize = lazy_module("scipy.optimize")
 
 __all__ = ["FrequencyResponse", "frequency_response", "system_response", "transmission_zeros",
            "channel_zeros",
-           "damping_ratio", "oscillatory", "statespace", "unwrapped_phase_deg", "RootLocus",
+           "damping_ratio", "oscillatory", "statespace", "cont2discrete", "unwrapped_phase_deg",
+           "RootLocus",
            "root_locus", "match_branches", "track_branches"]
 
 Spacing = Literal["linear", "log"]
@@ -317,6 +321,58 @@ def statespace(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, *,
             np.asarray(D, float)] + ([] if dt is None else [dt])
     return control.ss(*args, inputs=list(inputs), outputs=list(outputs), states=list(states),
                       name=re.sub(r"[^A-Za-z0-9_]+", "_", name).strip("_"))
+
+
+#: the methods of `cont2discrete`
+DISCRETIZATIONS = ("tustin", "bilinear", "zoh", "foh")
+
+
+def cont2discrete(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, dt: float,
+                  method: str = "tustin") -> tuple[NDArray[np.float64], ...]:
+    """The continuous state space ``(A, B, C, D)`` at sample time `dt` [s].
+
+    The formulas and LAPACK calls of ``scipy.signal.cont2discrete`` (scipy 1.11-1.17), so the
+    matrices are bitwise scipy's (`tests/test_lti.py` compares them): importing
+    ``scipy.signal`` takes 0.9-1.5 s (it imports ``scipy.stats``), which every ``empact
+    control`` command paid for one call (`bench/bench_discretize.py`).
+
+    Parameters
+    ----------
+    A, B, C, D : array_like
+        Shapes (n, n), (n, m), (p, n), (p, m).
+    dt : float
+        Sample time [s], positive.
+    method : {"tustin", "bilinear", "zoh", "foh"}
+        Tustin (= bilinear, the generalised bilinear transform with alpha = 1/2),
+        zero-order hold or first-order (triangle) hold.
+
+    Returns
+    -------
+    Ad, Bd, Cd, Dd : ndarray
+        ``x[k+1] = Ad x[k] + Bd u[k]``, ``y[k] = Cd x[k] + Dd u[k]``; shapes as the input.
+    """
+    a, b, c, d = (np.asarray(M, dtype=float) for M in (A, B, C, D))
+    if method not in DISCRETIZATIONS:
+        raise ValueError(f"method {method!r}: one of {', '.join(DISCRETIZATIONS)}")
+    n, m = b.shape
+    if method in ("tustin", "bilinear"):
+        alpha = 0.5
+        ima = np.eye(n) - alpha * dt * a
+        ad = linalg.solve(ima, np.eye(n) + (1.0 - alpha) * dt * a)
+        bd = linalg.solve(ima, dt * b)
+        cd = linalg.solve(ima.transpose(), c.transpose()).transpose()
+        dd = d + alpha * np.dot(c, bd)
+    elif method == "zoh":
+        em = np.vstack((np.hstack((a, b)), np.zeros((m, n + m))))
+        ms = linalg.expm(dt * em)[:n, :]
+        ad, bd, cd, dd = ms[:, :n], ms[:, n:], c, d
+    else:  # foh
+        em_upper = linalg.block_diag(np.block([a, b]) * dt, np.eye(m))
+        em = np.block([[em_upper], [np.zeros((m, n + 2 * m))]])
+        ms = linalg.expm(em)
+        ms11, ms12, ms13 = ms[:n, :n], ms[:n, n:n + m], ms[:n, n + m:]
+        ad, bd, cd, dd = ms11, ms12 - ms13 + ms11 @ ms13, c, d + c @ ms13
+    return ad, bd, cd, dd
 
 
 # --------------------------------------------------------------------------------------------

@@ -430,8 +430,8 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, params_fil
 @click.argument("controller", type=click.Path(dir_okay=False))
 @click.option("--rate", required=True, metavar="HZ", help="Sample rate [Hz].")
 @click.option("--method", type=click.Choice(["tustin", "zoh", "foh", "bilinear"]),
-              default="tustin", show_default=True, help="Discretisation (scipy.signal."
-              "cont2discrete).")
+              default="tustin", show_default=True, help="Discretisation (the formulas of "
+              "scipy.signal.cont2discrete).")
 @click.option("--out", "out", type=OutputFile(("json", "mat")), required=True,
               help="The discrete controller (.json or .mat; an existing file only with "
                    "--force).")

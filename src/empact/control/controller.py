@@ -35,10 +35,9 @@ from .._lazy import lazy_module
 from .._validate import check_number
 from ..errors import ParameterError
 from ..export import jsonable
-from ..lti import statespace
+from ..lti import DISCRETIZATIONS, cont2discrete, statespace
 from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS
 
-signal = lazy_module("scipy.signal")
 _core = lazy_module("empact.control._law_core")  # (numba, on first use)
 sio = lazy_module("scipy.io")
 
@@ -222,12 +221,16 @@ class Controller:
         return self.state_space()
 
     def discretize(self, dt: float, method: str = "tustin") -> "Controller":
-        """The controller at sample time `dt` [s] (Tustin by default; by
-        ``scipy.signal.cont2discrete``); computed once per `dt` and `method` (a loop law
+        """The controller at sample time `dt` [s] by `method` (one of
+        `empact.lti.DISCRETIZATIONS`, Tustin by default; ``scipy.signal.cont2discrete``'s
+        formulas, `empact.lti.cont2discrete`); computed once per `dt` and `method` (a loop law
         built at every point of a family discretizes the same controller each time)."""
         if self.dt:
             raise ParameterError(f"controller is already discrete (dt = {self.dt:g} s)")
         dt = check_number("dt", dt, 0.0, 1.0, lo_open=True, unit="s")
+        if method not in DISCRETIZATIONS:
+            raise ParameterError(f"discretization method {method!r}: one of "
+                                 f"{', '.join(DISCRETIZATIONS)}")
         done = self._discrete.get((dt, method))
         if done is not None:
             return done
@@ -235,8 +238,7 @@ class Controller:
             done = Controller(self.A, self.B, self.C, self.D, self.measured, self.outputs,
                               dt, self.method, self.design, self.schedule)
         else:
-            Ad, Bd, Cd, Dd, _ = signal.cont2discrete((self.A, self.B, self.C, self.D), dt,
-                                                     method=method)
+            Ad, Bd, Cd, Dd = cont2discrete(self.A, self.B, self.C, self.D, dt, method)
             done = Controller(Ad, Bd, Cd, Dd, self.measured, self.outputs, dt, self.method,
                               {**self.design, "discretized": method}, self.schedule)
         self._discrete[(dt, method)] = done
