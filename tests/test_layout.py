@@ -128,9 +128,15 @@ def test_no_type_checking_imports():
 
 
 def test_the_kernel_stays_inside_nonlinear():
-    """Only `empact.nonlinear` imports the compiled kernel and its integrator."""
+    """Only `empact.nonlinear` imports the compiled kernel and its integrators, and the
+    compiled closed loop (`empact.control._loop_core`: the law's compiled sample and the
+    integrator in one loop; the model must not import the control layer), which nothing
+    but the loop law imports."""
     graph = _graph()
+    compiled = {"empact.nonlinear._kernel", "empact.nonlinear._rosenbrock",
+                "empact.nonlinear._rodas"}
     users = sorted(k for k, deps in graph.items()
-                   if deps & {"empact.nonlinear._kernel", "empact.nonlinear._rosenbrock"}
-                   and not k.startswith("empact.nonlinear"))
-    assert users == []
+                   if deps & compiled and not k.startswith("empact.nonlinear"))
+    assert users == ["empact.control._loop_core"]
+    assert sorted(k for k, deps in graph.items() if "empact.control._loop_core" in deps) == \
+        ["empact.control.law"]

@@ -413,6 +413,46 @@ def test_the_compiled_sample_is_update(params, name):
     assert worst["u"] <= 1e-14 and worst["z"] <= 1e-12, worst
 
 
+@pytest.mark.parametrize("name", [n for n in SHIPPED if not n.startswith("shift")])
+def test_the_compiled_loop_is_the_python_loop(params, name):
+    """A compiled law runs with the integrator in one compiled loop
+    (`LoopLaw.run_compiled`, `empact.control._loop_core`); the same law stepped by the
+    simulator's Python loop (a controller with `step` only) gives bitwise the same run:
+    times, states, outputs, inputs and the integrator's step counts."""
+    from empact.control.closed_loop import build_law
+    from empact.nonlinear.simulation import run_scenario, scenario_model
+
+    sc = load_scenario(control_example_path(name))
+    model, op = scenario_model(sc, params)
+    runs = []
+    for wrap in (False, True):
+        law = build_law(sc, params, None, model, op)
+        assert law.compiled
+
+        class Stepped:  # the SampledController protocol alone: the Python loop
+            dt, commands, measured, step = law.dt, law.commands, law.measured, law.step
+
+        runs.append(run_scenario(sc, params, controller=Stepped() if wrap else law))
+        assert law._k == round(sc.duration / law.dt)  # every sample taken, either way
+    fast, slow = runs
+    assert fast.complete and slow.complete
+    for f in ("t", "x", "y", "u"):
+        np.testing.assert_array_equal(getattr(fast, f), getattr(slow, f), err_msg=f)
+    assert (fast.stats["n_steps"], fast.stats["n_rejected"]) == \
+        (slow.stats["n_steps"], slow.stats["n_rejected"])
+
+
+def test_run_compiled_needs_a_compiled_law(params):
+    """A law that calls the model at its samples (a moving shift feedforward) runs `update`
+    in the Python loop; asked to run compiled, it says so."""
+    from empact.control.closed_loop import build_law
+
+    law = build_law(load_scenario(control_example_path("shift-low-od")), params)
+    assert not law.compiled
+    with pytest.raises(RuntimeError, match="needs a compiled law"):
+        law.run_compiled(0, 1, (), 0.0, 1e-5, 1, 0, 0)
+
+
 def test_smallest_slip_reserve_is_the_per_sample_search(params):
     """`smallest_slip_reserve` (129 searches interpolated, 16 refined; the closed-loop
     metrics' ``slip_reserve_pp``) against the traction peak searched at every sample, on

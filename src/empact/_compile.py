@@ -20,41 +20,57 @@ from .nonlinear.equilibrium import trim
 from .nonlinear.linearization import linearize_many, plant
 from .nonlinear.model import nonlinear_model
 from .nonlinear.scenario import load_scenario
-from .nonlinear.simulation import simulate
+from .nonlinear.simulation import scenario_model, simulate
 from .params import OperatingPoint, default_params
 
 __all__ = ["compile_all", "drop_stale_cache"]
 
 
 def drop_stale_cache(folder: Path | None = None) -> int:
-    """Delete numba's cache of `empact.nonlinear` when any of its sources is newer than the
-    oldest cache index; returns the number of files deleted.
+    """Delete numba's cache of `empact.nonlinear` (and of the compiled closed loop) when any
+    of its sources is newer than the oldest cache index; returns the number of files
+    deleted.
 
     numba keys a function's cache on its own file only: the integrators of ``_rodas.py`` and
     ``_rosenbrock.py`` inline the right-hand side and Jacobian of ``_kernel.py`` and keep the
-    version they were compiled with after ``_kernel.py`` changes (numba issue 6845).  The
+    version they were compiled with after ``_kernel.py`` changes (numba issue 6845); so does
+    the compiled closed loop (``empact/control/_loop_core.py``) with the kernel, the
+    integrators and the law's sample (``_law_core.py``), whose cache is dropped likewise.  The
     test session calls this first, so that an edited kernel is never tested through stale
     integrators; the price is one compile (about 20 s) after a source changed.
 
     Parameters
     ----------
     folder : Path, optional
-        The package folder whose ``__pycache__`` is checked (default: `empact.nonlinear`'s).
+        A package folder whose ``__pycache__`` is checked against its sources (default:
+        `empact.nonlinear`'s, and ``_loop_core``'s cache in `empact.control`'s against the
+        sources it compiles in).
 
     Returns
     -------
     int
         The number of cache files (``.nbi`` and ``.nbc``) deleted; 0 when none was stale.
     """
-    folder = Path(__file__).resolve().parent / "nonlinear" if folder is None else Path(folder)
-    cache = folder / "__pycache__"
-    index = list(cache.glob("*.nbi"))
+    if folder is not None:
+        return _drop_stale(Path(folder) / "__pycache__", "*", list(Path(folder).glob("*.py")))
+    here = Path(__file__).resolve().parent
+    nonlinear = list((here / "nonlinear").glob("*.py"))
+    # the compiled closed loop calls the kernel, the integrator and the law's sample
+    loop_sources = nonlinear + [here / "control" / "_law_core.py",
+                                here / "control" / "_loop_core.py"]
+    return (_drop_stale(here / "nonlinear" / "__pycache__", "*", nonlinear)
+            + _drop_stale(here / "control" / "__pycache__", "_loop_core.*", loop_sources))
+
+
+def _drop_stale(cache: Path, pattern: str, sources: list[Path]) -> int:
+    """Delete the numba cache files `pattern` in `cache` when any of `sources` is newer than
+    the oldest of their indexes; the number deleted."""
+    index = list(cache.glob(f"{pattern}.nbi"))
     if not index:
         return 0
-    newest_source = max(p.stat().st_mtime for p in folder.glob("*.py"))
-    if newest_source <= min(p.stat().st_mtime for p in index):
+    if max(p.stat().st_mtime for p in sources) <= min(p.stat().st_mtime for p in index):
         return 0
-    stale = index + list(cache.glob("*.nbc"))
+    stale = index + list(cache.glob(f"{pattern}.nbc"))
     for path in stale:
         path.unlink(missing_ok=True)
     return len(stale)
@@ -80,7 +96,12 @@ def compile_all() -> float:
     plant(params)
     # the sampled loop law's compiled arithmetic (`empact.control._law_core`): a sample,
     # the linearisation's ideal sample, the sensors alone, the gain schedule
-    law = build_law(load_scenario(control_example_path("slip-load-step-r1")), params)
+    sc = load_scenario(control_example_path("slip-load-step-r1"))
+    model, op = scenario_model(sc, params)
+    law = build_law(sc, params, None, model, op)
+    # the compiled closed loop (`empact.control._loop_core`), then a sample alone
+    simulate(model, op.x, {}, 2 * law.dt, u0=op.u, controller=law)
+    law = build_law(sc, params, None, model, op)
     law.step(0.0, law.raw0)
     law._limit(np.zeros(2), (0.0, 0.0))  # the servo limits as `update` calls them
     law.preprocess(law.z0[:law.n_pre], law.raw0, 0, np.array([law.point["r_g"], 0.01, 0.05,

@@ -86,6 +86,7 @@ from ..params import Params
 from ..variator.geometry import ratio_range, secondary_radius, variator_state
 from ..variator.shift_law import g_beta
 from . import _law_core as core
+from . import _loop_core
 from .controller import Controller
 
 linalg = lazy_module("scipy.linalg")
@@ -93,6 +94,7 @@ linalg = lazy_module("scipy.linalg")
 __all__ = ["LoopConfig", "LoopLaw", "RAW_SIGNALS", "SHIPPED_LOOP", "reference_table"]
 
 _step_core: Any = core.step_core  # (numba's Dispatcher is typed without a call signature)
+_run_samples: Any = _loop_core.run_samples
 
 #: the loop of the shipped scenarios and designs (`ControllerSpec` keys): the clamping
 #: feedforward of the driveshaft torque at 0.9 of it, unfiltered but for noise, and the
@@ -693,6 +695,49 @@ class LoopLaw:
         """Whether `step` runs the whole sample compiled (`_law_core.step_core`: no
         safety-factor clamping, no moving shift feedforward) rather than `update`."""
         return self._fast is not None
+
+    def run_compiled(self, k0: int, k1: int, sim: tuple[Any, ...], t: float, h: float,
+                     filled: int, n_steps: int, n_rej: int) -> tuple[Any, ...]:
+        """Samples `k0` to ``k1 - 1`` of the simulator's sampled loop with the law and the
+        integrator in one compiled loop (`_loop_core.run_samples`; only when `compiled`):
+        bitwise what `step` at each sample between the integrator's calls gives.
+
+        Parameters
+        ----------
+        k0, k1 : int
+            The simulator's first sample and the one after the last.
+        sim : tuple
+            The simulator's arrays and the integrator's arguments, in `run_samples`' order
+            (from ``x`` to ``J``).
+        t, h : float
+            Time [s] and step size [s] the integrator continues from.
+        filled, n_steps, n_rej : int
+            Output samples filled, integration steps taken and rejected so far.
+
+        Returns
+        -------
+        tuple
+            ``(status, t, h, filled, n_steps, n_rej, k)``: the integrator's status after
+            sample `k`, the last one run.
+
+        Raises
+        ------
+        ParameterError
+            When the clamping feedforward finds no belt geometry at the measured ratio (as
+            `step` does).
+        """
+        if self._fast is None:
+            raise RuntimeError("run_compiled needs a compiled law (LoopLaw.compiled)")
+        status, t, h, filled, n_steps, n_rej, k, done, err = _run_samples(
+            k0, k1, self._z, self._z_spare, self._k, *self._fast, self._u_out, *sim, t, h,
+            filled, n_steps, n_rej)
+        self._k += done
+        if done % 2:
+            self._z, self._z_spare = self._z_spare, self._z
+        if err:
+            raise ParameterError(f"r_g = {self._res[core.R_M]:g}: no belt geometry at this "
+                                 "ratio")
+        return status, t, h, filled, n_steps, n_rej, k
 
     def step(self, t: float, measured: NDArray[np.float64]) -> NDArray[np.float64]:
         """Servo torques ``[T_mp, T_ms]`` [N m] over ``[t, t + dt)``: `update` of the law's

@@ -319,3 +319,7 @@ def integrate_rodas4(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, r
 
 #: the integrators of this module by `simulate`'s method name
 METHODS = {"rodas5p": integrate, "rodas4": integrate_rodas4}
+#: each integrator's tableau as `_run` takes it (``A, C, c, d, H, gamma, q``): a compiled
+#: loop around the integrator (`empact.control._loop_core`) calls `_run` with it
+TABLEAUX = {integrate: (R5P_A, R5P_C, R5P_c, R5P_d, R5P_H, R5P_GAMMA, 5.0),
+            integrate_rodas4: (R4_A, R4_C, R4_c, R4_d, R4_H, R4_GAMMA, 4.0)}

@@ -354,6 +354,27 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
     t, h = 0.0, min(1e-5, max_step)
     status, n_steps, n_rej, filled, k = 0, 0, 0, 1, 0
     every = max(1, n_k // 100)
+    # a controller whose sample is compiled runs with the integrator in one compiled loop
+    # (`empact.control.law.LoopLaw.run_compiled`), `every` samples a call (the progress bar
+    # and Ctrl-C between calls): bitwise this loop's result, without its Python per sample
+    tableau = _rodas.TABLEAUX.get(step)
+    if getattr(controller, "compiled", False) and tableau is not None and out_idx is not None:
+        sim = (x, u, np.ascontiguousarray(U_free), t_grid, out_idx, _index_array(cmd),
+               _index_array(free),
+               commands, dx, y, np.empty(out_idx.size), *tableau, samples, model.p,
+               model.ix, sig_t, sig_v, sig_n, brk_arr, rel, atol, max_step, omega_min,
+               max_steps, X, Y, cols, J)
+        with progress_bar(total=n_k, desc=f"simulate {name}".strip(), unit="samples",
+                          enabled=progress) as bar:
+            for k0 in range(0, n_k, every):
+                k1 = min(k0 + every, n_k)
+                status, t, h, filled, n_steps, n_rej, k = controller.run_compiled(
+                    k0, k1, sim, t, h, filled, n_steps, n_rej)
+                bar.update(k1 - k0)
+                if status != 0:
+                    break
+        return _sampled_inputs(status, t, filled, n_steps, n_rej, k, samples, dt, sig_t,
+                               sig_v, sig_n, cmd, commands, u0)
     with progress_bar(total=n_k, desc=f"simulate {name}".strip(), unit="samples",
                       enabled=progress) as bar:
         for k in range(n_k):
@@ -380,14 +401,28 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
                 bar.update(every)
             if status != 0:
                 break
-    # the applied inputs at the output samples: the free ones from their signals, the
-    # commands of the period (t_k, t_(k+1)] that ends at or after each sample (u0 at t = 0)
+    return _sampled_inputs(status, t, filled, n_steps, n_rej, k, samples, dt, sig_t, sig_v,
+                           sig_n, cmd, commands, u0)
+
+
+def _sampled_inputs(status, t, filled, n_steps, n_rej, k, samples, dt, sig_t, sig_v, sig_n,
+                    cmd, commands, u0):
+    """`_run_sampled`'s return value, with the inputs as applied at the output samples: the
+    free ones from their signals, the commands of the period (t_k, t_(k+1)] that ends at or
+    after each sample (u0 at t = 0); `k` is the last sample run."""
     n_out = max(filled, 1)
     U = _inputs_at(samples[:n_out], sig_t, sig_v, sig_n)
     idx = np.clip(np.ceil(samples[:n_out] / dt - 1e-9).astype(int) - 1, 0, max(k, 0))
     U[:, cmd] = commands[idx]
     U[0, cmd] = u0[cmd]
     return status, t, filled, n_steps, n_rej, U
+
+
+def _index_array(idx: slice | NDArray[np.intp]) -> NDArray[np.intp]:
+    """`_as_index`'s slice or array as an index array (the compiled loop's form)."""
+    if isinstance(idx, slice):
+        return np.arange(idx.start, idx.stop, dtype=np.intp)
+    return idx
 
 
 def _as_index(idx: list[int]) -> slice | NDArray[np.intp]:
