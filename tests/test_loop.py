@@ -560,3 +560,28 @@ def test_a_slip_set_point_past_the_traction_peak_is_refused(params):
                   f"(0, {pk2:.4g})"
     assert refuse({"nu": np.array([[0.0, 0.01], [0.5, 0.0], [1.0, 0.0]])}).startswith(
         "slip set-point 0 at r_g = 1: must lie")
+
+
+def test_plant_response_in_chunks_is_the_one_stack_solve(params, monkeypatch):
+    """`LoopModel.plant_response` solves a family a few points at a time (the whole stack
+    of a 63-point family is 560 MB); any chunk size gives bitwise the one-stack solve
+    ``-Ce (z I - Aa)^-1 Bu`` over the grid (an independent computation), shape ``shape +
+    (n_w, 2, 2)``."""
+    from empact.control import loop as L
+    from empact.control.family import LOOP_FAMILY_OUTPUTS, plant_family
+
+    fam = plant_family(params, r_g=[0.6, 1.0, 1.6], tau=[0.85, 0.95], F_s=[16000.0],
+                       outputs=LOOP_FAMILY_OUTPUTS)
+    lm = L.family_loops(fam, shipped_controller("pi"), LoopConfig.of(params, **SHIPPED_LOOP),
+                        params)
+    w = L.default_omega(lm.dt)[::10]
+    z = np.exp(1j * w * lm.dt)
+    M = z[:, None, None] * np.eye(lm.Aa.shape[-1]) - lm.Aa[..., None, :, :]
+    Bu = np.broadcast_to((lm.Bu * lm.mask)[..., None, :, :], M.shape[:-1] + (2,))
+    ref = -(lm.Ce[..., None, :, :] @ np.linalg.solve(M, Bu))
+    for chunk in (1.0, 3 * 16 * w.size * lm.Aa.shape[-1] ** 2, 1e12):  # 1, 3, 6 points
+        monkeypatch.setattr(L, "_CHUNK_BYTES", chunk)
+        lm._cache.clear()
+        G = lm.plant_response(w)
+        assert G.shape == fam.shape + (w.size, 2, 2)
+        np.testing.assert_array_equal(G, ref)

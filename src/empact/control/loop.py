@@ -38,6 +38,8 @@ from .law import RAW_SIGNALS, LoopConfig, LoopLaw, reference_table
 from .robustness import disk_margin
 
 linalg = lazy_module("scipy.linalg")
+#: the largest stack of matrices `LoopModel.plant_response` solves at once [bytes]
+_CHUNK_BYTES = 32e6
 
 __all__ = ["LoopModel", "loop_model", "predict_scenario", "family_loops", "LoopPrediction",
            "PERFORMANCE", "LOOP_FAMILY_OUTPUTS", "linear_preprocess", "zoh", "default_omega"]
@@ -271,10 +273,20 @@ class LoopModel:
             return self._cache[key]
         z = np.exp(1j * np.asarray(omega, float) * self.dt)
         n = self.Aa.shape[-1]
-        M = z[:, None, None] * np.eye(n) - self.Aa[..., None, :, :]
-        Bu = np.broadcast_to((self.Bu * self.mask)[..., None, :, :], M.shape[:-1] + (2,))
-        X = np.linalg.solve(M, Bu)
-        G = -(self.Ce[..., None, :, :] @ X)
+        A = self.Aa.reshape(-1, n, n)
+        Bu = np.broadcast_to(self.Bu * self.mask, self.Aa.shape[:-1] + (2,)).reshape(-1, n, 2)
+        Ce = np.broadcast_to(self.Ce, self.Aa.shape[:-2] + self.Ce.shape[-2:])
+        Ce = Ce.reshape(-1, *self.Ce.shape[-2:])
+        G = np.empty((A.shape[0], z.size, Ce.shape[-2], 2), complex)
+        zI = z[:, None, None] * np.eye(n)
+        # a few points a solve: the stacked matrices of a whole family (63 points x 300
+        # frequencies of 43 x 43, 560 MB) cost more in fresh memory than in the solve
+        step = max(1, int(_CHUNK_BYTES // (16 * z.size * n * n)))
+        for i in range(0, A.shape[0], step):
+            M = zI - A[i:i + step, None]
+            X = np.linalg.solve(M, np.broadcast_to(Bu[i:i + step, None], M.shape[:-1] + (2,)))
+            G[i:i + step] = -(Ce[i:i + step, None] @ X)
+        G = G.reshape(self.Aa.shape[:-2] + G.shape[1:])
         self._cache[key] = G
         return G
 
