@@ -359,3 +359,24 @@ def test_montecarlo_closed_loop_cli(tmp_path):
     doc = json.loads(res.stdout)  # (the progress bar is on stderr)
     assert doc["schema"]["name"] == "empact.montecarlo" and doc["runs"] == 2
     assert doc["outputs"]["ratio_error"]["n"] + doc["failures"] == 2
+
+
+def _pool_threads(_):
+    from threadpoolctl import threadpool_info
+    return sorted({p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"})
+
+
+def test_a_chunk_runs_on_one_blas_thread_and_new_libraries_are_seen(monkeypatch):
+    """`run_chunks` limits every loaded BLAS to one thread inside a chunk, from a scan of the
+    loaded libraries kept until a module is imported (`sweep._thread_pools`): the same
+    controller while nothing was imported, a new scan after an import."""
+    import sys
+    import types
+
+    from empact import sweep
+
+    assert sweep.run_chunks(_pool_threads, [0, 1]) == [[1], [1]]
+    first = sweep._thread_pools()
+    assert sweep._thread_pools() is first
+    monkeypatch.setitem(sys.modules, "_empact_test_new_module", types.ModuleType("x"))
+    assert sweep._thread_pools() is not first
