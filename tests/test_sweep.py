@@ -301,14 +301,14 @@ def test_unreachable_scheduler_one_line_exit_2(tmp_path):
         port = s.getsockname()[1]
     exe = Path(sys.executable).with_name("empact")
     out = subprocess.run([str(exe), "plants", "--ratio", "0.5:2:4", "--scheduler",
-                          f"tcp://127.0.0.1:{port}", "--scheduler-timeout", "2",
+                          f"tcp://127.0.0.1:{port}", "--scheduler-timeout", "0.5",
                           "--out", str(tmp_path / "f.npz")],
                          capture_output=True, text=True, timeout=90)
     assert out.returncode == 2, out.stderr
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1, out.stderr
     assert lines[0].startswith(f"error: --scheduler tcp://127.0.0.1:{port}: cannot reach the "
-                               "scheduler within 2 s")
+                               "scheduler within 0.5 s")
     assert not list(tmp_path.iterdir())  # nothing written
 
 
