@@ -108,6 +108,18 @@ def test_cli_start_up_imports_only_what_the_command_needs():
                                             "scipy.optimize", "control"} == set()
 
 
+def test_linearize_and_nmp_do_not_import_python_control(tmp_path):
+    """The exact plant's matrices and names need no python-control object (its import is
+    ~1.5 s: `Plant.system` is built on first use): ``linearize`` (JSON and .mat) and ``nmp``
+    load neither python-control nor ``scipy.signal``."""
+    heavy = {"control", "scipy.signal", "scipy.stats", "matplotlib.pyplot"}
+    assert _loaded("linearize", "--ratio", "1", "--tau", "0.9") & heavy == set()
+    assert _loaded("linearize", "--ratio", "1", "--tau", "0.9", "--out",
+                   str(tmp_path / "p.mat")) & heavy == set()
+    assert (tmp_path / "p.mat").is_file()
+    assert _loaded("nmp", "--ratios", "1", "--json") & heavy == set()
+
+
 def test_control_commands_do_not_import_scipy_signal(tmp_path):
     """A controller is discretised without ``scipy.signal`` (0.9-1.5 s of start-up, with the
     ``scipy.stats`` it imports, for one ``cont2discrete`` call): `empact.lti.cont2discrete`."""

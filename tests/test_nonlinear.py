@@ -462,3 +462,23 @@ def test_smallest_slip_reserve_short_records_and_bad_input(params):
         smallest_slip_reserve(model, [1.0, 1.1, 1.2], [0.01, 0.01])
     with pytest.raises(ValueError, match=r"\(got 0, 0\)"):
         smallest_slip_reserve(model, [], [])
+
+
+def test_plant_builds_its_python_control_object_on_first_use(params):
+    """`plant` holds the exact matrices and names; its named `control.StateSpace` is built
+    when asked (once) and is `linearize`'s system at the same point: the same matrices
+    (bitwise) and signal names."""
+    from empact.nonlinear.linearization import PLANT_INPUTS, PLANT_OUTPUTS, plant
+
+    p = plant(params)
+    assert "system" not in vars(p)  # not built yet
+    sys = p.system
+    assert p.system is sys and p.state_space() is sys
+    ref = linearize(p.trim, PLANT_INPUTS + ("T_l",), PLANT_OUTPUTS)
+    for name in "ABCD":
+        np.testing.assert_array_equal(getattr(p, name), getattr(sys, name))
+        np.testing.assert_array_equal(getattr(p, name), getattr(ref, name))
+    assert (p.inputs, p.outputs, p.states) == (tuple(sys.input_labels),
+                                               tuple(sys.output_labels),
+                                               tuple(sys.state_labels))
+    assert list(p.inputs) == ref.input_labels and p.input_labels == ref.input_labels

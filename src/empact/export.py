@@ -93,12 +93,13 @@ def format_of(path: str | os.PathLike[str], fmt: str | None = None) -> str:
 
 def system_dict(sys, units: Mapping[str, Sequence[str]] | None = None,
                 metadata: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """A named `control.StateSpace` as a plain dictionary (A, B, C, D, names, units).
+    """A named state-space model as a plain dictionary (A, B, C, D, names, units).
 
     Parameters
     ----------
-    sys : control.StateSpace
-        The system, n states, m inputs, p outputs.
+    sys : control.StateSpace or empact.nonlinear.linearization.Plant
+        The system, n states, m inputs, p outputs (``A, B, C, D`` and the names
+        ``input_labels``, ``output_labels``, ``state_labels``).
     units : dict str -> sequence of str, optional
         Units per signal, e.g. ``{"inputs": [...], "outputs": [...], "states": [...]}``;
         each entry becomes ``<key>_units``.
@@ -129,7 +130,7 @@ def save_system(sys, path: str | os.PathLike[str], *, fmt: str | None = None,
 
     Parameters
     ----------
-    sys : control.StateSpace
+    sys : control.StateSpace or empact.nonlinear.linearization.Plant (as `system_dict`)
     path : destination file
     fmt : "json", "mat" or "npz" (default: from the suffix)
     schema : JSON schema name (version 1)

@@ -222,12 +222,12 @@ def transmission_zeros(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, *
 
 def channel_zeros(sys, input: str, output: str, *, scale: ArrayLike | None = None,
                   max_abs: float = 1e12) -> NDArray[np.complex128]:
-    """`transmission_zeros` of one named input -> output channel of a `control.StateSpace`.
+    """`transmission_zeros` of one named input -> output channel of a named system.
 
     Parameters
     ----------
-    sys : control.StateSpace
-        The system, n states.
+    sys : control.StateSpace or empact.nonlinear.linearization.Plant
+        The system, n states (``A, B, C, D``, ``input_labels``, ``output_labels``).
     input, output : str
         Names of the channel's input and output (from ``sys.input_labels`` and
         ``sys.output_labels``).

@@ -48,7 +48,6 @@ from .._lazy import lazy_module
 from .._validate import check_choice, check_values
 from ..errors import ParameterError
 from ..export import jsonable, read_npz, write_arrays
-from ..lti import statespace
 from ..nonlinear.equilibrium import trim_grid
 from ..nonlinear.linearization import (
     BENCH_OPTIONS,
@@ -154,11 +153,11 @@ class PlantFamily:
         """The plant at one grid point (a `Plant`, as `empact.nonlinear.linearization.plant`
         returns; its ``state_space()`` is the named `control.StateSpace`)."""
         idx = self._index(index)
-        system = statespace(self.A[idx], self.B[idx], self.C[idx], self.D[idx],
-                            states=self.states, inputs=self.inputs, outputs=self.outputs,
-                            name="plant_" + "_".join(f"{k}_{self.operating[k][idx]:.4g}"
-                                                     for k in self.axes))
-        return Plant(system=system,
+        return Plant(self.A[idx], self.B[idx], self.C[idx], self.D[idx],
+                     inputs=tuple(self.inputs), outputs=tuple(self.outputs),
+                     states=tuple(self.states),
+                     name="plant_" + "_".join(f"{k}_{self.operating[k][idx]:.4g}"
+                                              for k in self.axes),
                      operating={k: float(v[idx]) for k, v in self.operating.items()})
 
     def _matrices(self, point: dict[str, float]) -> tuple[NDArray, NDArray, NDArray, NDArray]:
@@ -188,9 +187,9 @@ class PlantFamily:
         """The plant interpolated multilinearly at an off-grid point, given by the family's
         axis variables (``r_g=...``, ...), each inside its axis' range (a `Plant`)."""
         A, B, C, D = self._matrices(point)
-        system = statespace(A, B, C, D, states=self.states, inputs=self.inputs,
-                            outputs=self.outputs, name="plant_interpolated")
-        return Plant(system=system, operating={k: float(v) for k, v in point.items()})
+        return Plant(A, B, C, D, inputs=tuple(self.inputs), outputs=tuple(self.outputs),
+                     states=tuple(self.states), name="plant_interpolated",
+                     operating={k: float(v) for k, v in point.items()})
 
     def at(self, **point: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         """Deprecated: `interpolate` (returns a `Plant`); this gives its (A, B, C, D)."""

@@ -18,6 +18,7 @@ point and the single-point plant are the same system.
 """
 from __future__ import annotations
 
+import functools
 import warnings
 from dataclasses import dataclass, field
 from typing import Any, Iterator, Sequence
@@ -30,8 +31,8 @@ from ..params import OperatingPoint, Params
 from .equilibrium import TrimResult, trim
 from .model import EmpactModel, nonlinear_model
 
-__all__ = ["linearize", "linearize_many", "plant", "Plant", "trim_point", "PLANT_INPUTS",
-           "PLANT_OUTPUTS", "BENCH_OPTIONS", "disturbance_input"]
+__all__ = ["linearize", "linearized_plant", "linearize_many", "plant", "Plant", "trim_point",
+           "PLANT_INPUTS", "PLANT_OUTPUTS", "BENCH_OPTIONS", "disturbance_input"]
 
 #: the plant's control inputs (servo torques) and outputs (ratio and the two slip signals:
 #: eq. 2 on the current radii, and at the operating ratio)
@@ -84,7 +85,7 @@ def linearize(op: TrimResult, inputs: Sequence[str] | None = None,
     ----------
     op : TrimResult
         The operating point (its ``model`` is linearised).
-    inputs, outputs : sequence of str, optional
+    inputs, outputs : sequence of str
         Subsets of ``op.model.inputs`` / ``op.model.outputs`` (default: all).
     name : str
         System name.
@@ -95,15 +96,41 @@ def linearize(op: TrimResult, inputs: Sequence[str] | None = None,
         ``dx = A x + B u``, ``y = C x + D u`` in deviations from `op`; states named as
         ``op.model.states``.  Units: SI, as in `empact.nonlinear.model`.  The output
         ``nu_r`` is linearised at the trimmed ratio (the slip of eq. 3 and Fig. 12).
+        `linearized_plant` gives the same matrices without python-control.
+    """
+    return linearized_plant(op, inputs, outputs, name).system
+
+
+def linearized_plant(op: TrimResult, inputs: Sequence[str] | None = None,
+                     outputs: Sequence[str] | None = None, name: str = "empact_linear",
+                     operating: dict[str, float] | None = None) -> "Plant":
+    """`linearize` as a `Plant`: the matrices and signal names, the python-control object
+    built only when asked (``Plant.system``; importing python-control takes ~1.5 s).
+
+    Parameters
+    ----------
+    op : TrimResult
+        The operating point (its ``model`` is linearised).
+    inputs, outputs : sequence of str
+        Subsets of ``op.model.inputs`` / ``op.model.outputs`` (default: all).
+    name : str
+        System name.
+    operating : dict, optional
+        The plant's operating variables (default: none).
+
+    Returns
+    -------
+    Plant
+        ``dx = A x + B u``, ``y = C x + D u`` in deviations from `op` (SI), `trim` = `op`.
     """
     m = op.model
     A, B, C, D = m.jacobian(op.x, op.u)
     _refer_nu_r(m, C, D, op.r_g, op.nu)
     ii = _select(m.inputs, inputs, "input")
     oo = _select(m.outputs, outputs, "output")
-    return statespace(A, B[:, ii], C[oo], D[np.ix_(oo, ii)], states=m.states,
-                      inputs=[m.inputs[i] for i in ii], outputs=[m.outputs[o] for o in oo],
-                      name=name)
+    return Plant(A, B[:, ii], C[oo], D[np.ix_(oo, ii)], inputs=tuple(m.inputs[i] for i in ii),
+                 outputs=tuple(m.outputs[o] for o in oo), states=tuple(m.states), name=name,
+                 operating=dict(operating or {}), trim=op)
 
 
 def linearize_many(model: EmpactModel, X: NDArray, U: NDArray, r_g0: NDArray,
@@ -147,50 +174,60 @@ class Plant:
 
     Attributes
     ----------
-    system : control.StateSpace
-        Named inputs (``T_mp, T_ms`` [N m] and the disturbance), outputs (``r_g, nu, nu_r``
-        [-]) and states (SI).
+    A, B, C, D : ndarray, shapes (n, n), (n, m), (p, n), (p, m)
+        ``dx = A x + B u``, ``y = C x + D u`` in deviations from the operating point (SI).
+    inputs : tuple of str
+        Input names (``T_mp, T_ms`` [N m] and the disturbance), m of them.
+    outputs : tuple of str
+        Output names (``r_g, nu, nu_r`` [-]), p of them.
+    states : tuple of str
+        State names (SI), n of them.
+    name : str
+        System name.
     operating : dict
         The operating variables of the point (``r_g, nu, F_s, omega_p, T_l``, SI).
     trim : TrimResult or None
         The trimmed point (None for a point of a stored family).
     """
 
-    system: Any
+    A: NDArray[np.float64]
+    B: NDArray[np.float64]
+    C: NDArray[np.float64]
+    D: NDArray[np.float64]
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    states: tuple[str, ...]
+    name: str = "plant"
     operating: dict[str, float] = field(default_factory=dict)
     trim: TrimResult | None = None
+
+    @functools.cached_property
+    def system(self) -> Any:
+        """The plant as a named `control.StateSpace` (built on first use: python-control
+        is imported then)."""
+        return statespace(self.A, self.B, self.C, self.D, inputs=self.inputs,
+                          outputs=self.outputs, states=self.states, name=self.name)
 
     def state_space(self):
         """The plant as a named `control.StateSpace`."""
         return self.system
 
+    # the names as python-control spells them: a Plant goes wherever a named system does
+    # (`empact.export.system_dict`, `empact.lti.channel_zeros`)
     @property
-    def A(self) -> NDArray[np.float64]:
-        return np.asarray(self.system.A)
+    def input_labels(self) -> list[str]:
+        """`inputs` as a list (python-control's name)."""
+        return list(self.inputs)
 
     @property
-    def B(self) -> NDArray[np.float64]:
-        return np.asarray(self.system.B)
+    def output_labels(self) -> list[str]:
+        """`outputs` as a list (python-control's name)."""
+        return list(self.outputs)
 
     @property
-    def C(self) -> NDArray[np.float64]:
-        return np.asarray(self.system.C)
-
-    @property
-    def D(self) -> NDArray[np.float64]:
-        return np.asarray(self.system.D)
-
-    @property
-    def inputs(self) -> tuple[str, ...]:
-        return tuple(self.system.input_labels)
-
-    @property
-    def outputs(self) -> tuple[str, ...]:
-        return tuple(self.system.output_labels)
-
-    @property
-    def states(self) -> tuple[str, ...]:
-        return tuple(self.system.state_labels)
+    def state_labels(self) -> list[str]:
+        """`states` as a list (python-control's name)."""
+        return list(self.states)
 
     def __iter__(self) -> Iterator[Any]:
         """Deprecated: ``sys, trimmed = plant(...)`` (empact 0.1); use ``.state_space()``
@@ -262,6 +299,5 @@ def plant(params: Params, op: OperatingPoint | None = None, *,
     trimmed = trim(model, op)
     name = f"plant_rg_{op.r_g:g}".replace(".", "p")
     inputs = PLANT_INPUTS + ((disturbance_input(model),) if disturbance else ())
-    system = linearize(trimmed, inputs, PLANT_OUTPUTS, name=name)
     operating = {k: getattr(trimmed, k) for k in ("r_g", "nu", "F_s", "omega_p", "T_l")}
-    return Plant(system=system, operating=operating, trim=trimmed)
+    return linearized_plant(trimmed, inputs, PLANT_OUTPUTS, name, operating)

@@ -179,9 +179,8 @@ def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
     model = nonlinear_model(params, **options)
     zs, rhp = [], []
     for rg in r:
-        sys = plant(params, base.replace(r_g=float(rg)), model=model,
-                    disturbance=False).system
-        z = channel_zeros(sys, "T_mp", slip, max_abs=1e7)
+        pl = plant(params, base.replace(r_g=float(rg)), model=model, disturbance=False)
+        z = channel_zeros(pl, "T_mp", slip, max_abs=1e7)  # (no python-control object)
         z = z[np.abs(z) < 2 * np.pi * f_max_hz]
         zs.append(z)
         rhp.append(z[(z.real > 1e-3 * np.abs(z)) & (np.abs(z) > 1e-3)])
