@@ -36,6 +36,7 @@ import numpy as np  # noqa: E402
 from dataclasses import replace  # noqa: E402
 
 from _closed_loop_baseline import LoopLaw, run_closed_loop_v01  # noqa: E402
+from _montecarlo_workload import shipped_monte_carlo  # noqa: E402
 from empact.control.closed_loop import (control_example_path, control_examples,  # noqa: E402
                                         resolve_controller, run_closed_loop)
 from empact.nonlinear.scenario import load_scenario  # noqa: E402
@@ -81,16 +82,7 @@ def main() -> None:
               f"{str(equal):5s}  {today[0]:26.4f}", flush=True)
     if "--no-montecarlo" in sys.argv:
         return
-    from empact.montecarlo import load_spread, monte_carlo
-    from importlib import resources
-
-    path = resources.files("empact.data").joinpath("montecarlo", "example-spread.toml")
-    spread = load_spread(str(path), params)
-    sc = load_scenario(control_example_path("slip-load-step-r1"))
-    ctrl = resolve_controller(sc.controller.file)
-    t0 = time.perf_counter()
-    res = monte_carlo(params, spread, 200, "closed-loop", seed=1, scenario=sc, controller=ctrl)
-    wall = time.perf_counter() - t0
+    wall, res = shipped_monte_carlo(params)
     print(f"Monte Carlo, 200 closed-loop runs of slip-load-step-r1, serial: {wall:.1f} s "
           f"({res.failures} failed)")
 

@@ -20,11 +20,14 @@ import time
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
 import numpy as np  # noqa: E402
+from _montecarlo_workload import shipped_monte_carlo  # noqa: E402
 
 from empact.control import closed_loop  # noqa: E402
 from empact.control.closed_loop import (build_law, control_example_path,  # noqa: E402
-                                        control_examples, resolve_controller)
+                                        control_examples)
 from empact.control.law import LoopLaw  # noqa: E402
 from empact.nonlinear.scenario import load_scenario  # noqa: E402
 from empact.nonlinear.simulation import run_scenario, scenario_model  # noqa: E402
@@ -70,24 +73,8 @@ def main() -> None:
               flush=True)
     if "--no-montecarlo" in sys.argv:
         return
-    from importlib import resources
-
-    from empact.montecarlo import load_spread, monte_carlo
-
-    path = resources.files("empact.data").joinpath("montecarlo", "example-spread.toml")
-    spread = load_spread(str(path), params)
-    sc = load_scenario(control_example_path("slip-load-step-r1"))
-    ctrl = resolve_controller(sc.controller.file)
-    out = {}
-    for key, cls in (("python", PythonLoopLaw), ("compiled", LoopLaw)):
-        closed_loop.LoopLaw = cls  # what build_law builds
-        try:
-            t0 = time.perf_counter()
-            res = monte_carlo(params, spread, 200, "closed-loop", seed=1, scenario=sc,
-                              controller=ctrl)
-            out[key] = (time.perf_counter() - t0, res)
-        finally:
-            closed_loop.LoopLaw = LoopLaw
+    out = {key: shipped_monte_carlo(params, cls)
+           for key, cls in (("python", PythonLoopLaw), ("compiled", LoopLaw))}
     (tp, rp), (tc, rc) = out["python"], out["compiled"]
     same = np.array_equal(rp.values, rc.values, equal_nan=True)
     print(f"Monte Carlo, 200 closed-loop runs of slip-load-step-r1, serial: Python loop "

@@ -27,9 +27,9 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import numpy as np  # noqa: E402
 
 import _loop_law_baseline as frozen  # noqa: E402
-from empact.control import closed_loop  # noqa: E402
+from _montecarlo_workload import shipped_monte_carlo  # noqa: E402
 from empact.control.closed_loop import (build_law, control_example_path,  # noqa: E402
-                                        control_examples, resolve_controller)
+                                        control_examples)
 from empact.control.law import LoopLaw  # noqa: E402
 from empact.nonlinear.scenario import load_scenario  # noqa: E402
 from empact.nonlinear.simulation import run_scenario, scenario_model  # noqa: E402
@@ -90,24 +90,8 @@ def main() -> None:
               flush=True)
     if "--no-montecarlo" in sys.argv:
         return
-    from importlib import resources
-
-    from empact.montecarlo import load_spread, monte_carlo
-
-    path = resources.files("empact.data").joinpath("montecarlo", "example-spread.toml")
-    spread = load_spread(str(path), params)
-    sc = load_scenario(control_example_path("slip-load-step-r1"))
-    ctrl = resolve_controller(sc.controller.file)
-    out = {}
-    for key, cls in (("frozen", frozen.LoopLaw), ("law", LoopLaw)):
-        closed_loop.LoopLaw = cls  # what build_law builds
-        try:
-            t0 = time.perf_counter()
-            res = monte_carlo(params, spread, 200, "closed-loop", seed=1, scenario=sc,
-                              controller=ctrl)
-            out[key] = (time.perf_counter() - t0, res)
-        finally:
-            closed_loop.LoopLaw = LoopLaw
+    out = {key: shipped_monte_carlo(params, cls)
+           for key, cls in (("frozen", frozen.LoopLaw), ("law", LoopLaw))}
     (to, ro), (tn, rn) = out["frozen"], out["law"]
     same = np.array_equal(ro.values, rn.values, equal_nan=True)
     rel = float(np.nanmax(np.abs(ro.values - rn.values) / np.maximum(np.abs(ro.values),
