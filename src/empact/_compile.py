@@ -15,12 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .control.closed_loop import build_law, control_example_path
+from .control.closed_loop import build_law, control_example_path, run_closed_loop
 from .nonlinear.equilibrium import trim
 from .nonlinear.linearization import linearize_many, plant
 from .nonlinear.model import nonlinear_model
 from .nonlinear.scenario import load_scenario
-from .nonlinear.simulation import scenario_model, simulate
+from .nonlinear.simulation import simulate
 from .params import OperatingPoint, default_params
 
 __all__ = ["compile_all", "drop_stale_cache"]
@@ -97,11 +97,9 @@ def compile_all() -> float:
     # the sampled loop law's compiled arithmetic (`empact.control._law_core`): a sample,
     # the linearisation's ideal sample, the sensors alone, the gain schedule
     sc = load_scenario(control_example_path("slip-load-step-r1"))
-    model, op = scenario_model(sc, params)
-    law = build_law(sc, params, None, model, op)
     # the compiled closed loop (`empact.control._loop_core`), then a sample alone
-    simulate(model, op.x, {}, 2 * law.dt, u0=op.u, controller=law)
-    law = build_law(sc, params, None, model, op)
+    run_closed_loop(sc.with_duration(0.002), params)
+    law = build_law(sc, params)
     law.step(0.0, law.raw0)
     law._limit(np.zeros(2), (0.0, 0.0))  # the servo limits as `update` calls them
     law.preprocess(law.z0[:law.n_pre], law.raw0, 0, np.array([law.point["r_g"], 0.01, 0.05,

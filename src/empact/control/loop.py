@@ -286,9 +286,9 @@ class LoopModel:
             M = zI - A[i:i + step, None]
             X = np.linalg.solve(M, np.broadcast_to(Bu[i:i + step, None], M.shape[:-1] + (2,)))
             G[i:i + step] = -(Ce[i:i + step, None] @ X)
-        G = G.reshape(self.Aa.shape[:-2] + G.shape[1:])
-        self._cache[key] = G
-        return G
+        out = G.reshape(self.Aa.shape[:-2] + G.shape[1:])
+        self._cache[key] = out
+        return out
 
     def controller_response(self, omega: NDArray) -> NDArray[np.complex128]:
         """``K(e^(j w dt))``, shape ``(n_w, 2, 2)``."""
