@@ -7,8 +7,8 @@ and with the same compiled routines: the free inputs of the sample, the model's 
 (`empact.nonlinear._kernel._eval`), the measurements, the law's sample
 (`_law_core.step_core`), the held commands, and the integrator up to the next sample
 (`empact.nonlinear._rodas._run` with the method's tableau).  So a run is bitwise the Python
-loop's (`tests/test_loop.py`); what goes is the Python between the compiled calls (about
-half of a closed-loop run's time, `bench/bench_closed_loop.py`).
+loop's (`tests/test_loop.py`); what goes is the Python between the compiled calls (a third
+of a load step's run, `bench/bench_compiled_loop.py`).
 
 It is the one module outside `empact.nonlinear` that calls the kernel and an integrator
 (`tests/test_layout.py`): the loop needs both the law (here, above the model) and the

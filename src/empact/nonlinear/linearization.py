@@ -85,7 +85,7 @@ def linearize(op: TrimResult, inputs: Sequence[str] | None = None,
     ----------
     op : TrimResult
         The operating point (its ``model`` is linearised).
-    inputs, outputs : sequence of str
+    inputs, outputs : sequence of str, optional
         Subsets of ``op.model.inputs`` / ``op.model.outputs`` (default: all).
     name : str
         System name.
@@ -111,7 +111,7 @@ def linearized_plant(op: TrimResult, inputs: Sequence[str] | None = None,
     ----------
     op : TrimResult
         The operating point (its ``model`` is linearised).
-    inputs, outputs : sequence of str
+    inputs, outputs : sequence of str, optional
         Subsets of ``op.model.inputs`` / ``op.model.outputs`` (default: all).
     name : str
         System name.

@@ -360,10 +360,9 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
     tableau = _rodas.TABLEAUX.get(step)
     if getattr(controller, "compiled", False) and tableau is not None and out_idx is not None:
         sim = (x, u, np.ascontiguousarray(U_free), t_grid, out_idx, _index_array(cmd),
-               _index_array(free),
-               commands, dx, y, np.empty(out_idx.size), *tableau, samples, model.p,
-               model.ix, sig_t, sig_v, sig_n, brk_arr, rel, atol, max_step, omega_min,
-               max_steps, X, Y, cols, J)
+               _index_array(free), commands, dx, y, np.empty(out_idx.size), *tableau,
+               samples, model.p, model.ix, sig_t, sig_v, sig_n, brk_arr, rel, atol, max_step,
+               omega_min, max_steps, X, Y, cols, J)
         with progress_bar(total=n_k, desc=f"simulate {name}".strip(), unit="samples",
                           enabled=progress) as bar:
             for k0 in range(0, n_k, every):
