@@ -96,6 +96,12 @@ __all__ = ["LoopConfig", "LoopLaw", "RAW_SIGNALS", "SHIPPED_LOOP", "reference_ta
 _step_core: Any = core.step_core  # (numba's Dispatcher is typed without a call signature)
 _run_samples: Any = _loop_core.run_samples
 
+def _no_geometry(r_g: float) -> ParameterError:
+    """A sample's refusal (`LoopLaw.update`, the compiled sample): the clamping feedforward
+    finds no belt geometry at the measured ratio `r_g`."""
+    return ParameterError(f"r_g = {r_g:g}: no belt geometry at this ratio")
+
+
 #: the loop of the shipped scenarios and designs (`ControllerSpec` keys): the clamping
 #: feedforward of the driveshaft torque at 0.9 of it, unfiltered but for noise, and the
 #: primary servo following it through a 5 Hz low-pass (see the module notes)
@@ -567,7 +573,7 @@ class LoopLaw:
             e1 = 0.0  # the slip loop is replaced by the open-loop clamping strategy
             u1 = self._safety_torque(m[3], m[0])
         elif spec.feedforward and v[core.R_RS] != v[core.R_RS]:
-            raise ParameterError(f"r_g = {m[0]:g}: no belt geometry at this ratio")
+            raise _no_geometry(m[0])
         # the primary servo's feedforward share, low-passed: the decoupler (it follows the
         # feedforward's clamping) and the shift feedforward
         t_mp = dec * (u1 - self._T_ms_start)
@@ -735,8 +741,7 @@ class LoopLaw:
         if done % 2:
             self._z, self._z_spare = self._z_spare, self._z
         if err:
-            raise ParameterError(f"r_g = {self._res[core.R_M]:g}: no belt geometry at this "
-                                 "ratio")
+            raise _no_geometry(self._res[core.R_M])
         return status, t, h, filled, n_steps, n_rej, k
 
     def step(self, t: float, measured: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -746,8 +751,7 @@ class LoopLaw:
             z_next = self._z_spare
             if _step_core(self._z, z_next, np.ascontiguousarray(measured, dtype=float),
                          self._k, *self._fast, self._u_out):
-                raise ParameterError(f"r_g = {self._res[core.R_M]:g}: no belt geometry at "
-                                     "this ratio")
+                raise _no_geometry(self._res[core.R_M])
             self._z_spare, self._z = self._z, z_next
             self._k += 1
             return self._u_out.copy()

@@ -335,8 +335,9 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
     dt = float(check_number("controller dt", controller.dt, 0.0, duration, lo_open=True,
                             unit="s"))
     cmd_list = [model.input_index(c) for c in controller.commands]
+    free_list = [j for j in range(4) if j not in cmd_list]
     cmd = _as_index(cmd_list)  # a slice where the indices run on (indexing with a list costs
-    free = _as_index([j for j in range(4) if j not in cmd_list])  # ~1-2 us a sample)
+    free = _as_index(free_list)  # ~1-2 us a sample)
     where = _measurement(model, tuple(controller.measured))
     n_k = int(round(duration / dt))
     t_grid = np.minimum(np.arange(n_k + 1) * dt, duration)
@@ -358,13 +359,15 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
     # (`empact.control.law.LoopLaw.run_compiled`), `every` samples a call (the progress bar
     # and Ctrl-C between calls): bitwise this loop's result, without its Python per sample
     tableau = _rodas.TABLEAUX.get(step)
-    if getattr(controller, "compiled", False) and tableau is not None and out_idx is not None:
-        sim = (x, u, np.ascontiguousarray(U_free), t_grid, out_idx, _index_array(cmd),
-               _index_array(free), commands, dx, y, np.empty(out_idx.size), *tableau,
-               samples, model.p, model.ix, sig_t, sig_v, sig_n, brk_arr, rel, atol, max_step,
-               omega_min, max_steps, X, Y, cols, J)
-        with progress_bar(total=n_k, desc=f"simulate {name}".strip(), unit="samples",
-                          enabled=progress) as bar:
+    fast = getattr(controller, "compiled", False) and tableau is not None and out_idx is not None
+    with progress_bar(total=n_k, desc=f"simulate {name}".strip(), unit="samples",
+                      enabled=progress) as bar:
+        if fast:
+            sim = (x, u, np.ascontiguousarray(U_free), t_grid, out_idx,
+                   np.array(cmd_list, dtype=np.intp), np.array(free_list, dtype=np.intp),
+                   commands, dx, y, np.empty(out_idx.size), *tableau, samples, model.p,
+                   model.ix, sig_t, sig_v, sig_n, brk_arr, rel, atol, max_step, omega_min,
+                   max_steps, X, Y, cols, J)
             for k0 in range(0, n_k, every):
                 k1 = min(k0 + every, n_k)
                 status, t, h, filled, n_steps, n_rej, k = controller.run_compiled(
@@ -372,56 +375,39 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
                 bar.update(k1 - k0)
                 if status != 0:
                     break
-        return _sampled_inputs(status, t, filled, n_steps, n_rej, k, samples, dt, sig_t,
-                               sig_v, sig_n, cmd, commands, u0)
-    with progress_bar(total=n_k, desc=f"simulate {name}".strip(), unit="samples",
-                      enabled=progress) as bar:
-        for k in range(n_k):
-            u[free] = U_free[k]
-            K._eval(x, u, model.p, model.ix, dx, y)
-            if k == 0:
-                Y[0] = y
-            if out_idx is not None:
-                meas = y[out_idx]
-            else:
-                for i, (kind, j) in enumerate(where):
-                    meas[i] = y[j] if kind == 0 else (x[j] if kind == 1 else u[j])
-            c = np.asarray(controller.step(t_list[k], meas), float)
-            commands[k] = c
-            u[cmd] = c
-            sig_v[cmd, 0] = c
-            status, t, h, filled, ns, nr = step(
-                x, t, t_list[k + 1], h, samples, model.p, model.ix, sig_t, sig_v,
-                sig_n, brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps,
-                X, Y, cols, J, k == 0)
-            n_steps += ns
-            n_rej += nr
-            if (k + 1) % every == 0:
-                bar.update(every)
-            if status != 0:
-                break
-    return _sampled_inputs(status, t, filled, n_steps, n_rej, k, samples, dt, sig_t, sig_v,
-                           sig_n, cmd, commands, u0)
-
-
-def _sampled_inputs(status, t, filled, n_steps, n_rej, k, samples, dt, sig_t, sig_v, sig_n,
-                    cmd, commands, u0):
-    """`_run_sampled`'s return value, with the inputs as applied at the output samples: the
-    free ones from their signals, the commands of the period (t_k, t_(k+1)] that ends at or
-    after each sample (u0 at t = 0); `k` is the last sample run."""
+        else:
+            for k in range(n_k):
+                u[free] = U_free[k]
+                K._eval(x, u, model.p, model.ix, dx, y)
+                if k == 0:
+                    Y[0] = y
+                if out_idx is not None:
+                    meas = y[out_idx]
+                else:
+                    for i, (kind, j) in enumerate(where):
+                        meas[i] = y[j] if kind == 0 else (x[j] if kind == 1 else u[j])
+                c = np.asarray(controller.step(t_list[k], meas), float)
+                commands[k] = c
+                u[cmd] = c
+                sig_v[cmd, 0] = c
+                status, t, h, filled, ns, nr = step(
+                    x, t, t_list[k + 1], h, samples, model.p, model.ix, sig_t, sig_v,
+                    sig_n, brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps,
+                    X, Y, cols, J, k == 0)
+                n_steps += ns
+                n_rej += nr
+                if (k + 1) % every == 0:
+                    bar.update(every)
+                if status != 0:
+                    break
+    # the applied inputs at the output samples: the free ones from their signals, the
+    # commands of the period (t_k, t_(k+1)] that ends at or after each sample (u0 at t = 0)
     n_out = max(filled, 1)
     U = _inputs_at(samples[:n_out], sig_t, sig_v, sig_n)
     idx = np.clip(np.ceil(samples[:n_out] / dt - 1e-9).astype(int) - 1, 0, max(k, 0))
     U[:, cmd] = commands[idx]
     U[0, cmd] = u0[cmd]
     return status, t, filled, n_steps, n_rej, U
-
-
-def _index_array(idx: slice | NDArray[np.intp]) -> NDArray[np.intp]:
-    """`_as_index`'s slice or array as an index array (the compiled loop's form)."""
-    if isinstance(idx, slice):
-        return np.arange(idx.start, idx.stop, dtype=np.intp)
-    return idx
 
 
 def _as_index(idx: list[int]) -> slice | NDArray[np.intp]:
