@@ -6,6 +6,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+import pytest
+
 import empact
 
 PKG = Path(empact.__file__).parent
@@ -106,6 +109,40 @@ def test_cli_start_up_imports_only_what_the_command_needs():
     # loaded)
     assert _loaded("modes", "driveline") & {"matplotlib.pyplot", "scipy.stats",
                                             "scipy.optimize", "control"} == set()
+
+
+def test_figures_of_linear_analyses_and_records_load_no_model(tmp_path):
+    """`empact.plotting` imports a submodule when one of its names is first used: a Bode plot
+    of the actuation model, and an FRF estimate of measured records (``frf-estimate``, apart
+    from the experiments on the model), load neither the nonlinear model (numba, ~0.5 s) nor
+    the control layer."""
+    heavy = {"numba", "empact.nonlinear", "empact.control", "empact.experiments"}
+    assert _loaded("frf", "actuation", "--input", "T_mp", "--output", "theta_mp", "--plot",
+                   str(tmp_path / "frf.png")) & heavy == set()
+    assert (tmp_path / "frf.png").stat().st_size > 1000
+    t = np.arange(2048) / 100.0
+    u = np.random.default_rng(1).standard_normal(t.size)
+    np.savetxt(tmp_path / "rec.csv", np.column_stack([t, u, np.convolve(u, [0.5, 0.3])[:t.size]]),
+               delimiter=",", header="time,u,y", comments="")
+    assert _loaded("frf-estimate", str(tmp_path / "rec.csv"), "--input", "u", "--output", "y",
+                   "--time", "time", "--plot", str(tmp_path / "est.png")) & heavy == set()
+    assert (tmp_path / "est.png").stat().st_size > 1000
+
+
+def test_plotting_names_resolve_to_their_submodules():
+    """Each public name of `empact.plotting` is its submodule's object (imported on first
+    use), `dir` lists them, and an unknown name is an AttributeError."""
+    import importlib
+
+    import empact.plotting as plotting
+
+    for name in plotting.__all__:
+        module = importlib.import_module(f"empact.plotting.{plotting._CATALOGUE[name]}")
+        assert getattr(plotting, name) is getattr(module, name), name
+        assert name in module.__all__, name
+    assert set(plotting.__all__) <= set(dir(plotting))
+    with pytest.raises(AttributeError, match="plot_nothing"):
+        plotting.plot_nothing  # noqa: B018
 
 
 def test_linearize_and_nmp_do_not_import_python_control(tmp_path):

@@ -20,33 +20,41 @@ control
 variator
     The machine sheet: traction curves with their torque reserve, the ratio's static
     stability map.
-"""
-from ._common import FORMATS, STYLE, Plot, save_figure, save_plot, symbol
-from .control import (
-    plot_closed_loop,
-    plot_family_poles,
-    plot_loop_shapes,
-    plot_robustness_maps,
-    plot_shift_envelope,
-)
-from .identification import plot_frf_estimate, plot_identified_plant
-from .linear import plot_bode, plot_modal_energy, plot_mode_shapes
-from .nonlinear import plot_nmp, plot_plant_magnitude, plot_simulation
-from .slip import (
-    plot_belt_root_locus,
-    plot_pole_sweep,
-    plot_slip_bode,
-    plot_stability_map,
-    plot_traction,
-    plot_zero_locus,
-)
-from .variator import plot_ratio_stability, plot_traction_reserve
 
-__all__ = ["Plot", "STYLE", "FORMATS", "save_figure", "save_plot", "symbol", "plot_mode_shapes",
-           "plot_modal_energy", "plot_bode", "plot_belt_root_locus", "plot_traction",
-           "plot_pole_sweep", "plot_slip_bode", "plot_zero_locus", "plot_stability_map",
-           "plot_nmp", "plot_simulation", "plot_plant_magnitude", "plot_frf_estimate",
-           "plot_identified_plant", "plot_family_poles", "plot_loop_shapes",
-           "plot_robustness_maps", "plot_closed_loop", "plot_shift_envelope",
-           "plot_traction_reserve",
-           "plot_ratio_stability"]
+Each submodule is imported when one of its names is first used (``from empact.plotting import
+plot_bode`` loads the Bode plot's module, not the control plots' simulation stack).
+"""
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+#: public name -> the submodule that defines it
+_CATALOGUE = {
+    "Plot": "_common", "STYLE": "_common", "FORMATS": "_common", "save_figure": "_common",
+    "save_plot": "_common", "symbol": "_common",
+    "plot_mode_shapes": "linear", "plot_modal_energy": "linear", "plot_bode": "linear",
+    "plot_belt_root_locus": "slip", "plot_traction": "slip", "plot_pole_sweep": "slip",
+    "plot_slip_bode": "slip", "plot_zero_locus": "slip", "plot_stability_map": "slip",
+    "plot_nmp": "nonlinear", "plot_simulation": "nonlinear",
+    "plot_plant_magnitude": "nonlinear",
+    "plot_frf_estimate": "identification", "plot_identified_plant": "identification",
+    "plot_family_poles": "control", "plot_loop_shapes": "control",
+    "plot_robustness_maps": "control", "plot_closed_loop": "control",
+    "plot_shift_envelope": "control",
+    "plot_traction_reserve": "variator", "plot_ratio_stability": "variator",
+}
+
+__all__ = list(_CATALOGUE)
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _CATALOGUE:
+        raise AttributeError(f"module 'empact.plotting' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_CATALOGUE[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_CATALOGUE))
