@@ -133,6 +133,12 @@ def test_cli_simulate_linearize_nmp(tmp_path):
     assert text[0].startswith("# empact simulation") and "r_g [-]" in text[1]
     assert "F_s [N]" in text[1] and len(text) == 2 + 201
     assert (sim / "servo-torque-steps.png").stat().st_size > 1000
+    # the figure is PNG unless --formats asks for vector ones beside it
+    assert sorted(p.suffix for p in sim.iterdir()) == [".csv", ".png"]
+    res = run("simulate", "--example", "servo-torque-steps", "--out", tmp_path / "vec",
+              "--quiet", "--duration", "0.01", "--formats", "png,svg")
+    assert res.exit_code == 0, res.output
+    assert sorted(p.suffix for p in (tmp_path / "vec").iterdir()) == [".csv", ".png", ".svg"]
     # the simulation's CSV reads back as records (comment line, units in the header)
     res = run("frf-estimate", sim / "servo-torque-steps.csv", "--input", "T_ms", "--output",
               "theta_ms", "--time", "time", "--nperseg", "64", "--json")
@@ -577,6 +583,8 @@ BAD_INPUT = [
     (["simulate", "--example", "servo-torque-steps", "--out", ".."], "current folder"),
     (["simulate", "--example", "servo-torque-steps", "--out", "full"], "not empty"),
     (["simulate", "--example", "servo-torque-steps", "--out", "existing.png"], "is a file"),
+    (["simulate", "--example", "servo-torque-steps", "--formats", "png,eps"],
+     "--formats = 'eps': must be one of png, svg, pdf"),
     (["simulate", "sc_input.toml"], "unknown input 'T_zz'"),
     (["simulate", "sc_times.toml"], "must be >= 0 and non-decreasing"),
     (["simulate", "sc_rtol.toml"], "solver.rtol = 2: allowed range"),

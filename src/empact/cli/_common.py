@@ -25,7 +25,7 @@ import click
 import numpy as np
 
 from .._io import atomic_write_text
-from .._validate import check_int, check_number, check_values
+from .._validate import check_choice, check_int, check_number, check_values
 from ..errors import ParameterError
 from ..export import jsonable as to_jsonable
 from ..params import OperatingPoint, Params, load_params
@@ -38,7 +38,8 @@ __all__ = ["sweep_options", "sweep_from_options",
            "operating_values", "PLOT_SUFFIXES", "LINEAR_OPTIONS",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
            "OutputFile", "check_outputs", "check_references", "quiet_option", "Interrupted",
-           "EXIT_INTERRUPTED", "parse_list", "schema_version", "fraction_metrics",
+           "EXIT_INTERRUPTED", "parse_list", "formats_option", "parse_formats", "schema_version",
+           "fraction_metrics",
            "announce_compilation", "COMPILING"]
 
 #: suffixes of ``--plot`` files (the figure's format)
@@ -311,6 +312,17 @@ force_option = click.option("--force", is_flag=True,
                             help="Replace existing output (in a folder: only empact's own "
                                  "files).")
 quiet_option = click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
+formats_option = click.option(
+    "--formats", default="png", show_default=True,
+    help="Figure formats, comma-separated: png, svg, pdf (png,svg or png,pdf adds vector "
+         "figures for print).")
+
+
+def parse_formats(text: str) -> tuple[str, ...]:
+    """The figure formats of ``--formats png,svg`` (each once, in the order given); an
+    unknown one is one line naming the option."""
+    return tuple(dict.fromkeys(check_choice("--formats", f.strip(), PLOT_SUFFIXES)
+                               for f in text.split(",")))
 
 
 class OutputFile(click.Path):

@@ -13,11 +13,13 @@ from ._common import (
     check_references,
     emit_json,
     force_option,
+    formats_option,
     get_params,
     json_options,
     operating_point,
     output_folder,
     params_option,
+    parse_formats,
     parse_list,
 )
 from .linear import plot_option
@@ -31,8 +33,9 @@ MAX_SAMPLES = 5_000_000
 @click.option("--example", "example", default=None, help="Run a shipped example scenario.")
 @click.option("--list-examples", "list_ex", is_flag=True, help="List the shipped scenarios.")
 @click.option("--out", "out", default=None, type=click.Path(file_okay=False),
-              help="Output folder for NAME.csv and NAME.png / NAME.svg (default: sim-NAME); "
+              help="Output folder for NAME.csv and the figure NAME.png (default: sim-NAME); "
                    "new or empty unless --force.")
+@formats_option
 @click.option("--duration", "duration", type=float, default=None,
               help="Override the scenario's end time [s].")
 @click.option("--states", "states", is_flag=True, help="Also write the states to the CSV.")
@@ -42,9 +45,10 @@ MAX_SAMPLES = 5_000_000
 @force_option
 @click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
 def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: str | None,
-                 duration: float | None, states: bool, keep_partial: bool,
+                 formats: str, duration: float | None, states: bool, keep_partial: bool,
                  params_file: str | None, force: bool, quiet: bool) -> None:
-    """Simulate SCENARIO.toml (or --example NAME); write CSV (units in the header) and a figure.
+    """Simulate SCENARIO.toml (or --example NAME); write CSV (units in the header) and a figure
+    (PNG; --formats png,svg adds the vector figure).
 
     Exit status: 0 complete; 1 the run stopped early (nothing written, or with --keep-partial
     the partial result, marked INCOMPLETE); 2 bad input.
@@ -62,6 +66,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
         return
     if (scenario is None) == (example is None):
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
+    fmts = parse_formats(formats)
     sc = load_scenario(example_path(example) if example else scenario)
     if duration is not None:
         sc = sc.with_duration(check_number("--duration", duration, 0.0, 3600.0, lo_open=True,
@@ -84,7 +89,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
                                                   unit="file", enabled=not quiet) as bar:
         (tmp / f"{sc.name}.csv").write_text(csv_text(res, states))
         bar.update(1)
-        save_figure(plot_simulation(res).figure, tmp / sc.name)
+        save_figure(plot_simulation(res).figure, tmp / sc.name, fmts)
         bar.update(1)
     click.echo(str(dest / f"{sc.name}.csv"))
     if not res.complete:

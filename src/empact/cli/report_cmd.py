@@ -7,7 +7,15 @@ from .. import paper
 from .._validate import check_choice
 from ..report import SECTIONS, build_report
 from ..variator.geometry import ratio_range
-from ._common import InputError, force_option, get_params, output_folder, params_option
+from ._common import (
+    InputError,
+    force_option,
+    formats_option,
+    get_params,
+    output_folder,
+    params_option,
+    parse_formats,
+)
 
 #: the ratios the report evaluates: the paper's LOW and OD (Fig. 10) and Tables 1-2
 REPORT_RATIOS = (*paper.FIG10_RATIOS, *paper.TABLE2_HZ)
@@ -18,9 +26,7 @@ REPORT_RATIOS = (*paper.FIG10_RATIOS, *paper.TABLE2_HZ)
               type=click.Path(file_okay=False),
               help="Report folder; new or empty unless --force (then only empact's own files "
                    "in it are replaced).")
-@click.option("--formats", default="png", show_default=True,
-              help="Figure formats, comma-separated: png, svg, pdf (the page shows PNG; "
-                   "png,svg or png,pdf adds vector figures for print).")
+@formats_option
 @click.option("--sections", default=None,
               help="Only these sections, comma-separated anchors (default: all; e.g. "
                    "table1,table2,fig9).")
@@ -29,9 +35,9 @@ REPORT_RATIOS = (*paper.FIG10_RATIOS, *paper.TABLE2_HZ)
 @click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
 def reproduce(out: str, formats: str, sections: str | None, params_file: str | None,
               force: bool, quiet: bool) -> None:
-    """Reproduce every table and figure of the paper into OUT/index.html."""
-    fmts = tuple(dict.fromkeys(check_choice("--formats", f.strip(), ("png", "svg", "pdf"))
-                               for f in formats.split(",")))
+    """Reproduce every table and figure of the paper into OUT/index.html (the page shows the
+    PNG figures; --formats adds vector ones beside them)."""
+    fmts = parse_formats(formats)
     anchors = [s.anchor for s in SECTIONS]
     chosen = None if sections is None else [
         check_choice("--sections", a.strip(), anchors) for a in sections.split(",")]
