@@ -442,6 +442,38 @@ def test_compiled_traction_peak_is_bitwise_the_vectorised_search(params):
         traction_peak(model, [1.0, 0.0])
 
 
+def test_compiled_bisection_is_bitwise_the_vectorised_one(params):
+    """The compiled bisection of the rising traction curve (`_kernel.bisect_rising_many`,
+    issue 23) returns to the last bit what the vectorised NumPy bisection it replaced returns
+    (written out here): random ratios and targets of both signs, targets above the peak and
+    NaN (the upper end then moves every step), and the slip it finds reaches the target."""
+    from empact.nonlinear.equilibrium import _bisect_rising, traction_peak
+
+    def numpy_bisection(model, r, target, nu_pk):  # the replaced code, verbatim
+        a_, b_ = np.zeros(r.shape), nu_pk.copy()
+        goal = np.abs(target)
+        for _ in range(64):
+            mid = 0.5 * (a_ + b_)
+            below = model.traction(mid, r) < goal
+            a_, b_ = np.where(below, mid, a_), np.where(below, b_, mid)
+        return np.sign(target) * 0.5 * (a_ + b_)
+
+    model = nonlinear_model(params)
+    rng = np.random.default_rng(11)
+    r = rng.uniform(0.45, 2.2, 400)
+    nu_pk, mu_pk = traction_peak(model, r)
+    target = rng.uniform(-1.1, 1.1, r.size) * mu_pk
+    target[:5] = np.nan
+    got = _bisect_rising(model, r, target, nu_pk)
+    np.testing.assert_array_equal(got, numpy_bisection(model, r, target, nu_pk))
+    on = np.abs(target) < mu_pk  # on the rising branch: the curve meets the target
+    np.testing.assert_allclose(model.traction(np.abs(got[on]), r[on]), np.abs(target[on]),
+                               rtol=1e-12)
+    with pytest.raises(ValueError, match="must be positive"):
+        _bisect_rising(model, np.array([1.0, 0.0]), np.array([0.01, 0.01]),
+                       np.array([0.05, 0.05]))
+
+
 def test_smallest_slip_reserve_short_records_and_bad_input(params):
     """`smallest_slip_reserve` on a record no longer than its searches is the per-sample
     search itself (bitwise), on a long smooth record (a ratio sweep 0.45 -> 2.2 with a slip

@@ -1274,6 +1274,24 @@ def traction_many(nu, r_g, p, out):
 
 
 @njit(cache=True)
+def bisect_rising_many(r_g, goal, nu_pk, p, out):
+    """The slip in ``[0, nu_pk[k]]`` where the traction curve at ``r_g[k]`` reaches
+    ``goal[k]`` (64 bisection steps: to rounding), for 1-D arrays: ``out[k]``.  Step for step
+    the vectorised bisection it replaced (`empact.nonlinear.equilibrium._bisect_rising`: the
+    same midpoints and comparisons; a NaN goal moves the upper end), so bitwise the same."""
+    for k in range(r_g.shape[0]):
+        a, b = 0.0, nu_pk[k]
+        r, g = r_g[k], goal[k]
+        for _ in range(64):
+            mid = 0.5 * (a + b)
+            if traction_mu(mid, r, p) < g:
+                a = mid
+            else:
+                b = mid
+        out[k] = 0.5 * (a + b)
+
+
+@njit(cache=True)
 def traction_peak_many(r_g, g, p, nu_out, mu_out):
     """Golden-section search of the traction curve's peak on slip [0, 0.99] at each ratio
     ``r_g[k]`` (90 steps, ratio `g`): ``nu_out[k], mu_out[k]``.  Step for step the search of

@@ -347,14 +347,16 @@ def slip_at_torque_ratio(model: EmpactModel, tau: ArrayLike,
 
 def _bisect_rising(model: EmpactModel, r: NDArray, target: NDArray, nu_pk: NDArray) -> NDArray:
     """The slip in ``[0, nu_pk]`` where the kernel's curve reaches ``|target|`` (64 bisection
-    steps: to rounding), with the sign of `target`."""
-    a_, b_ = np.zeros(r.shape), nu_pk.copy()
-    goal = np.abs(target)
-    for _ in range(64):
-        mid = 0.5 * (a_ + b_)
-        below = model.traction(mid, r) < goal
-        a_, b_ = np.where(below, mid, a_), np.where(below, b_, mid)
-    return np.sign(target) * 0.5 * (a_ + b_)
+    steps: to rounding, compiled: `_kernel.bisect_rising_many`), with the sign of `target`
+    (arrays of one shape)."""
+    if np.any(r <= 0):
+        raise ValueError(f"r_g = {r[r <= 0].flat[0]:g}: must be positive")
+    shape = np.shape(r)
+    r_, goal, top = (np.ascontiguousarray(np.broadcast_to(np.asarray(v, float), shape)).ravel()
+                     for v in (r, np.abs(target), nu_pk))
+    out = np.empty(r_.size)
+    K.bisect_rising_many(r_, goal, top, model.p, out)
+    return np.sign(target) * out.reshape(shape)
 
 
 def _contact(model: EmpactModel, r, F_contact, tau_of):
