@@ -585,3 +585,22 @@ def test_plant_response_in_chunks_is_the_one_stack_solve(params, monkeypatch):
         G = lm.plant_response(w)
         assert G.shape == fam.shape + (w.size, 2, 2)
         np.testing.assert_array_equal(G, ref)
+
+
+def test_unique_rows_is_numpys_unique_of_the_rows():
+    """`law._unique_rows` (the reference table's distinct (slip, ratio) pairs from the runs of
+    equal rows) gives exactly ``np.unique(..., axis=0, return_inverse=True)``: piecewise
+    constant references (a set-point step, a value that comes back), a moving ratio (every
+    row distinct) and one row."""
+    from empact.control.law import _unique_rows
+
+    rng = np.random.default_rng(5)
+    steps = np.repeat(rng.choice([0.01, 0.02, 0.03], 12), rng.integers(1, 300, 12))
+    cases = [(steps, np.ones(steps.size)), (steps, np.repeat([1.0, 0.5], [1, steps.size - 1])),
+             (np.full(500, 0.02), np.linspace(0.5, 2.0, 500)), (np.array([0.01]), np.ones(1))]
+    for a, b in cases:
+        want, want_inv = np.unique(np.column_stack([a, b]), axis=0, return_inverse=True)
+        got, got_inv = _unique_rows(a, b)
+        np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(got_inv, want_inv.ravel())
+        np.testing.assert_array_equal(got[got_inv], np.column_stack([a, b]))

@@ -96,6 +96,18 @@ __all__ = ["LoopConfig", "LoopLaw", "RAW_SIGNALS", "SHIPPED_LOOP", "reference_ta
 _step_core: Any = core.step_core  # (numba's Dispatcher is typed without a call signature)
 _run_samples: Any = _loop_core.run_samples
 
+def _unique_rows(*columns: NDArray) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """``np.unique(np.column_stack(columns), axis=0, return_inverse=True)`` (the distinct
+    rows, sorted, and each row's index among them), computed on the first row of each run of
+    equal rows: a reference table holds a few values for thousands of samples, and sorting
+    every sample's row cost about 1 ms a column pair."""
+    rows = np.column_stack(columns)
+    start = np.ones(len(rows), dtype=bool)
+    start[1:] = np.any(rows[1:] != rows[:-1], axis=1)
+    distinct, inv = np.unique(rows[start], axis=0, return_inverse=True)
+    return distinct, inv.ravel()[np.cumsum(start) - 1]
+
+
 def _no_geometry(r_g: float) -> ParameterError:
     """A sample's refusal (`LoopLaw.update`, the compiled sample): the clamping feedforward
     finds no belt geometry at the measured ratio `r_g`."""
@@ -426,9 +438,8 @@ class LoopLaw:
             raise ParameterError(f"references.r_g = {bad:g}: outside the variator's ratio "
                                  f"range [{lo:.4g}, {hi:.4g}]")
         if "tau" in tab:
-            pairs, inv = np.unique(np.column_stack([tab["tau"], r]), axis=0,
-                                   return_inverse=True)
-            slip = slip_at_torque_ratio(self.model, pairs[:, 0], pairs[:, 1])[inv.ravel()]
+            pairs, inv = _unique_rows(tab["tau"], r)
+            slip = slip_at_torque_ratio(self.model, pairs[:, 0], pairs[:, 1])[inv]
         else:
             slip = tab.get(self.slip_signal if self.slip_signal in tab else
                            ("nu" if "nu" in tab else "nu_r"),
@@ -436,15 +447,15 @@ class LoopLaw:
         # below the traction peak at every sample: its closest approach to the peak
         # (`smallest_slip_reserve`, not a search per sample of a shift's moving ratio)
         slip = np.asarray(slip, float)
-        pairs, inv = np.unique(np.column_stack([slip, r]), axis=0, return_inverse=True)
+        pairs, inv = _unique_rows(slip, r)
         reserve, j = smallest_slip_reserve(self.model, pairs[:, 1], pairs[:, 0])
         bad = np.flatnonzero(~(slip > 0))
         if bad.size or not reserve > 0:
-            k = int(bad[0]) if bad.size else int(np.flatnonzero(inv.ravel() == j)[0])
+            k = int(bad[0]) if bad.size else int(np.flatnonzero(inv == j)[0])
             nu_pk = float(traction_peak(self.model, r[k])[0])
             raise ParameterError(f"slip set-point {slip[k]:g} at r_g = {r[k]:g}: must lie on "
                                  f"the rising traction curve (0, {nu_pk:.4g})")
-        mu = self.model.traction(pairs[:, 0], pairs[:, 1])[inv.ravel()]
+        mu = self.model.traction(pairs[:, 0], pairs[:, 1])[inv]
         self._tau_ref = float(mu[0] / self.model.mu_max(r[0]))
         self._tau_ref = min(max(self._tau_ref, 1e-3), 0.999)
         # the rate of the reference over each sample period (no smearing across a corner)
