@@ -96,6 +96,7 @@ __all__ = ["LoopConfig", "LoopLaw", "RAW_SIGNALS", "SHIPPED_LOOP", "reference_ta
 _step_core: Any = core.step_core  # (numba's Dispatcher is typed without a call signature)
 _run_samples: Any = _loop_core.run_samples
 
+
 def _unique_rows(*columns: NDArray) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
     """``np.unique(np.column_stack(columns), axis=0, return_inverse=True)`` (the distinct
     rows, sorted, and each row's index among them), computed on the first row of each run of

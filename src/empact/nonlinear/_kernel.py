@@ -1276,9 +1276,10 @@ def traction_many(nu, r_g, p, out):
 @njit(cache=True)
 def bisect_rising_many(r_g, goal, nu_pk, p, out):
     """The slip in ``[0, nu_pk[k]]`` where the traction curve at ``r_g[k]`` reaches
-    ``goal[k]`` (64 bisection steps: to rounding), for 1-D arrays: ``out[k]``.  Step for step
-    the vectorised bisection it replaced (`empact.nonlinear.equilibrium._bisect_rising`: the
-    same midpoints and comparisons; a NaN goal moves the upper end), so bitwise the same."""
+    ``goal[k]`` (64 bisection steps: to rounding), for 1-D arrays: ``out[k]``
+    (`empact.nonlinear.equilibrium._bisect_rising`).  Step for step the vectorised NumPy
+    bisection it replaced (the same midpoints and comparisons; a NaN goal moves the upper end;
+    written out in the tests), so bitwise the same."""
     for k in range(r_g.shape[0]):
         a, b = 0.0, nu_pk[k]
         r, g = r_g[k], goal[k]
