@@ -19,7 +19,7 @@ import os
 import sys
 import tempfile
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
 import click
 import numpy as np
@@ -38,7 +38,7 @@ __all__ = ["sweep_options", "sweep_from_options",
            "operating_values", "PLOT_SUFFIXES", "LINEAR_OPTIONS",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
            "OutputFile", "check_outputs", "check_references", "quiet_option", "Interrupted",
-           "EXIT_INTERRUPTED", "parse_list", "formats_option", "parse_formats", "schema_version",
+           "EXIT_INTERRUPTED", "parse_list", "formats_option", "parse_choices", "schema_version",
            "fraction_metrics",
            "announce_compilation", "COMPILING"]
 
@@ -318,10 +318,11 @@ formats_option = click.option(
          "figures for print).")
 
 
-def parse_formats(text: str) -> tuple[str, ...]:
-    """The figure formats of ``--formats png,svg`` (each once, in the order given); an
-    unknown one is one line naming the option."""
-    return tuple(dict.fromkeys(check_choice("--formats", f.strip(), PLOT_SUFFIXES)
+def parse_choices(option: str, text: str, allowed: Sequence[str]) -> tuple[str, ...]:
+    """The comma-separated choices of an option (``--formats png,svg``, ``--sections
+    table1,fig9``), each once, in the order given; an unknown one is one line naming the
+    option and what it allows."""
+    return tuple(dict.fromkeys(check_choice(option, f.strip(), allowed)
                                for f in text.split(",")))
 
 

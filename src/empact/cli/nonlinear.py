@@ -7,6 +7,7 @@ import numpy as np
 from .._validate import check_number
 from ..variator.geometry import check_ratio
 from ._common import (
+    PLOT_SUFFIXES,
     Failed,
     InputError,
     OutputFile,
@@ -19,7 +20,7 @@ from ._common import (
     operating_point,
     output_folder,
     params_option,
-    parse_formats,
+    parse_choices,
     parse_list,
 )
 from .linear import plot_option
@@ -66,7 +67,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
         return
     if (scenario is None) == (example is None):
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
-    fmts = parse_formats(formats)
+    fmts = parse_choices("--formats", formats, PLOT_SUFFIXES)
     sc = load_scenario(example_path(example) if example else scenario)
     if duration is not None:
         sc = sc.with_duration(check_number("--duration", duration, 0.0, 3600.0, lo_open=True,

@@ -4,17 +4,17 @@ from __future__ import annotations
 import click
 
 from .. import paper
-from .._validate import check_choice
 from ..report import SECTIONS, build_report
 from ..variator.geometry import ratio_range
 from ._common import (
+    PLOT_SUFFIXES,
     InputError,
     force_option,
     formats_option,
     get_params,
     output_folder,
     params_option,
-    parse_formats,
+    parse_choices,
 )
 
 #: the ratios the report evaluates: the paper's LOW and OD (Fig. 10) and Tables 1-2
@@ -37,10 +37,9 @@ def reproduce(out: str, formats: str, sections: str | None, params_file: str | N
               force: bool, quiet: bool) -> None:
     """Reproduce every table and figure of the paper into OUT/index.html (the page shows the
     PNG figures; --formats adds vector ones beside them)."""
-    fmts = parse_formats(formats)
+    fmts = parse_choices("--formats", formats, PLOT_SUFFIXES)
     anchors = [s.anchor for s in SECTIONS]
-    chosen = None if sections is None else [
-        check_choice("--sections", a.strip(), anchors) for a in sections.split(",")]
+    chosen = None if sections is None else parse_choices("--sections", sections, anchors)
     dest = output_folder(out, "--out", force=force)
     params = get_params(params_file)
     lo, hi = ratio_range(params.variator)
