@@ -29,7 +29,6 @@ from __future__ import annotations
 import math
 import os
 import tomllib
-import warnings
 from dataclasses import asdict, dataclass, fields, replace
 from importlib import resources
 from typing import Any, Mapping
@@ -37,6 +36,7 @@ from typing import Any, Mapping
 import numpy as np
 import tomli_w
 
+from .._deprecate import warn_renamed
 from ._io import atomic_write_text
 from ._section import Section, param
 from ._validate import check_choice, check_number
@@ -352,8 +352,7 @@ class OperatingPoint(Section):
 
     def as_dict(self) -> dict[str, float]:
         """Deprecated: `to_dict`."""
-        warnings.warn("OperatingPoint.as_dict is deprecated; use to_dict", DeprecationWarning,
-                      stacklevel=2)
+        warn_renamed("OperatingPoint.as_dict", "to_dict")
         return self.to_dict()
 
     def resolve(self, params: "Params", traction: Any = None) -> "OperatingPoint":

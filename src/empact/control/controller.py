@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import os
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
@@ -30,6 +29,7 @@ from typing import Any, Mapping
 import numpy as np
 from numpy.typing import NDArray
 
+from ..._deprecate import warn_renamed
 from .._io import atomic_file, atomic_write_text
 from .._lazy import lazy_module
 from .._validate import check_number
@@ -216,8 +216,7 @@ class Controller:
 
     def statespace(self):
         """Deprecated: `state_space`."""
-        warnings.warn("Controller.statespace is deprecated; use state_space",
-                      DeprecationWarning, stacklevel=2)
+        warn_renamed("Controller.statespace", "state_space")
         return self.state_space()
 
     def discretize(self, dt: float, method: str = "tustin") -> "Controller":

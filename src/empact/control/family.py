@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import json
 import os
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -43,6 +42,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from ..._deprecate import warn_renamed
 from .._io import atomic_write_text
 from .._lazy import lazy_module
 from .._validate import check_choice, check_values
@@ -193,15 +193,13 @@ class PlantFamily:
 
     def at(self, **point: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         """Deprecated: `interpolate` (returns a `Plant`); this gives its (A, B, C, D)."""
-        warnings.warn("PlantFamily.at is deprecated; use PlantFamily.interpolate (a Plant)",
-                      DeprecationWarning, stacklevel=2)
+        warn_renamed("PlantFamily.at", "PlantFamily.interpolate (a Plant)")
         return self._matrices(point)
 
     def interpolated_plant(self, **point: float):
         """Deprecated: ``interpolate(...).state_space()``."""
-        warnings.warn("PlantFamily.interpolated_plant is deprecated; use "
-                      "PlantFamily.interpolate(...).state_space()", DeprecationWarning,
-                      stacklevel=2)
+        warn_renamed("PlantFamily.interpolated_plant",
+                     "PlantFamily.interpolate(...).state_space()")
         return self.interpolate(**point).system
 
     def to_dict(self) -> dict[str, Any]:

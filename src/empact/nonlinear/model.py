@@ -103,7 +103,6 @@ within about 1 %.
 from __future__ import annotations
 
 import os
-import warnings
 from dataclasses import InitVar, dataclass, field, fields
 from functools import cached_property, lru_cache
 from typing import Literal
@@ -111,6 +110,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..._deprecate import warn_renamed
 from .._lazy import lazy_module
 from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
@@ -245,8 +245,7 @@ class ModelOptions:
                            ("load_bandwidth", load_bandwidth),
                            ("ratio_bandwidth", ratio_bandwidth)):
             if value is not None:
-                warnings.warn(f"ModelOptions.{old} is deprecated; use {old}_hz [Hz]",
-                              DeprecationWarning, stacklevel=3)
+                warn_renamed(f"ModelOptions.{old}", f"{old}_hz [Hz]", stacklevel=3)
                 object.__setattr__(self, f"{old}_hz", value)
         check_choice("damping", self.damping, DAMPING_LEVELS)
         check_choice("kinematics", self.kinematics, KINEMATICS)
