@@ -36,7 +36,7 @@ from typing import Any, Mapping
 import numpy as np
 import tomli_w
 
-from .._deprecate import warn_renamed
+from ._deprecate import warn_renamed
 from ._io import atomic_write_text
 from ._section import Section, param
 from ._validate import check_choice, check_number

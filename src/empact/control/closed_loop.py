@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._deprecate import warn_renamed
+from .._deprecate import warn_renamed
 from ..errors import ParameterError
 from ..nonlinear.equilibrium import TrimResult, smallest_slip_reserve
 from ..nonlinear.model import EmpactModel

@@ -29,7 +29,7 @@ from typing import Any, Mapping
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._deprecate import warn_renamed
+from .._deprecate import warn_renamed
 from .._io import atomic_file, atomic_write_text
 from .._lazy import lazy_module
 from .._validate import check_number

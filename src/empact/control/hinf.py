@@ -30,7 +30,7 @@ import warnings
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._deprecate import warn_renamed
+from .._deprecate import warn_renamed
 from .._lazy import lazy_module
 from .._validate import check_number
 from ..errors import ParameterError

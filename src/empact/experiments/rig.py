@@ -21,7 +21,7 @@ from typing import Literal, Mapping
 
 import numpy as np
 
-from ..._deprecate import warn_renamed
+from .._deprecate import warn_renamed
 from .._lazy import lazy_module
 from .._validate import check_choice, check_int, check_number
 from ..errors import ParameterError

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..._deprecate import warn_renamed
+from .._deprecate import warn_renamed
 from ..errors import ParameterError, TrimError
 from ..params import OperatingPoint
 from ..variator.geometry import check_ratio, radii, ratio_range, stretched_radii

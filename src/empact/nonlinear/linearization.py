@@ -25,7 +25,7 @@ from typing import Any, Iterator, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._deprecate import warn_renamed
+from .._deprecate import warn_renamed
 from ..lti import index, statespace
 from ..params import OperatingPoint, Params
 from .equilibrium import TrimResult, trim

@@ -110,7 +110,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..._deprecate import warn_renamed
+from .._deprecate import warn_renamed
 from .._lazy import lazy_module
 from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..._deprecate import warn_renamed
+from .._deprecate import warn_renamed
 from .._validate import check_choice, check_number
 from ..lti import channel_zeros
 from ..params import OperatingPoint, Params

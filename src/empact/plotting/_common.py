@@ -18,7 +18,7 @@ import matplotlib as mpl
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..._deprecate import warn_renamed
+from .._deprecate import warn_renamed
 from .._io import atomic_file
 from .._validate import check_choice
 

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..._deprecate import warn_renamed
+from .._deprecate import warn_renamed
 from .._validate import check_values
 from ..params import OPERATING_VARIABLES, OperatingPoint, Params
 from ..variator.geometry import variator_state
