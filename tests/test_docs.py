@@ -7,6 +7,7 @@ import inspect
 import io
 import pkgutil
 import re
+from pathlib import Path
 
 import pytest
 
@@ -167,3 +168,63 @@ def test_entry_point_examples_run_as_doctests(name):
     for test in tests:
         runner.run(test, out=out.write)
     assert runner.failures == 0, out.getvalue()
+
+
+# --- the site's hand-written pages (issue 31, item 7) -------------------------------------------
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+README = DOCS.parent / "README.md"
+
+
+def _literalincludes(rst: str) -> list[tuple[str, dict[str, str]]]:
+    """Each ``.. literalinclude::`` of a page: its file and options."""
+    out = []
+    for m in re.finditer(r"^\.\. literalinclude:: (\S+)\n((?:   :[\w-]+:.*\n)*)", rst, re.M):
+        opts = dict(re.findall(r"^   :([\w-]+):\s*(.*)$", m.group(2), re.M))
+        out.append((m.group(1), opts))
+    return out
+
+
+def _included(text: str, opts: dict[str, str]) -> str:
+    """What Sphinx's literalinclude shows of `text` with ``start-at`` and ``end-before``: from
+    the first line containing the one to the next containing the other."""
+    lines = text.splitlines()
+    start = next(i for i, line in enumerate(lines) if opts["start-at"] in line)
+    end = next(i for i in range(start + 1, len(lines)) if opts["end-before"] in lines[i])
+    return "\n".join(lines[start:end])
+
+
+def test_getting_started_shows_the_readme_tour():
+    """``docs/getting_started.rst`` includes the README's quick start, its tour's commands
+    (the block `tests/test_readme.py` runs) and its Python example, whole, and has no hand
+    copy of a command or of code."""
+    from readme_tour import python_examples
+
+    page, text = (DOCS / "getting_started.rst").read_text(), README.read_text()
+    assert "code-block" not in page and ">>>" not in page
+    blocks = []
+    for path, opts in _literalincludes(page):
+        assert (DOCS / path).resolve() == README
+        blocks.append(_included(text, opts))
+    tour = text[text.index("## A short tour"):]
+    quick = text[text.index("## Quick start"):]
+    assert blocks == [re.search(r"```sh\n(.*?)\n```", quick, re.S).group(1),
+                      re.search(r"```sh\n(.*?)\n```", tour, re.S).group(1),
+                      python_examples(text)[0].rstrip("\n")]
+
+
+def test_control_chapter_examples_run():
+    """The examples of ``docs/control.rst`` run (doctests) and the chapter links every public
+    module of `empact.control` to its API page."""
+    text = (DOCS / "control.rst").read_text()
+    test = doctest.DocTestParser().get_doctest(text, {}, "control.rst", str(DOCS), 0)
+    assert len(test.examples) >= 10
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    out = io.StringIO()
+    runner.run(test, out=out.write)
+    assert runner.failures == 0, out.getvalue()
+    import empact.control
+    modules = {m.name for m in pkgutil.iter_modules(empact.control.__path__)
+               if not m.name.startswith("_")}
+    assert sorted(m for m in modules if f"empact.control.{m}" not in text) == []
+    assert ":doc:`api/control`" in text
