@@ -1,7 +1,9 @@
 """Test hygiene (issue 24, item 6), read from the test files themselves: every
 `assert_allclose` states its tolerance, no assertion is over constants only (it could not
-fail), and a test that pins today's results as a regression guard is named as one."""
+fail), a test that pins today's results as a regression guard is named as one, every
+`pytest.approx` states its tolerance, and every module has its row in ``tests/MODULES.md``."""
 import ast
+import re
 from pathlib import Path
 
 TESTS = Path(__file__).resolve().parent
@@ -57,3 +59,56 @@ def test_regression_guards_are_named_as_such():
                 and "regression guard" in (ast.get_docstring(node) or "").lower()
                 and not node.name.startswith("test_regression_")]
     assert misnamed == []
+
+
+def test_every_approx_states_its_tolerance():
+    """``pytest.approx`` without ``rel=`` / ``abs=`` compares to 1e-6 relative silently: a
+    test states the tolerance it means (and, beside it, the reference's source)."""
+    missing = [f"{name}:{node.lineno}" for name, tree in _trees() for node in ast.walk(tree)
+               if isinstance(node, ast.Call)
+               and getattr(node.func, "attr", getattr(node.func, "id", "")) == "approx"
+               and not {k.arg for k in node.keywords} & {"rel", "abs"}]
+    assert missing == []
+
+
+# --- the map of modules to their tests (issue 31, item 7) --------------------------------------
+
+SRC = TESTS.parent / "src" / "empact"
+
+
+def _modules() -> set[str]:
+    names = set()
+    for path in SRC.rglob("*.py"):
+        parts = path.relative_to(SRC.parent).with_suffix("").parts
+        names.add(".".join(parts[:-1] if parts[-1] == "__init__" else parts))
+    return names
+
+
+def _module_table() -> dict[str, list[str]]:
+    """``tests/MODULES.md``: module -> its test files (rows ``| `module` | files |``)."""
+    rows = {}
+    for line in (TESTS / "MODULES.md").read_text().splitlines():
+        m = re.match(r"\|\s*`([\w.]+)`\s*\|([^|]*)\|\s*$", line)
+        if m:
+            assert m.group(1) not in rows, f"MODULES.md: two rows for {m.group(1)}"
+            rows[m.group(1)] = m.group(2).split()
+    return rows
+
+
+def test_every_module_has_its_tests_in_the_table():
+    """Each module of ``src/empact`` has a row in ``tests/MODULES.md`` naming existing test
+    files, and the table names no module that is gone."""
+    table, modules = _module_table(), _modules()
+    assert len(modules) > 50  # the walk found the package
+    assert sorted(modules - set(table)) == [], "modules without a row in tests/MODULES.md"
+    assert sorted(set(table) - modules) == [], "rows of tests/MODULES.md for no module"
+    bad = [f"{mod}: {f}" for mod, files in table.items() for f in files or ["(none)"]
+           if not re.fullmatch(r"test_\w+\.py", f) or not (TESTS / f).is_file()]
+    assert bad == []
+
+
+def test_the_approx_check_catches_a_bare_approx():
+    bare = ast.parse("assert x == pytest.approx(1.0)").body[0].test.comparators[0]
+    stated = ast.parse("assert x == pytest.approx(1.0, rel=1e-9)").body[0].test.comparators[0]
+    assert not {k.arg for k in bare.keywords} & {"rel", "abs"}
+    assert {k.arg for k in stated.keywords} & {"rel", "abs"}

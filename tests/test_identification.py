@@ -72,7 +72,9 @@ def test_realize_recovers_order_poles_and_frf(modal_case):
     assert np.all(res.fit > 99.9)
     np.testing.assert_allclose(res.step_model, steps, atol=1e-8)  # tol 1e-8 abs, same reason
     assert res.sys.input_labels == ["T_d", "T_l"] and res.sys.output_labels == ["w_p", "w_s"]
-    assert res.sys.state_labels[0] == "x0" and res.sys_discrete.dt == pytest.approx(1 / FS_STEP)
+    # tol 1e-12 rel: the realisation's sample time is the records' (reference: 1 / FS_STEP)
+    assert res.sys.state_labels[0] == "x0" and res.sys_discrete.dt == pytest.approx(1 / FS_STEP,
+                                                                                    rel=1e-12)
 
 
 def test_realize_fixed_order_and_hankel_size(modal_case):

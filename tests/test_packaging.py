@@ -30,3 +30,13 @@ def test_the_build_backend_supports_the_spdx_licence():
     floor would let a build fail or warn on the table form."""
     requires = tomllib.loads((ROOT / "pyproject.toml").read_text())["build-system"]["requires"]
     assert "setuptools>=77" in requires
+
+
+def test_the_changelog_has_a_section_for_the_version():
+    """``CHANGELOG.md`` has a dated section for `empact.__version__` (Keep a Changelog's
+    ``## X.Y.Z - YYYY-MM-DD``), above the previous release's."""
+    import re
+    heads = re.findall(r"^## (\d+\.\d+\.\d+) - \d{4}-\d{2}-\d{2}$",
+                       (ROOT / "CHANGELOG.md").read_text(), re.M)
+    assert heads[:1] == [empact.__version__], heads
+    assert heads == sorted(heads, key=lambda v: tuple(map(int, v.split("."))), reverse=True)

@@ -66,7 +66,6 @@ Control and sweeps (beyond the paper)
                       -- robust decentralised PI; mixed-sensitivity H-infinity (slycot)
    robustness_map     -- disk margins of a controller over a family
    run_closed_loop    -- a scenario with a [controller] on the nonlinear machine
-                      -- a controller on the nonlinear machine
    monte_carlo, load_spread
                       -- an analysis over a parameter spread (failures kept with reasons)
    SweepOptions       -- where a sweep runs: in process, a local Dask cluster, a scheduler
@@ -86,7 +85,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 #: public name -> module that defines it
 _CATALOGUE = {
@@ -121,9 +120,13 @@ _CATALOGUE = {
     "frequency_response": "lti", "transmission_zeros": "lti", "root_locus": "lti",
 }
 
-__all__ = sorted(_CATALOGUE)
+#: deprecated names: still importable (each warns, naming its replacement), not in ``__all__``
+DEPRECATED_NAMES = ("load_control_scenario",)
 
-#: module paths of empact 0.1 kept for one release (importing one warns, naming the new one)
+__all__ = sorted(set(_CATALOGUE) - set(DEPRECATED_NAMES))
+
+#: module paths of empact 0.1 kept for one release, removed in 0.3.0 (importing one warns,
+#: naming the new one and the removal)
 DEPRECATED_MODULES = {"empact.geometry": "empact.variator.geometry",
                       "empact.traction": "empact.variator.traction",
                       "empact.shift_law": "empact.variator.shift_law",

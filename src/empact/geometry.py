@@ -1,10 +1,9 @@
-"""Deprecated: `empact.variator.geometry` (kept for one release; importing warns)."""
+"""Deprecated since 0.2.0, removed in empact 0.3.0: import `empact.variator.geometry` (importing
+this module warns, naming the new path and the removal)."""
 from __future__ import annotations
 
-import warnings
-
+from ._deprecate import warn_renamed
 from .variator.geometry import *  # noqa: F401,F403
 from .variator.geometry import __all__  # noqa: F401
 
-warnings.warn("empact.geometry is deprecated; import empact.variator.geometry", DeprecationWarning,
-              stacklevel=2)
+warn_renamed("empact.geometry", "empact.variator.geometry", removal="0.3.0")

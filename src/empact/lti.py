@@ -80,7 +80,15 @@ class FrequencyResponse:
         return self.omega / (2 * np.pi)
 
     def response(self, output: str, input: str) -> NDArray[np.complex128]:
-        """The response of one named output to one named input, shape (n_f,)."""
+        """The response of one named output to one named input, shape (n_f,).
+
+        Parameters
+        ----------
+        output : str
+            One of `outputs`.
+        input : str
+            One of `inputs`.
+        """
         return self.H[index(self.outputs, output, "output"), index(self.inputs, input, "input")]
 
     def magnitude_db(self) -> NDArray[np.float64]:

@@ -29,7 +29,6 @@ from __future__ import annotations
 import math
 import os
 import tomllib
-import warnings
 from dataclasses import asdict, dataclass, fields, replace
 from importlib import resources
 from typing import Any, Mapping
@@ -37,6 +36,7 @@ from typing import Any, Mapping
 import numpy as np
 import tomli_w
 
+from ._deprecate import warn_renamed
 from ._io import atomic_write_text
 from ._section import Section, param
 from ._validate import check_choice, check_number
@@ -167,7 +167,13 @@ class DampingParams:
                                         lo_open=True, unit="rad/s"))
 
     def level(self, name: str) -> DampingLevel:
-        """The damping level called `name` (one of ``DAMPING_LEVELS``)."""
+        """The damping level called `name` (one of ``DAMPING_LEVELS``).
+
+        Parameters
+        ----------
+        name : str
+            One of ``DAMPING_LEVELS``.
+        """
         return getattr(self, check_choice("damping", name, DAMPING_LEVELS))
 
 
@@ -315,12 +321,27 @@ class OperatingPoint(Section):
 
     @classmethod
     def from_params(cls, params: "Params", **changes: float | None) -> "OperatingPoint":
-        """The ``[operating]`` point of a parameter set, with keyword `changes`."""
+        """The ``[operating]`` point of a parameter set, with keyword `changes`.
+
+        Parameters
+        ----------
+        params : Params
+            The parameter set.
+        **changes : float or None
+            Variables to change, as `replace` takes them.
+        """
         return params.operating.replace(**changes)
 
     def replace(self, **changes: float | None) -> "OperatingPoint":
         """A copy with some variables changed (validated).  Setting the slip as ``nu`` drops
-        a ``tau`` and the other way round; a value of None drops a variable."""
+        a ``tau`` and the other way round; a value of None drops a variable.
+
+        Parameters
+        ----------
+        **changes : float or None
+            Operating variables (``r_g``, ``nu``, ``tau``, ``F_s``, ``T_l``, ``omega_p``) to set,
+            in SI units; None drops one.
+        """
         unknown = set(changes) - set(OPERATING_VARIABLES)
         if unknown:
             raise ParameterError(f"unknown operating-point variable {sorted(unknown)[0]!r}: "
@@ -342,7 +363,13 @@ class OperatingPoint(Section):
 
     def label(self, ratio: bool = False) -> str:
         """The given variables as text with units (``"tau = 0.9, F_s = 10000 N, omega_p = 300
-        rad/s"``; the ratio first with `ratio`)."""
+        rad/s"``; the ratio first with `ratio`).
+
+        Parameters
+        ----------
+        ratio : bool, optional
+            Start with the ratio ``r_g`` (default False).
+        """
         names = (("r_g",) if ratio else ()) + tuple(k for k in ("nu", "tau", "F_s", "T_l")
                                                      if getattr(self, k) is not None)
         parts = [f"{k} = {getattr(self, k):g}" + (f" {OPERATING_VARIABLES[k][0]}"
@@ -352,8 +379,7 @@ class OperatingPoint(Section):
 
     def as_dict(self) -> dict[str, float]:
         """Deprecated: `to_dict`."""
-        warnings.warn("OperatingPoint.as_dict is deprecated; use to_dict", DeprecationWarning,
-                      stacklevel=2)
+        warn_renamed("OperatingPoint.as_dict", "to_dict")
         return self.to_dict()
 
     def resolve(self, params: "Params", traction: Any = None) -> "OperatingPoint":
@@ -361,7 +387,15 @@ class OperatingPoint(Section):
         variator's unstretched radii with the traction curve of `params` (or `traction`):
         ``T_l = 2 mu(nu) F_s R_s / cos(beta)`` (eq. 1), the slip on the rising branch of the
         curve where a torque ratio or a load fixes it.  A point given by ``nu`` and ``F_s``
-        is returned as it is."""
+        is returned as it is.
+
+        Parameters
+        ----------
+        params : Params
+            The parameter set (variator geometry and ``[traction]``).
+        traction : TractionModel, optional
+            The traction curve to solve on (default `traction_from_params(params)`).
+        """
         if self.nu is not None and self.F_s is not None:
             return self
         tr = traction_from_params(params) if traction is None else traction
@@ -478,6 +512,16 @@ class Params:
                   source: str = "parameters") -> "Params":
         """Build from a nested mapping; keys not given are taken from `base`.
 
+        Parameters
+        ----------
+        data : mapping
+            Sections (``"actuation"``, ...) to mappings of keys to values (SI units).
+        base : Params, optional
+            The set that gives the keys `data` leaves out (default none: `data` gives every
+            section and key without a default).
+        source : str, optional
+            What the messages call `data` (e.g. the file's name; default ``"parameters"``).
+
         Raises
         ------
         ParameterError
@@ -503,7 +547,13 @@ class Params:
             raise ParameterError(f"{source}: {exc}") from None
 
     def from_dotted(self, values: Mapping[str, float]) -> "Params":
-        """A copy with values changed by dotted name, e.g. ``{"damping.large.alpha": 1e-3}``."""
+        """A copy with values changed by dotted name, e.g. ``{"damping.large.alpha": 1e-3}``.
+
+        Parameters
+        ----------
+        values : mapping of str to float
+            Dotted names (``"section.key"`` or ``"damping.level.key"``) to new values (SI).
+        """
         nested: dict[str, Any] = {}
         for name, value in values.items():
             node = nested
@@ -516,7 +566,16 @@ class Params:
     def get(self, dotted: str, *, unset_ok: bool = False) -> float | None:
         """The value of a dotted name such as ``"actuation.k_w"`` (with `unset_ok`, None for
         an operating-point variable the set does not give, e.g. ``operating.nu`` of a point
-        given by its torque ratio)."""
+        given by its torque ratio).
+
+        Parameters
+        ----------
+        dotted : str
+            A dotted parameter name.
+        unset_ok : bool, optional
+            Return None for an operating-point variable the set does not give, instead of
+            raising (default False).
+        """
         node: Any = self
         for part in dotted.split("."):
             if not hasattr(node, part) or part.startswith("_"):
@@ -531,7 +590,13 @@ class Params:
         return node
 
     def unit(self, dotted: str) -> str:
-        """The unit of a dotted parameter name, e.g. ``"N m/rad"`` for ``"actuation.k_w"``."""
+        """The unit of a dotted parameter name, e.g. ``"N m/rad"`` for ``"actuation.k_w"``.
+
+        Parameters
+        ----------
+        dotted : str
+            A dotted parameter name.
+        """
         self.get(dotted, unset_ok=True)
         *path, last = dotted.split(".")
         node: Any = self

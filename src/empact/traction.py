@@ -1,10 +1,9 @@
-"""Deprecated: `empact.variator.traction` (kept for one release; importing warns)."""
+"""Deprecated since 0.2.0, removed in empact 0.3.0: import `empact.variator.traction` (importing
+this module warns, naming the new path and the removal)."""
 from __future__ import annotations
 
-import warnings
-
+from ._deprecate import warn_renamed
 from .variator.traction import *  # noqa: F401,F403
 from .variator.traction import __all__  # noqa: F401
 
-warnings.warn("empact.traction is deprecated; import empact.variator.traction", DeprecationWarning,
-              stacklevel=2)
+warn_renamed("empact.traction", "empact.variator.traction", removal="0.3.0")

@@ -10,7 +10,6 @@ builds the linear model of the same law around the linearised machine.
 """
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
@@ -19,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._deprecate import warn_renamed
 from ..errors import ParameterError
 from ..nonlinear.equilibrium import TrimResult, smallest_slip_reserve
 from ..nonlinear.model import EmpactModel
@@ -30,10 +30,17 @@ from .law import LoopConfig, LoopLaw
 
 __all__ = ["LoopLaw", "ClosedLoopResult", "run_closed_loop", "build_law", "metrics",
            "resolve_controller", "control_examples", "control_example_path",
-           "load_control_scenario", "ControlScenario", "safety_factor_twin", "check_targets"]
+           "safety_factor_twin", "check_targets"]
 
-#: Deprecated name of the closed-loop scenario (one `Scenario` type now).
-ControlScenario = Scenario
+
+def __getattr__(name: str) -> Any:
+    """``ControlScenario``: deprecated name of the closed-loop scenario (one `Scenario` type
+    now; removed in empact 0.3.0)."""
+    if name == "ControlScenario":
+        warn_renamed("empact.control.closed_loop.ControlScenario",
+                     "empact.nonlinear.scenario.Scenario")
+        return Scenario
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def control_examples() -> dict[str, str]:
@@ -85,8 +92,7 @@ def load_control_scenario(path) -> Scenario:
     -------
     Scenario
     """
-    warnings.warn("load_control_scenario is deprecated; use load_scenario (one scenario "
-                  "format)", DeprecationWarning, stacklevel=2)
+    warn_renamed("load_control_scenario", "load_scenario (one scenario format)")
     sc = load_scenario(path)
     if not sc.closed_loop:
         raise ParameterError(f"{path}: no [controller] table (not a closed-loop scenario)")

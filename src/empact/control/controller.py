@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import os
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
@@ -30,6 +29,7 @@ from typing import Any, Mapping
 import numpy as np
 from numpy.typing import NDArray
 
+from .._deprecate import warn_renamed
 from .._io import atomic_file, atomic_write_text
 from .._lazy import lazy_module
 from .._validate import check_number
@@ -120,13 +120,25 @@ class Schedule:
         """The gains at the operating point `values` (one per axis, in the order of `axes`),
         as floats (what a sampled law calls at every sample): the interpolation compiled
         (`empact.control._law_core.schedule_log_gains`), each value rounded as the array
-        form's elementwise arithmetic would, then `exp_gains`."""
+        form's elementwise arithmetic would, then `exp_gains`.
+
+        Parameters
+        ----------
+        values : list of float
+            The operating point: one value per axis, in the order of `axes` (SI units).
+        """
         out = np.empty(self._n_e)
         _core.schedule_log_gains(self._packed, np.array(values, float), False, out)
         return self.exp_gains(out.tolist())
 
     def exp_gains(self, log_gains: list[float]) -> list[float]:
-        """The gains of the log-gains ``ln |gain|`` (numpy's ``exp``, with the signs)."""
+        """The gains of the log-gains ``ln |gain|`` (numpy's ``exp``, with the signs).
+
+        Parameters
+        ----------
+        log_gains : list of float
+            ``ln |gain|`` of each scheduled gain, in the schedule's order.
+        """
         gains = np.exp(np.array(log_gains)).tolist()
         return gains if self._positive else [s * x for s, x in zip(self._sign_list, gains)]
 
@@ -191,7 +203,14 @@ class Controller:
 
     def at(self, point: Mapping[str, float]) -> "Controller":
         """The controller frozen at an operating point: its schedule's gains folded into B
-        and D (an LTI controller; itself when it has no schedule)."""
+        and D (an LTI controller; itself when it has no schedule).
+
+        Parameters
+        ----------
+        point : mapping of str to float
+            The operating point: a value for each of the schedule's axes (e.g. ``r_g``) in
+            their SI units.
+        """
         if self.schedule is None:
             return self
         g = self.schedule(point)
@@ -216,15 +235,22 @@ class Controller:
 
     def statespace(self):
         """Deprecated: `state_space`."""
-        warnings.warn("Controller.statespace is deprecated; use state_space",
-                      DeprecationWarning, stacklevel=2)
+        warn_renamed("Controller.statespace", "state_space")
         return self.state_space()
 
     def discretize(self, dt: float, method: str = "tustin") -> "Controller":
         """The controller at sample time `dt` [s] by `method` (one of
         `empact.lti.DISCRETIZATIONS`, Tustin by default; ``scipy.signal.cont2discrete``'s
         formulas, `empact.lti.cont2discrete`); computed once per `dt` and `method` (a loop law
-        built at every point of a family discretizes the same controller each time)."""
+        built at every point of a family discretizes the same controller each time).
+
+        Parameters
+        ----------
+        dt : float
+            Sample time [s], > 0.
+        method : str, optional
+            One of `empact.lti.DISCRETIZATIONS` (default ``"tustin"``).
+        """
         if self.dt:
             raise ParameterError(f"controller is already discrete (dt = {self.dt:g} s)")
         dt = check_number("dt", dt, 0.0, 1.0, lo_open=True, unit="s")
@@ -255,7 +281,13 @@ class Controller:
                 "schedule": None if self.schedule is None else self.schedule.to_dict()}
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write JSON or ``.mat`` (by the suffix) atomically."""
+        """Write JSON or ``.mat`` (by the suffix) atomically.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The file: ``.json`` or ``.mat``.
+        """
         suffix = Path(path).suffix.lower()
         data = self.to_dict()
         if suffix == ".json":

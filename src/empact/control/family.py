@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import json
 import os
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -43,6 +42,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from .._deprecate import warn_renamed
 from .._io import atomic_write_text
 from .._lazy import lazy_module
 from .._validate import check_choice, check_values
@@ -151,7 +151,13 @@ class PlantFamily:
 
     def plant(self, index: tuple[int, ...] | int) -> Plant:
         """The plant at one grid point (a `Plant`, as `empact.nonlinear.linearization.plant`
-        returns; its ``state_space()`` is the named `control.StateSpace`)."""
+        returns; its ``state_space()`` is the named `control.StateSpace`).
+
+        Parameters
+        ----------
+        index : int or tuple of int
+            The grid point: one index per axis (an int for a one-axis family).
+        """
         idx = self._index(index)
         return Plant(self.A[idx], self.B[idx], self.C[idx], self.D[idx],
                      inputs=tuple(self.inputs), outputs=tuple(self.outputs),
@@ -185,23 +191,40 @@ class PlantFamily:
 
     def interpolate(self, **point: float) -> Plant:
         """The plant interpolated multilinearly at an off-grid point, given by the family's
-        axis variables (``r_g=...``, ...), each inside its axis' range (a `Plant`)."""
+        axis variables (``r_g=...``, ...), each inside its axis' range (a `Plant`).
+
+        Parameters
+        ----------
+        **point : float
+            A value for each axis variable of the family (``r_g=...``, ...), in its SI unit,
+            inside the axis' range.
+        """
         A, B, C, D = self._matrices(point)
         return Plant(A, B, C, D, inputs=tuple(self.inputs), outputs=tuple(self.outputs),
                      states=tuple(self.states), name="plant_interpolated",
                      operating={k: float(v) for k, v in point.items()})
 
     def at(self, **point: float) -> tuple[NDArray, NDArray, NDArray, NDArray]:
-        """Deprecated: `interpolate` (returns a `Plant`); this gives its (A, B, C, D)."""
-        warnings.warn("PlantFamily.at is deprecated; use PlantFamily.interpolate (a Plant)",
-                      DeprecationWarning, stacklevel=2)
+        """Deprecated: `interpolate` (returns a `Plant`); this gives its (A, B, C, D).
+
+        Parameters
+        ----------
+        **point : float
+            As `interpolate`'s.
+        """
+        warn_renamed("PlantFamily.at", "PlantFamily.interpolate (a Plant)")
         return self._matrices(point)
 
     def interpolated_plant(self, **point: float):
-        """Deprecated: ``interpolate(...).state_space()``."""
-        warnings.warn("PlantFamily.interpolated_plant is deprecated; use "
-                      "PlantFamily.interpolate(...).state_space()", DeprecationWarning,
-                      stacklevel=2)
+        """Deprecated: ``interpolate(...).state_space()``.
+
+        Parameters
+        ----------
+        **point : float
+            As `interpolate`'s.
+        """
+        warn_renamed("PlantFamily.interpolated_plant",
+                     "PlantFamily.interpolate(...).state_space()")
         return self.interpolate(**point).system
 
     def to_dict(self) -> dict[str, Any]:

@@ -30,6 +30,7 @@ import warnings
 import numpy as np
 from numpy.typing import NDArray
 
+from .._deprecate import warn_renamed
 from .._lazy import lazy_module
 from .._validate import check_number
 from ..errors import ParameterError
@@ -75,8 +76,7 @@ def residualize(A, B, C, D, f_keep_hz: float | None = None, *,
         When a fast mode is not stable.
     """
     if f_keep is not None:
-        warnings.warn("residualize(f_keep=) is deprecated; use f_keep_hz [Hz]",
-                      DeprecationWarning, stacklevel=2)
+        warn_renamed("residualize(f_keep=)", "f_keep_hz [Hz]")
         f_keep_hz = f_keep
     A, B, C, D = (np.asarray(M, float) for M in (A, B, C, D))
     w = 2 * np.pi * f_keep_hz
@@ -282,8 +282,7 @@ def design_hinf(family: PlantFamily, bandwidth_hz=(0.5, 0.2), *, slip: str = "nu
     True
     """
     if f_keep is not None:
-        warnings.warn("design_hinf(f_keep=) is deprecated; use f_keep_hz [Hz]",
-                      DeprecationWarning, stacklevel=2)
+        warn_renamed("design_hinf(f_keep=)", "f_keep_hz [Hz]")
         f_keep_hz = f_keep
     if not np.all(family.ok):
         raise ParameterError("the family has points that did not trim")

@@ -155,7 +155,16 @@ class LoopConfig:
 
     @classmethod
     def for_scenario(cls, scenario: Scenario, params: Params) -> "LoopConfig":
-        """The loop of a closed-loop scenario on the parameter set."""
+        """The loop of a closed-loop scenario on the parameter set.
+
+        Parameters
+        ----------
+        scenario : Scenario
+            A closed-loop scenario (with a ``[controller]`` table; its ``[limits]`` and
+            ``[sensors]`` override the parameter set's key by key).
+        params : Params
+            The parameter set (its ``[servo]`` and ``[sensors]`` sections).
+        """
         spec = scenario.controller
         if spec is None:
             raise ParameterError(f"scenario {scenario.name!r} has no [controller] table")
@@ -165,7 +174,15 @@ class LoopConfig:
     @classmethod
     def of(cls, params: Params, **spec: Any) -> "LoopConfig":
         """A loop on the parameter set's servos and sensors with the `ControllerSpec` keys
-        `spec` (no file: for design and analysis)."""
+        `spec` (no file: for design and analysis).
+
+        Parameters
+        ----------
+        params : Params
+            The parameter set (its ``[servo]`` and ``[sensors]`` sections).
+        **spec : Any
+            `ControllerSpec` fields (a scenario's ``[controller]`` keys but ``file``).
+        """
         sp = ControllerSpec(file="", **spec)
         return cls(sp, params.servo if sp.limits else None,
                    params.sensors if sp.sensors else None)
@@ -489,7 +506,13 @@ class LoopLaw:
         return noise
 
     def raw_at_rest(self, point: Mapping[str, float]) -> NDArray[np.float64]:
-        """The raw measurements at a steady operating point (`RAW_SIGNALS` order)."""
+        """The raw measurements at a steady operating point (`RAW_SIGNALS` order).
+
+        Parameters
+        ----------
+        point : mapping of str to float
+            The steady operating point (``r_g``, ``omega_p``, ... in SI units).
+        """
         w_p = point["omega_p"]
         return np.array([point["r_g"], w_p, point["r_g"] * w_p * (1 - point["nu"]),
                          point["T_l"], 0.0, 0.0, point["T_l"]])
@@ -533,7 +556,15 @@ class LoopLaw:
     def sense(self, buf: NDArray, ideal: bool = False) -> NDArray[np.float64]:
         """The measurements the controller sees from the buffers (n_raw, n_buf): each signal
         `delay` samples late, the shaft speeds averaged over the counting window and
-        quantised (not when `ideal`)."""
+        quantised (not when `ideal`).
+
+        Parameters
+        ----------
+        buf : ndarray, shape (n_raw, n_buf)
+            The measurement buffers, one row per raw signal (`RAW_SIGNALS`), newest last.
+        ideal : bool, optional
+            No quantisation (default False).
+        """
         buf = np.ascontiguousarray(buf, dtype=float)
         m = np.empty(buf.shape[0])
         core.sense(buf.ravel(), buf.shape[0], self._P, ideal, m)
@@ -546,7 +577,22 @@ class LoopLaw:
         index `k`, the next state, the controller's errors ``e``, the servo torques without
         the controller's share (holding torques and feedforwards) and the measurements the
         controller saw; `ref` (``r_g, slip, mu, dr_g/dt``) replaces the references of sample
-        `k`; `ideal` drops noise and quantisation."""
+        `k`; `ideal` drops noise and quantisation.
+
+        Parameters
+        ----------
+        s : ndarray, shape (n_pre,)
+            The sensor and feedforward state.
+        raw : ndarray, shape (len(RAW_SIGNALS),)
+            The raw measurements of this sample, in `RAW_SIGNALS` order (SI).
+        k : int
+            The sample index.
+        ref : ndarray, shape (4,), optional
+            ``r_g`` [-], slip [-], ``mu`` [-] and ``dr_g/dt`` [1/s] replacing the references of
+            sample `k` (default: the law's own).
+        ideal : bool, optional
+            Drop noise and quantisation (default False).
+        """
         s = np.ascontiguousarray(s, dtype=float)
         s_next = np.empty(self.n_pre)
         e, u, m = self._pre(s, s_next, raw, k, ref, ideal)
@@ -633,7 +679,21 @@ class LoopLaw:
         [N m] held over the period, from the state `z` (`preprocess`'s, then the
         controller's), the raw measurements `raw` (`RAW_SIGNALS`) and the sample index `k`;
         `ref` replaces the references of sample `k`; `ideal` drops noise, quantisation and
-        limits (the linear model's law)."""
+        limits (the linear model's law).
+
+        Parameters
+        ----------
+        z : ndarray
+            The law's state: `preprocess`'s (``n_pre``), then the controller's.
+        raw : ndarray, shape (len(RAW_SIGNALS),)
+            The raw measurements of this sample, in `RAW_SIGNALS` order (SI).
+        k : int
+            The sample index.
+        ref : ndarray, shape (4,), optional
+            As `preprocess`'s.
+        ideal : bool, optional
+            Drop noise, quantisation and limits (default False).
+        """
         c, n = self.controller, self.n_pre
         z = np.ascontiguousarray(z, dtype=float)
         z_next = np.empty(self.n_state)
@@ -758,7 +818,15 @@ class LoopLaw:
 
     def step(self, t: float, measured: NDArray[np.float64]) -> NDArray[np.float64]:
         """Servo torques ``[T_mp, T_ms]`` [N m] over ``[t, t + dt)``: `update` of the law's
-        state, compiled when `compiled`."""
+        state, compiled when `compiled`.
+
+        Parameters
+        ----------
+        t : float
+            The sample time [s].
+        measured : ndarray, shape (len(RAW_SIGNALS),)
+            The measured signals at `t` in `RAW_SIGNALS` order (SI).
+        """
         if self._fast is not None:
             z_next = self._z_spare
             if _step_core(self._z, z_next, np.ascontiguousarray(measured, dtype=float),

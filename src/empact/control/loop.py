@@ -151,7 +151,13 @@ class LoopPrediction:
     signals: dict[str, NDArray[np.float64]]
 
     def output(self, name: str) -> NDArray[np.float64]:
-        """One predicted signal by name."""
+        """One predicted signal by name.
+
+        Parameters
+        ----------
+        name : str
+            One of `outputs`.
+        """
         if name not in self.signals:
             raise ParameterError(f"no predicted signal {name!r} (choose from "
                                  f"{', '.join(self.signals)})")
@@ -224,7 +230,13 @@ class LoopModel:
         """The same loop with another controller (continuous: discretised by Tustin at the
         loop's rate); the augmented plant and its cached responses are shared.  Its
         schedule, if any, must be the one the model was built with (the schedule acts in
-        the pre-processing)."""
+        the pre-processing).
+
+        Parameters
+        ----------
+        controller : Controller
+            The other controller (2 errors in, 2 servo torques out).
+        """
         c = controller.discretize(self.dt) if not controller.dt else controller
         return LoopModel(**{f: getattr(self, f) for f in (
             "Aa", "Bu", "Bw", "Br", "Ce", "Dew", "Der", "Cy", "Dyu", "Dyw", "Dyr")},
@@ -267,7 +279,13 @@ class LoopModel:
 
     def plant_response(self, omega: NDArray) -> NDArray[np.complex128]:
         """The augmented plant ``G = -(e / du)`` at ``z = e^(j w dt)``: shape ``shape +
-        (n_w, 2, 2)`` (the sign makes ``L = K G`` the loop gain of negative feedback)."""
+        (n_w, 2, 2)`` (the sign makes ``L = K G`` the loop gain of negative feedback).
+
+        Parameters
+        ----------
+        omega : ndarray, shape (n_w,)
+            Angular frequencies [rad/s].
+        """
         key = ("G", np.asarray(omega, float).tobytes())
         if key in self._cache:
             return self._cache[key]
@@ -291,7 +309,13 @@ class LoopModel:
         return out
 
     def controller_response(self, omega: NDArray) -> NDArray[np.complex128]:
-        """``K(e^(j w dt))``, shape ``(n_w, 2, 2)``."""
+        """``K(e^(j w dt))``, shape ``(n_w, 2, 2)``.
+
+        Parameters
+        ----------
+        omega : ndarray, shape (n_w,)
+            Angular frequencies [rad/s].
+        """
         c = self.controller
         z = np.exp(1j * np.asarray(omega, float) * self.dt)
         if c.n == 0:
@@ -303,7 +327,14 @@ class LoopModel:
         """Multiloop balanced disk margins at the servo torques (``input``: ``L = K G``) and
         at the errors (``output``: ``L = G K``), and their minimum (``alpha``, 0 where the
         loop is unstable), each of shape `shape`; over `omega` [rad/s] up to the Nyquist
-        frequency (default 300 points from 0.01 Hz)."""
+        frequency (default 300 points from 0.01 Hz).
+
+        Parameters
+        ----------
+        omega : ndarray, shape (n_w,), optional
+            Angular frequencies [rad/s] (default 300 points from 0.01 Hz to the Nyquist
+            frequency).
+        """
         w = default_omega(self.dt) if omega is None else np.asarray(omega, float)
         G = self.plant_response(w)
         K = self.controller_response(w) * self.mask[None, :, None]
@@ -315,7 +346,15 @@ class LoopModel:
 
     def predict(self, w: NDArray, r: NDArray) -> NDArray[np.float64]:
         """Outputs (deviations, ``(n_k, n_y)``) for input deviations ``w`` ``(n_k, n_w)``
-        and ``r`` ``(n_k, 4)`` at the samples (one point only)."""
+        and ``r`` ``(n_k, 4)`` at the samples (one point only).
+
+        Parameters
+        ----------
+        w : ndarray, shape (n_k, n_w)
+            Deviations of the machine's other inputs (`disturbances`) at the samples (SI).
+        r : ndarray, shape (n_k, 4)
+            Deviations of the references (``r_g``, slip, ``mu``, ``dr_g/dt``) at the samples.
+        """
         if self.shape:
             raise ParameterError("predict: one operating point, not a grid")
         A, B, C, D = self.closed_loop()

@@ -73,7 +73,13 @@ class ShiftEnvelope:
     tau: float
 
     def rate_at(self, r_g: ArrayLike) -> NDArray[np.float64]:
-        """The envelope at ratio(s) `r_g` (linear in ``ln r_g``)."""
+        """The envelope at ratio(s) `r_g` (linear in ``ln r_g``).
+
+        Parameters
+        ----------
+        r_g : array_like
+            Geometric ratio(s) [-] (any shape).
+        """
         return np.interp(np.log(r_g), np.log(self.r_g), self.rate)
 
 

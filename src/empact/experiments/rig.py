@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import csv
 import io
-import warnings
 from dataclasses import InitVar, dataclass, field
 from typing import Literal, Mapping
 
 import numpy as np
 
+from .._deprecate import warn_renamed
 from .._lazy import lazy_module
 from .._validate import check_choice, check_int, check_number
 from ..errors import ParameterError
@@ -148,8 +148,7 @@ class RigSettings:
 
     def __post_init__(self, band: tuple[float, float] | None = None) -> None:
         if band is not None:
-            warnings.warn("RigSettings.band is deprecated; use band_hz [Hz]", DeprecationWarning,
-                          stacklevel=3)
+            warn_renamed("RigSettings.band", "band_hz [Hz]", stacklevel=3)
             object.__setattr__(self, "band_hz", tuple(band))
         check_choice("method", self.method, METHODS)
         check_choice("excite", self.excite, ("T_mp", "T_ms"))

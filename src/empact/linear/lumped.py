@@ -159,7 +159,13 @@ class LumpedModel:
         return np.zeros((self.n, self.n)) if self.damping is None else np.asarray(self.damping)
 
     def force_matrix(self, inputs: Sequence[str] | None = None) -> NDArray[np.float64]:
-        """Input distribution ``F``, shape (n, n_in), for the named inputs (default all)."""
+        """Input distribution ``F``, shape (n, n_in), for the named inputs (default all).
+
+        Parameters
+        ----------
+        inputs : sequence of str, optional
+            Input names (default all, in the model's order).
+        """
         names = list(self.inputs) if inputs is None else list(inputs)
         for name in names:
             index(list(self.inputs), name, "input")
@@ -171,6 +177,11 @@ class LumpedModel:
 
         A coordinate or derived-coordinate name gives a displacement; the same name with
         ``_dot`` appended gives its velocity.  Also returns a mask of the velocity outputs.
+
+        Parameters
+        ----------
+        outputs : sequence of str
+            Coordinate or derived-coordinate names, each optionally with ``_dot``.
         """
         known = {**{c: np.eye(self.n)[i] for i, c in enumerate(self.coordinates)}, **self.derived}
         rows, is_velocity = [], []
@@ -249,6 +260,13 @@ class LumpedModel:
 
         State names are the coordinates and ``<coordinate>_dot``; outputs as in
         `output_matrix` (default: all coordinates).
+
+        Parameters
+        ----------
+        inputs : sequence of str, optional
+            Input names (default all).
+        outputs : sequence of str, optional
+            Output names as `output_matrix` takes them (default all coordinates).
         """
         inputs = list(self.inputs) if inputs is None else list(inputs)
         outputs = list(self.coordinates) if outputs is None else list(outputs)

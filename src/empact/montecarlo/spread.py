@@ -84,7 +84,13 @@ class Distribution:
         return float(ndtr(z(self.lower))), float(ndtr(z(self.upper)))
 
     def ppf(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Inverse CDF of the truncated distribution at `u` in (0, 1) (any shape)."""
+        """Inverse CDF of the truncated distribution at `u` in (0, 1) (any shape).
+
+        Parameters
+        ----------
+        u : ndarray
+            Probabilities in (0, 1), any shape.
+        """
         u = np.asarray(u, float)
         if self.kind == "uniform":
             return self.loc + u * (self.scale - self.loc)
@@ -130,6 +136,13 @@ class Spread:
 
         Run ``i`` uses the stream ``SeedSequence(seed, spawn_key=(i,))``: its values do not
         depend on which other runs are drawn with it.
+
+        Parameters
+        ----------
+        seed : int
+            The study's seed.
+        runs : sequence of int
+            Run indices.
         """
         runs = np.asarray(runs, dtype=np.int64).ravel()
         k = len(self.distributions)

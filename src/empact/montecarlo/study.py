@@ -90,7 +90,14 @@ class MonteCarloResult:
     def summary(self, quantiles: Sequence[float] = QUANTILES) -> dict[str, Any]:
         """Failure count (by kind, `failure_kind`, with the first run's reason) and, per
         output, the statistics of the successful runs where it is finite: ``n``, ``mean``,
-        ``std``, ``min``, quantiles ``q05`` ..., ``max``."""
+        ``std``, ``min``, quantiles ``q05`` ..., ``max``.
+
+        Parameters
+        ----------
+        quantiles : sequence of float, optional
+            Probabilities in [0, 1] (default 0.05, 0.25, 0.5, 0.75, 0.95); each gives a key
+            ``qNN`` (percent, two digits).
+        """
         stats: dict[str, Any] = {}
         for j, name in enumerate(self.outputs):
             v = self.values[self.ok, j]

@@ -17,7 +17,7 @@ simulation
     The simulator (`simulate`, `run_scenario`) and its result.
 """
 from .equilibrium import TrimResult, traction_peak, trim
-from .linearization import PLANT_INPUTS, PLANT_OUTPUTS, linearize, plant, trim_point
+from .linearization import PLANT_INPUTS, PLANT_OUTPUTS, linearize, plant, trim_point  # noqa: F401 (deprecated)
 from .model import (
     BASE_STATES,
     OUTPUTS,
@@ -33,6 +33,6 @@ from .simulation import SimulationResult, run_scenario, simulate, write_csv
 
 __all__ = ["ModelOptions", "EmpactModel", "nonlinear_model", "rhs", "shift_inertia",
            "BASE_STATES", "OUTPUTS", "TrimResult", "trim", "traction_peak", "linearize", "plant",
-           "trim_point", "PLANT_INPUTS", "PLANT_OUTPUTS", "BeltLengthChange", "NmpResult",
+           "PLANT_INPUTS", "PLANT_OUTPUTS", "BeltLengthChange", "NmpResult",
            "belt_length_change", "nmp_analysis", "Scenario", "load_scenario", "list_examples",
            "example_path", "SimulationResult", "simulate", "run_scenario", "write_csv"]

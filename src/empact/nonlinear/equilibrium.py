@@ -16,12 +16,12 @@ checked: the normalised residual of ``dx/dt`` must be below ``1e-8``, else it is
 """
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._deprecate import warn_renamed
 from ..errors import ParameterError, TrimError
 from ..params import OperatingPoint
 from ..variator.geometry import check_ratio, radii, ratio_range, stretched_radii
@@ -91,8 +91,7 @@ class TrimResult:
 
     def as_dict(self) -> dict[str, float]:
         """Deprecated: `to_dict`."""
-        warnings.warn("TrimResult.as_dict is deprecated; use to_dict", DeprecationWarning,
-                      stacklevel=2)
+        warn_renamed("TrimResult.as_dict", "to_dict")
         return self.to_dict()
 
     @property
@@ -281,8 +280,8 @@ def trim(model: EmpactModel, op: OperatingPoint | float, omega_p: float | None =
     (True, 50.0)
     """
     if not isinstance(op, OperatingPoint):
-        warnings.warn("trim(model, r_g, omega_p, nu=, F_s=, T_l=) is deprecated; pass an "
-                      "OperatingPoint", DeprecationWarning, stacklevel=2)
+        warn_renamed("trim(model, r_g, omega_p, nu=, F_s=, T_l=)", "trim(model, op) with an "
+                     "OperatingPoint")
         op = OperatingPoint(r_g=op, omega_p=omega_p, nu=nu, F_s=F_s, T_l=T_l)
     elif omega_p is not None or nu is not None or F_s is not None or T_l is not None:
         raise ParameterError("trim: give an OperatingPoint alone")

@@ -19,19 +19,19 @@ point and the single-point plant are the same system.
 from __future__ import annotations
 
 import functools
-import warnings
 from dataclasses import dataclass, field
 from typing import Any, Iterator, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .._deprecate import warn_renamed
 from ..lti import index, statespace
 from ..params import OperatingPoint, Params
 from .equilibrium import TrimResult, trim
 from .model import EmpactModel, nonlinear_model
 
-__all__ = ["linearize", "linearized_plant", "linearize_many", "plant", "Plant", "trim_point",
+__all__ = ["linearize", "linearized_plant", "linearize_many", "plant", "Plant",
            "PLANT_INPUTS", "PLANT_OUTPUTS", "BENCH_OPTIONS", "disturbance_input"]
 
 #: the plant's control inputs (servo torques) and outputs (ratio and the two slip signals:
@@ -232,8 +232,8 @@ class Plant:
     def __iter__(self) -> Iterator[Any]:
         """Deprecated: ``sys, trimmed = plant(...)`` (empact 0.1); use ``.state_space()``
         and ``.trim``."""
-        warnings.warn("unpacking plant() as (system, trim) is deprecated: plant() returns a "
-                      "Plant; use .state_space() and .trim", DeprecationWarning, stacklevel=2)
+        warn_renamed("unpacking plant() as (system, trim)", ".state_space() and .trim of the "
+                     "Plant it returns")
         return iter((self.system, self.trim))
 
 
@@ -252,8 +252,7 @@ def trim_point(model: EmpactModel, op: OperatingPoint) -> TrimResult:
     TrimResult
         ``trim(model, op)`` (with a `DeprecationWarning`).
     """
-    warnings.warn("trim_point(model, op) is deprecated; use trim(model, op)",
-                  DeprecationWarning, stacklevel=2)
+    warn_renamed("trim_point(model, op)", "trim(model, op)")
     return trim(model, op)
 
 

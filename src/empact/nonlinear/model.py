@@ -103,7 +103,6 @@ within about 1 %.
 from __future__ import annotations
 
 import os
-import warnings
 from dataclasses import InitVar, dataclass, field, fields
 from functools import cached_property, lru_cache
 from typing import Literal
@@ -111,6 +110,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._deprecate import warn_renamed
 from .._lazy import lazy_module
 from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
@@ -245,8 +245,7 @@ class ModelOptions:
                            ("load_bandwidth", load_bandwidth),
                            ("ratio_bandwidth", ratio_bandwidth)):
             if value is not None:
-                warnings.warn(f"ModelOptions.{old} is deprecated; use {old}_hz [Hz]",
-                              DeprecationWarning, stacklevel=3)
+                warn_renamed(f"ModelOptions.{old}", f"{old}_hz [Hz]", stacklevel=3)
                 object.__setattr__(self, f"{old}_hz", value)
         check_choice("damping", self.damping, DAMPING_LEVELS)
         check_choice("kinematics", self.kinematics, KINEMATICS)
@@ -276,7 +275,14 @@ class ModelOptions:
 
     @classmethod
     def from_mapping(cls, values: dict) -> "ModelOptions":
-        """Options from keyword values; an unknown key is an error naming the allowed ones."""
+        """Options from keyword values; an unknown key is an error naming the allowed ones.
+
+        Parameters
+        ----------
+        values : dict
+            Option names (the fields of `ModelOptions`, or a deprecated name) to values;
+            ``thrust_ratio`` and ``creep_map`` may be file paths (read here).
+        """
         allowed = [f.name for f in fields(cls)] + list(_DEPRECATED_OPTIONS)
         for key in values:
             if key not in allowed:
@@ -339,15 +345,33 @@ class EmpactModel:
         return len(self.states)
 
     def state_index(self, name: str) -> int:
-        """Position of the state `name` in ``x`` (e.g. ``"twist_ds"``)."""
+        """Position of the state `name` in ``x`` (e.g. ``"twist_ds"``).
+
+        Parameters
+        ----------
+        name : str
+            One of `states`.
+        """
         return _index(self.states, name, "state")
 
     def output_index(self, name: str) -> int:
-        """Position of the output `name` in ``y`` (e.g. ``"nu_r"``)."""
+        """Position of the output `name` in ``y`` (e.g. ``"nu_r"``).
+
+        Parameters
+        ----------
+        name : str
+            One of `outputs`.
+        """
         return _index(self.outputs, name, "output")
 
     def input_index(self, name: str) -> int:
-        """Position of the input `name` in ``u`` (e.g. ``"T_l"``)."""
+        """Position of the input `name` in ``u`` (e.g. ``"T_l"``).
+
+        Parameters
+        ----------
+        name : str
+            One of `inputs`.
+        """
         return _index(self.inputs, name, "input")
 
     @cached_property
@@ -389,7 +413,15 @@ class EmpactModel:
         return x, u
 
     def evaluate(self, x: ArrayLike, u: ArrayLike) -> tuple[NDArray, NDArray]:
-        """State derivative, shape (n,), and outputs, shape (len(OUTPUTS),), at (x, u)."""
+        """State derivative, shape (n,), and outputs, shape (len(OUTPUTS),), at (x, u).
+
+        Parameters
+        ----------
+        x : array_like, shape (n,)
+            State, in the order of `states` (SI).
+        u : array_like, shape (4,)
+            Inputs, in the order of `inputs` (SI).
+        """
         x, u = self._check(x, u)
         dx = np.empty(self.n)
         y = np.empty(len(self.outputs))
@@ -397,21 +429,57 @@ class EmpactModel:
         return dx, y
 
     def rhs(self, t: float, x: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
-        """``dx/dt`` at time `t` [s] (unused: the model is autonomous), shape (n,)."""
+        """``dx/dt`` at time `t` [s] (unused: the model is autonomous), shape (n,).
+
+        Parameters
+        ----------
+        t : float
+            Time [s] (unused).
+        x : array_like, shape (n,)
+            State, in the order of `states` (SI).
+        u : array_like, shape (4,)
+            Inputs, in the order of `inputs` (SI).
+        """
         return self.evaluate(x, u)[0]
 
     def output(self, t: float, x: ArrayLike, u: ArrayLike) -> NDArray[np.float64]:
-        """Outputs (`outputs`, SI units in `OUTPUT_UNITS`), shape (len(OUTPUTS),)."""
+        """Outputs (`outputs`, SI units in `OUTPUT_UNITS`), shape (len(OUTPUTS),).
+
+        Parameters
+        ----------
+        t : float
+            Time [s] (unused: the model is autonomous).
+        x : array_like, shape (n,)
+            State, in the order of `states` (SI).
+        u : array_like, shape (4,)
+            Inputs, in the order of `inputs` (SI).
+        """
         return self.evaluate(x, u)[1]
 
     def output_dict(self, x: ArrayLike, u: ArrayLike) -> dict[str, float]:
-        """Outputs by name."""
+        """Outputs by name.
+
+        Parameters
+        ----------
+        x : array_like, shape (n,)
+            State, in the order of `states` (SI).
+        u : array_like, shape (4,)
+            Inputs, in the order of `inputs` (SI).
+        """
         return dict(zip(self.outputs, map(float, self.output(0.0, x, u))))
 
     def jacobian(self, x: ArrayLike, u: ArrayLike) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         """Exact ``A = df/dx`` (n, n), ``B = df/du`` (n, 4), ``C = dy/dx`` (ny, n),
         ``D = dy/du`` (ny, 4), exact: forward-mode derivatives of the compiled kernel (no
-        truncation error; equal to the complex step to rounding)."""
+        truncation error; equal to the complex step to rounding).
+
+        Parameters
+        ----------
+        x : array_like, shape (n,)
+            State, in the order of `states` (SI).
+        u : array_like, shape (4,)
+            Inputs, in the order of `inputs` (SI).
+        """
         x, u = self._check(x, u)
         A = np.empty((self.n, self.n))
         B = np.empty((self.n, 4))
@@ -421,7 +489,15 @@ class EmpactModel:
         return A, B, C, D
 
     def traction(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-        """Traction coefficient ``mu(nu, r_g)`` of the compiled kernel [-] (broadcasts)."""
+        """Traction coefficient ``mu(nu, r_g)`` of the compiled kernel [-] (broadcasts).
+
+        Parameters
+        ----------
+        nu : array_like
+            Slip [-].
+        r_g : array_like
+            Geometric ratio [-] (broadcast against `nu`).
+        """
         nu, r = np.broadcast_arrays(np.asarray(nu, float), np.asarray(r_g, float))
         if np.any(r <= 0):
             raise ValueError(f"r_g = {r[r <= 0].flat[0]:g}: must be positive")
@@ -432,7 +508,13 @@ class EmpactModel:
 
     def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
         """Peak traction coefficient ``mu_max(r_g)`` of the kernel's curve [-] (the torque
-        ratio is ``tau = mu / mu_max``)."""
+        ratio is ``tau = mu / mu_max``).
+
+        Parameters
+        ----------
+        r_g : array_like
+            Geometric ratio(s) [-].
+        """
         r = np.asarray(r_g, float)
         out = np.empty(r.size)
         K.mu_max_many(np.ascontiguousarray(r.ravel()), self.p, out)
@@ -442,7 +524,21 @@ class EmpactModel:
         """The shift law at rest for arrays (broadcast): the generalised force ``Lambda``
         [N m] on the ratio and the equilibrium thrust ratio ``kappa*`` [-], at the belt
         element's secondary force `F_el` [N] and the torque ratio `tau` (zero force and the
-        geometric thrust ratio for Shafai's law)."""
+        geometric thrust ratio for Shafai's law).
+
+        Parameters
+        ----------
+        r_g : array_like
+            Geometric ratio [-].
+        R_p, R_s : array_like
+            Primary and secondary running radii [m].
+        phi : array_like
+            Wrap angle on the primary pulley [rad].
+        F_el : array_like
+            The belt element's secondary force [N].
+        tau : array_like
+            Torque ratio ``mu / mu_max`` [-].
+        """
         args = [np.ascontiguousarray(a, dtype=float).ravel()
                 for a in np.broadcast_arrays(r_g, R_p, R_s, phi, F_el, tau)]
         shape = np.broadcast(r_g, R_p, R_s, phi, F_el, tau).shape
@@ -459,7 +555,23 @@ class EmpactModel:
                            work: list[NDArray] | None = None) -> tuple[float, float]:
         """`static_creep` at one point, as floats (what a sampled law calls at every
         sample): the same compiled loop on one-element arrays, `work` (eight of them) if
-        given."""
+        given.
+
+        Parameters
+        ----------
+        r_g : float
+            Geometric ratio [-].
+        R_p, R_s : float
+            Primary and secondary running radii [m].
+        phi : float
+            Wrap angle on the primary pulley [rad].
+        F_el : float
+            The belt element's secondary force [N].
+        tau : float
+            Torque ratio ``mu / mu_max`` [-].
+        work : list of ndarray, optional
+            Eight one-element work arrays, reused between calls (default: new ones).
+        """
         if not self.creep:
             return 0.0, float((np.pi + 2 * phi) / (np.pi - 2 * phi))
         a = work if work is not None else [np.empty(1) for _ in range(8)]
@@ -470,7 +582,15 @@ class EmpactModel:
 
     def evaluate_many(self, X: ArrayLike, U: ArrayLike) -> tuple[NDArray, NDArray]:
         """`evaluate` at many points in one compiled loop: `X` (N, n), `U` (N, 4) ->
-        derivatives (N, n) and outputs (N, len(outputs))."""
+        derivatives (N, n) and outputs (N, len(outputs)).
+
+        Parameters
+        ----------
+        X : array_like, shape (N, n)
+            States, one per row.
+        U : array_like, shape (N, 4)
+            Inputs, one per row.
+        """
         X, U = np.ascontiguousarray(X, float), np.ascontiguousarray(U, float)
         DX, Y = np.empty_like(X), np.empty((X.shape[0], len(self.outputs)))
         K.eval_batch(X, U, self.p, self.ix, DX, Y)
@@ -478,7 +598,15 @@ class EmpactModel:
 
     def jacobian_many(self, X: ArrayLike, U: ArrayLike) -> tuple[NDArray, ...]:
         """`jacobian` at many points in one compiled loop: ``A`` (N, n, n), ``B`` (N, n, 4),
-        ``C`` (N, ny, n), ``D`` (N, ny, 4)."""
+        ``C`` (N, ny, n), ``D`` (N, ny, 4).
+
+        Parameters
+        ----------
+        X : array_like, shape (N, n)
+            States, one per row.
+        U : array_like, shape (N, 4)
+            Inputs, one per row.
+        """
         X, U = np.ascontiguousarray(X, float), np.ascontiguousarray(U, float)
         N, n, ny = X.shape[0], self.n, len(self.outputs)
         A, B = np.empty((N, n, n)), np.empty((N, n, 4))
@@ -488,11 +616,25 @@ class EmpactModel:
 
     def stop_status(self, y: NDArray[np.float64], omega_min: float = 1.0) -> int:
         """Why a simulation would stop at outputs `y` (0: it need not; codes of
-        `empact.nonlinear.simulation.STATUS`)."""
+        `empact.nonlinear.simulation.STATUS`).
+
+        Parameters
+        ----------
+        y : ndarray, shape (len(OUTPUTS),)
+            Outputs, in the order of `outputs` (SI).
+        omega_min : float, optional
+            Primary speed [rad/s] at or below which the run stops (slip undefined; default 1).
+        """
         return int(K.stop_status(np.ascontiguousarray(y, float), self.p, omega_min))
 
     def iosystem(self, name: str = "empact"):
-        """The model as a `control.NonlinearIOSystem` (updfcn signature ``(t, x, u, params)``)."""
+        """The model as a `control.NonlinearIOSystem` (updfcn signature ``(t, x, u, params)``).
+
+        Parameters
+        ----------
+        name : str, optional
+            The system's name (default ``"empact"``).
+        """
         return control.nlsys(lambda t, x, u, params: self.rhs(t, x, u),
                              lambda t, x, u, params: self.output(t, x, u),
                              inputs=list(self.inputs), outputs=list(self.outputs),

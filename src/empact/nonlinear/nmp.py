@@ -20,12 +20,12 @@ ratio below -0.001): lightly damped zeros on the imaginary axis stay out of the 
 """
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._deprecate import warn_renamed
 from .._validate import check_choice, check_number
 from ..lti import channel_zeros
 from ..params import OperatingPoint, Params
@@ -126,8 +126,7 @@ class NmpResult:
     @property
     def f_max(self) -> float:
         """Deprecated: `f_max_hz`."""
-        warnings.warn("NmpResult.f_max is deprecated; use f_max_hz [Hz]", DeprecationWarning,
-                      stacklevel=2)
+        warn_renamed("NmpResult.f_max", "f_max_hz [Hz]")
         return self.f_max_hz
 
     def summary(self) -> list[dict]:
@@ -170,8 +169,7 @@ def nmp_analysis(params: Params, ratios: ArrayLike = (0.5, 1.0, 2.0), *,
     """
     check_choice("slip", slip, SLIPS)
     if f_max is not None:
-        warnings.warn("nmp_analysis(f_max=) is deprecated; use f_max_hz [Hz]",
-                      DeprecationWarning, stacklevel=2)
+        warn_renamed("nmp_analysis(f_max=)", "f_max_hz [Hz]")
         f_max_hz = f_max
     f_max_hz = check_number("f_max_hz", f_max_hz, 0.0, lo_open=True, unit="Hz")
     base = params.operating if base is None else base

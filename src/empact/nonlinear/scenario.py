@@ -319,12 +319,24 @@ class Scenario:
         return self.controller is not None
 
     def with_duration(self, duration: float) -> "Scenario":
-        """A copy with another end time [s]."""
+        """A copy with another end time [s].
+
+        Parameters
+        ----------
+        duration : float
+            The end time [s], > 0.
+        """
         return replace(self, duration=check_number("duration", duration, 0.0, 3600.0,
                                                    lo_open=True, unit="s"))
 
     def with_controller(self, file: str) -> "Scenario":
-        """A copy whose controller is read from `file` (a path or ``"shipped:NAME"``)."""
+        """A copy whose controller is read from `file` (a path or ``"shipped:NAME"``).
+
+        Parameters
+        ----------
+        file : str
+            A controller file (JSON or ``.mat``) or ``"shipped:NAME"``.
+        """
         if self.controller is None:
             raise ParameterError(f"scenario {self.name!r} has no [controller] table")
         return replace(self, controller=replace(self.controller, file=str(file)))

@@ -78,7 +78,13 @@ class SimulationResult:
     stats: Mapping[str, float] = field(default_factory=dict)
 
     def output(self, name: str) -> NDArray[np.float64]:
-        """One output (or state, or input) over time, shape (n_t,)."""
+        """One output (or state, or input) over time, shape (n_t,).
+
+        Parameters
+        ----------
+        name : str
+            An output, state or input name of the run.
+        """
         for names, data in ((self.outputs, self.y), (self.states, self.x),
                             (self.inputs, self.u)):
             if name in names:
@@ -145,7 +151,15 @@ class SampledController(Protocol):
     commands: tuple[str, ...]
 
     def step(self, t: float, measured: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Commands over ``[t, t + dt)`` from the measurements at `t`."""
+        """Commands over ``[t, t + dt)`` from the measurements at `t`.
+
+        Parameters
+        ----------
+        t : float
+            The sample time [s].
+        measured : ndarray, shape (len(measured),)
+            The measured values at `t`, in the order of `measured` (SI).
+        """
 
 
 def _signal_table(model: EmpactModel, signals: Mapping[str, NDArray], u0: NDArray,

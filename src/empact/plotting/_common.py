@@ -10,7 +10,6 @@ from __future__ import annotations
 import functools
 import os
 import re
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -19,6 +18,7 @@ import matplotlib as mpl
 import numpy as np
 from matplotlib.figure import Figure
 
+from .._deprecate import warn_renamed
 from .._io import atomic_file
 from .._validate import check_choice
 
@@ -80,8 +80,7 @@ def styled(fn: Callable[..., Plot]) -> Callable[..., Plot]:
     @functools.wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Plot:
         if "axes" in kwargs:
-            warnings.warn(f"{fn.__name__}(axes=...) is deprecated; use ax=", DeprecationWarning,
-                          stacklevel=2)
+            warn_renamed(f"{fn.__name__}(axes=...)", "ax=")
             kwargs["ax"] = kwargs.pop("axes")
         with mpl.rc_context(STYLE):
             return fn(*args, **kwargs)

@@ -7,9 +7,10 @@ for scripts.
 """
 from __future__ import annotations
 
-import warnings
 from dataclasses import asdict, dataclass, field
 from typing import Any, Iterable, Mapping
+
+from .._deprecate import warn_renamed
 
 __all__ = ["Claim", "claims_table"]
 
@@ -68,8 +69,7 @@ class Claim:
 
     def as_dict(self) -> dict[str, Any]:
         """Deprecated: `to_dict`."""
-        warnings.warn("Claim.as_dict is deprecated; use to_dict", DeprecationWarning,
-                      stacklevel=2)
+        warn_renamed("Claim.as_dict", "to_dict")
         return self.to_dict()
 
 

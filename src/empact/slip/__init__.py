@@ -17,7 +17,7 @@ from .coupling import (
     VARIABLES,
     BeltLinearisation,
     belt_torque,
-    linearise_belt,
+    linearise_belt,  # noqa: F401 (deprecated: importable, not in __all__)
     linearize_belt,
     slip,
 )
@@ -48,7 +48,7 @@ from .stability import StabilityMap, dynamic_poles, stability_map, stability_mea
 __all__ = [
     "STATES", "INPUTS", "OUTPUTS", "VARIABLES", "N_STRUCTURAL_ZEROS", "REDUCED_STATES",
     "BeltLinearisation", "SlipModel", "BeltRootLocus", "PoleSweep", "ZeroLocus", "StabilityMap",
-    "slip", "belt_torque", "linearize_belt", "linearise_belt", "slip_model", "slip_state_space",
+    "slip", "belt_torque", "linearize_belt", "slip_model", "slip_state_space",
     "state_matrices",
     "reduced_matrices", "dynamic_poles", "stability_measures", "belt_root_locus",
     "coupled_limit", "pole_sweep", "slip_frequency_responses", "zero_locus", "stability_map",

@@ -26,19 +26,18 @@ the parameter set).
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._deprecate import warn_renamed
 from .._validate import check_values
 from ..params import OPERATING_VARIABLES, OperatingPoint, Params
 from ..variator.geometry import variator_state
 from ..variator.traction import TractionModel, traction_from_params
 
 __all__ = ["VARIABLES", "BeltLinearisation", "slip", "belt_torque", "linearize_belt",
-           "linearise_belt",
            "linearisation_terms", "check_speed", "check_clamp", "check_slip"]
 
 #: Operating-point variables, their units and descriptions (names as in the paper).
@@ -273,6 +272,5 @@ def linearise_belt(params: Params, op: OperatingPoint | None = None,
     BeltLinearisation
         As `linearize_belt` (with a `DeprecationWarning`).
     """
-    warnings.warn("linearise_belt is deprecated; use linearize_belt", DeprecationWarning,
-                  stacklevel=2)
+    warn_renamed("linearise_belt", "linearize_belt")
     return linearize_belt(params, op, traction)

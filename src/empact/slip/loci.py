@@ -225,7 +225,13 @@ class PoleSweep:
 
     def oscillatory(self, k: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Natural frequency [Hz] and damping [-] of the oscillatory pair(s) at point `k`,
-        ascending in frequency (upper-half-plane poles only)."""
+        ascending in frequency (upper-half-plane poles only).
+
+        Parameters
+        ----------
+        k : int
+            Index of the sweep point.
+        """
         return oscillatory(self.poles[k])
 
 

@@ -297,7 +297,15 @@ class SlipModel:
 
     def state_space(self, inputs: Sequence[str] | None = None,
                     outputs: Sequence[str] | None = None):
-        """Named `control.StateSpace` (states `STATES`; default all inputs and outputs)."""
+        """Named `control.StateSpace` (states `STATES`; default all inputs and outputs).
+
+        Parameters
+        ----------
+        inputs : sequence of str, optional
+            Input names (default all of `INPUTS`).
+        outputs : sequence of str, optional
+            Output names (default all of `OUTPUTS`).
+        """
         ii, oo, ins, outs = self._select(inputs, outputs)
         return statespace(self.A, self.B[:, ii], self.C[oo], self.D[np.ix_(oo, ii)],
                           inputs=ins, outputs=outs, states=self.states, name=self.name)
@@ -312,6 +320,17 @@ class SlipModel:
         """``H(j w) = C (j w I - A)^{-1} B + D`` at `omega` [rad/s] (> 0), vectorised.
 
         Returns a `~empact.lti.FrequencyResponse` with ``H`` of shape (n_out, n_in, n_f).
+
+        Parameters
+        ----------
+        omega : array_like, shape (n_f,)
+            Angular frequencies [rad/s], > 0.
+        inputs : sequence of str, optional
+            Input names (default all of `INPUTS`).
+        outputs : sequence of str, optional
+            Output names (default all of `OUTPUTS`).
+        label : str, optional
+            The response's label (legends).
         """
         w = check_values("omega", omega, 0.0, lo_open=True, unit="rad/s",
                          note="the model has poles at 0")
@@ -320,7 +339,15 @@ class SlipModel:
                                   np.atleast_1d(w), ins, outs, label=label)
 
     def zeros(self, input: str = "F_s", output: str = "nu") -> NDArray[np.complex128]:
-        """Finite invariant zeros of one input -> output channel [rad/s], by magnitude."""
+        """Finite invariant zeros of one input -> output channel [rad/s], by magnitude.
+
+        Parameters
+        ----------
+        input : str, optional
+            One of `INPUTS` (default ``"F_s"``).
+        output : str, optional
+            One of `OUTPUTS` (default ``"nu"``).
+        """
         ii, oo, _, _ = self._select([input], [output])
         return transmission_zeros(self.A, self.B[:, ii], self.C[oo], self.D[np.ix_(oo, ii)])
 

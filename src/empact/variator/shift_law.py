@@ -208,7 +208,15 @@ class CreepMap:
         return isinstance(other, CreepMap) and hash(self) == hash(other)
 
     def K_c(self, r_g: ArrayLike, F_s: ArrayLike) -> NDArray[np.float64]:
-        """The map's creep coefficient [-] at ratios `r_g` and clamping forces `F_s` [N]."""
+        """The map's creep coefficient [-] at ratios `r_g` and clamping forces `F_s` [N].
+
+        Parameters
+        ----------
+        r_g : array_like
+            Geometric ratios [-].
+        F_s : array_like
+            Clamping forces [N] (broadcast against `r_g`).
+        """
         return interpolate_curves(self.ratios, self.F_s_data, self.K_c_data, F_s, r_g)
 
     def encode(self) -> NDArray[np.float64]:

@@ -128,11 +128,27 @@ class AnalyticThrustRatio:
 
     @classmethod
     def from_params(cls, params: _HasThrustRatio) -> "AnalyticThrustRatio":
+        """The analytic thrust ratio of a parameter set's ``[thrust_ratio]`` section on its
+        variator geometry.
+
+        Parameters
+        ----------
+        params : Params or section
+            A parameter set, or a block, with the thrust-ratio parameters.
+        """
         t: ThrustRatioParams = params.thrust_ratio
         return cls(t.p0, t.b0, t.b1, params.variator)
 
     def kappa(self, tau: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-        """``kappa*`` [-] at torque ratios `tau` and ratios `r_g` (broadcast)."""
+        """``kappa*`` [-] at torque ratios `tau` and ratios `r_g` (broadcast).
+
+        Parameters
+        ----------
+        tau : array_like
+            Torque ratios ``mu / mu_max`` [-].
+        r_g : array_like
+            Geometric ratios [-] (broadcast against `tau`).
+        """
         tau, r = np.broadcast_arrays(np.asarray(tau, float), np.asarray(r_g, float))
         return np.exp(self.p0 * np.log(kappa_geo(r, self.variator))
                       + (self.b0 - self.b1 * np.log(r)) * tau)
@@ -187,7 +203,15 @@ class TabulatedThrustRatio:
         return isinstance(other, TabulatedThrustRatio) and hash(self) == hash(other)
 
     def kappa(self, tau: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-        """``kappa`` [-] at torque ratios `tau` and ratios `r_g` (broadcast)."""
+        """``kappa`` [-] at torque ratios `tau` and ratios `r_g` (broadcast).
+
+        Parameters
+        ----------
+        tau : array_like
+            Torque ratios ``mu / mu_max`` [-].
+        r_g : array_like
+            Geometric ratios [-] (broadcast against `tau`).
+        """
         return np.exp(interpolate_curves(self.ratios, self.tau_data,
                                          [np.log(k) for k in self.kappa_data], tau, r_g))
 

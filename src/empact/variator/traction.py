@@ -138,10 +138,26 @@ class TractionModel(Protocol):
     nu_range: tuple[float, float]
 
     def mu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-        """Traction coefficient [-]."""
+        """Traction coefficient [-].
+
+        Parameters
+        ----------
+        nu : array_like
+            Slip [-].
+        r_g : array_like
+            Geometric ratio [-] (broadcast against `nu`).
+        """
 
     def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-        """Slope ``d mu / d nu`` [-]."""
+        """Slope ``d mu / d nu`` [-].
+
+        Parameters
+        ----------
+        nu : array_like
+            Slip [-].
+        r_g : array_like
+            Geometric ratio [-] (broadcast against `nu`).
+        """
 
 
 def _fmt_range(lo: float, hi: float) -> str:
@@ -212,7 +228,15 @@ class MagicFormulaTraction:
     @classmethod
     def from_params(cls, traction: TractionParams, nu_max: float = MAGIC_NU_MAX) \
             -> "MagicFormulaTraction":
-        """The model of a ``[traction]`` parameter section."""
+        """The model of a ``[traction]`` parameter section.
+
+        Parameters
+        ----------
+        traction : TractionParams
+            The ``[traction]`` section.
+        nu_max : float, optional
+            The valid slip range is ``[-nu_max, nu_max]`` [-] (default 0.2).
+        """
         t = traction
         return cls(ratios=(t.r_low, t.r_med, t.r_od), B=(t.B_low, t.B_med, t.B_od),
                    C=(t.C_low, t.C_med, t.C_od), D=(t.D_low, t.D_med, t.D_od),
@@ -228,6 +252,11 @@ class MagicFormulaTraction:
 
         Linear interpolation in ``log(r_g)`` between the LOW, MED and OD values, constant
         outside: ``numpy.interp(log(r_g), log(ratios), values)``.
+
+        Parameters
+        ----------
+        r_g : array_like
+            Geometric ratio(s) [-].
         """
         r = np.asarray(r_g, float)
         if np.any(~np.isfinite(r) | (r <= 0)):
@@ -240,11 +269,25 @@ class MagicFormulaTraction:
     def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
         """The curve's peak value ``D(r_g)`` [-] (reached where ``C arctan(phi) = pi / 2``,
         for ``C >= 1``): the torque ratio is ``tau = mu / mu_max``, as the compiled model
-        computes it."""
+        computes it.
+
+        Parameters
+        ----------
+        r_g : array_like
+            Geometric ratio(s) [-].
+        """
         return self.coefficients(r_g)[2]
 
     def mu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-        """Traction coefficient ``D sin(C arctan(phi))`` [-], shape of ``broadcast(nu, r_g)``."""
+        """Traction coefficient ``D sin(C arctan(phi))`` [-], shape of ``broadcast(nu, r_g)``.
+
+        Parameters
+        ----------
+        nu : array_like
+            Slip [-].
+        r_g : array_like
+            Geometric ratio [-] (broadcast against `nu`).
+        """
         nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
         B, C, D, E = self.coefficients(r_a)
         bx = B * nu_a
@@ -252,7 +295,15 @@ class MagicFormulaTraction:
         return D * np.sin(C * np.arctan(phi))
 
     def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-        """Slope ``d mu / d nu`` [-] (analytic), shape of ``broadcast(nu, r_g)``."""
+        """Slope ``d mu / d nu`` [-] (analytic), shape of ``broadcast(nu, r_g)``.
+
+        Parameters
+        ----------
+        nu : array_like
+            Slip [-].
+        r_g : array_like
+            Geometric ratio [-] (broadcast against `nu`).
+        """
         nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
         B, C, D, E = self.coefficients(r_a)
         bx = B * nu_a
@@ -332,7 +383,16 @@ class TabulatedTraction:
     @classmethod
     def from_curves(cls, curves: Mapping[float, tuple[ArrayLike, ArrayLike]],
                     source: str = "traction table") -> "TabulatedTraction":
-        """From ``{r_g: (nu, mu)}`` (curves in any order of ratio)."""
+        """From ``{r_g: (nu, mu)}`` (curves in any order of ratio).
+
+        Parameters
+        ----------
+        curves : mapping of float to (array_like, array_like)
+            Ratio ``r_g`` [-] to the curve's slips ``nu`` [-] and traction coefficients ``mu``
+            [-].
+        source : str, optional
+            What the messages call the table (default ``"traction table"``).
+        """
         items = sorted(((float(r), c) for r, c in curves.items()), key=lambda t: t[0])
         return cls(ratios=tuple(r for r, _ in items),
                    nu_data=tuple(np.asarray(c[0], float) for _, c in items),
@@ -372,11 +432,27 @@ class TabulatedTraction:
         return out
 
     def mu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-        """Traction coefficient [-], shape of ``broadcast(nu, r_g)``."""
+        """Traction coefficient [-], shape of ``broadcast(nu, r_g)``.
+
+        Parameters
+        ----------
+        nu : array_like
+            Slip [-].
+        r_g : array_like
+            Geometric ratio [-] (broadcast against `nu`).
+        """
         return self._evaluate(nu, r_g, self._interp)
 
     def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-        """Slope ``d mu / d nu`` of the interpolant [-], shape of ``broadcast(nu, r_g)``."""
+        """Slope ``d mu / d nu`` of the interpolant [-], shape of ``broadcast(nu, r_g)``.
+
+        Parameters
+        ----------
+        nu : array_like
+            Slip [-].
+        r_g : array_like
+            Geometric ratio [-] (broadcast against `nu`).
+        """
         return self._evaluate(nu, r_g, self._slope)
 
 
