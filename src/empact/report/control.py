@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..control.closed_loop import shown_metric
+from ..control.loop import disk_margin_map
 from ..plotting import (
     plot_closed_loop,
     plot_family_poles,
@@ -89,13 +90,17 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
         "held and sampled) gives every margin and pole below. Set-points are torque ratios "
         "on the traction curve (tau = 0.9: an 11 % torque reserve). Targets are issue 21's; "
         "verdicts below.</p>"
-        + ctx.figure(plot_family_poles(fam, title="Plant family: poles and zeros below 60 Hz"),
+        + ctx.figure(plot_family_poles(fam.roots(60.0),
+                                       title="Plant family: poles and zeros below 60 Hz"),
                      "control_family", "Poles and zeros of every plant of the design family")
-        + ctx.figure(plot_loop_shapes(res.loops, title="Loop shapes over the family"),
+        + ctx.figure(plot_loop_shapes({n: lm.loop_shapes() for n, lm in res.loops.items()},
+                                      title="Loop shapes over the family"),
                      "control_loops", "Diagonal loop gains of the shipped controllers on "
                      "the sampled loop (sensors, feedforwards) against every plant")
-        + ctx.figure(plot_robustness_maps(fam, res.loops, title="Multiloop disk margin "
-                                          "over the family"), "control_robustness",
+        + ctx.figure(plot_robustness_maps({n: disk_margin_map(fam, lm)
+                                           for n, lm in res.loops.items()},
+                                          title="Multiloop disk margin over the family"),
+                     "control_robustness",
                      "The multiloop disk margin (the smaller of servo torques and errors) "
                      "at every plant of the family; 0 where unstable")
         + ctx.table("control_designs", ["controller", "states", "scheduled", "stable",
