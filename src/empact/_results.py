@@ -28,7 +28,8 @@ def plain(obj: Any) -> Any:
     Parameters
     ----------
     obj : object
-        A result, mapping, sequence, array or scalar.
+        A result (or any object with ``to_dict``), a dataclass (its public fields), a
+        mapping, sequence, array or scalar.
 
     Returns
     -------
@@ -43,6 +44,9 @@ def plain(obj: Any) -> Any:
     """
     if hasattr(obj, "to_dict") and not isinstance(obj, type):
         return plain(obj.to_dict())
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):  # a settings record
+        return {f.name: plain(getattr(obj, f.name)) for f in dataclasses.fields(obj)
+                if not f.name.startswith("_")}
     if isinstance(obj, Mapping):
         return {str(k): plain(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):

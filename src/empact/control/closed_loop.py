@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._results import Result
 from ..errors import ParameterError
 from ..nonlinear.equilibrium import TrimResult, smallest_slip_reserve
 from ..nonlinear.model import EmpactModel
@@ -123,7 +124,7 @@ def resolve_controller(ref: str) -> Controller:
 
 
 @dataclass(frozen=True, eq=False)
-class ClosedLoopResult:
+class ClosedLoopResult(Result):
     """A closed-loop run: the simulation (`result`), references at its sample times
     (``r_g`` and the slip set-point under the controller's slip signal), the trimmed start,
     the law that ran (`law`: its configuration, limits and sensors) and the metrics.
@@ -155,6 +156,13 @@ class ClosedLoopResult:
     controller: Controller
     metrics: dict[str, Any] = field(default_factory=dict)
     law: LoopLaw | None = None
+
+    def _data(self) -> dict[str, Any]:
+        """`to_dict`: the simulation, references, trimmed start, the scenario's name, the
+        controller and the metrics (the law and the scenario are inputs, not data)."""
+        return {"scenario": self.scenario.name, "result": self.result,
+                "references": self.references, "op": self.op, "controller": self.controller,
+                "metrics": self.metrics}
 
 
 def build_law(scenario: Scenario, params: Params, controller: Controller | None = None,
@@ -440,7 +448,7 @@ def shown_metric(name: str, value: Any) -> tuple[Any, str]:
 
 
 @dataclass(frozen=True)
-class TargetCheck:
+class TargetCheck(Result):
     """One target of a run: the metric, its value, the target and whether it is met."""
 
     name: str

@@ -238,7 +238,20 @@ class PlantFamily:
                            {c: tuple(z) for c, z in zeros.items()}, float(f_max_hz))
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain arrays and names (the export layout)."""
+        """The family as plain JSON types (the export layout of `_layout`, as `save_family`
+        writes it to JSON: arrays as nested lists, NaN as None).
+
+        Returns
+        -------
+        dict
+            ``A``, ``B``, ``C``, ``D``, the names and their units, ``axis_<name>``,
+            ``grid_<name>``, ``operating_<name>``, ``ok``, ``reason``, ``fixed``,
+            ``options``.
+        """
+        return jsonable(self._layout())
+
+    def _layout(self) -> dict[str, Any]:
+        """Arrays and names (the export layout: `save_family` writes it)."""
         grids = np.meshgrid(*self.axes.values(), indexing="ij") if self.axes else []
         d: dict[str, Any] = {
             "A": self.A, "B": self.B, "C": self.C, "D": self.D,
@@ -466,7 +479,7 @@ def save_family(family: PlantFamily, path: str | os.PathLike[str], fmt: str | No
     """
     fmt = check_choice("format", fmt or Path(path).suffix.lstrip(".").lower(),
                        ("npz", "json", "mat"))
-    data = family.to_dict()
+    data = family._layout()
     if fmt == "json":
         doc = {"schema": {"name": "empact.plants", "version": 1}, **data}
         atomic_write_text(path, json.dumps(jsonable(doc)) + "\n")

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._lazy import lazy_module
-from .._results import Result
+from .._results import Result, TableResult
 from ..errors import ParameterError
 from ..nonlinear.linearization import linearize
 from ..nonlinear.model import EmpactModel, nonlinear_model
@@ -138,7 +138,7 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
 
 
 @dataclass(frozen=True, eq=False)
-class LoopPrediction:
+class LoopPrediction(TableResult):
     """A linear prediction of a closed-loop run: the signals at the loop's samples.
 
     Attributes
@@ -152,6 +152,9 @@ class LoopPrediction:
     t: NDArray[np.float64]
     signals: dict[str, NDArray[np.float64]]
 
+    def _columns(self) -> dict[str, NDArray[np.float64]]:
+        return {"t": self.t, **self.signals}
+
     def output(self, name: str) -> NDArray[np.float64]:
         """One predicted signal by name."""
         if name not in self.signals:
@@ -161,7 +164,7 @@ class LoopPrediction:
 
 
 @dataclass(frozen=True, eq=False)
-class LoopModel:
+class LoopModel(Result):
     """The linear closed loop of a law around the machine (one point, or stacked over a
     family's grid: leading dimensions ``shape``), discrete at the law's sample time.
 

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._results import Result
 from ..errors import ParameterError, TrimError
 from ..params import OperatingPoint
 from ..variator.geometry import check_ratio, radii, ratio_range, stretched_radii
@@ -102,7 +103,7 @@ class TrimResult:
 
 
 @dataclass(frozen=True, eq=False)
-class TrimGrid:
+class TrimGrid(Result):
     """Trimmed operating points of one model, many at once (`trim_grid`).
 
     Attributes
@@ -123,6 +124,8 @@ class TrimGrid:
     y : array, shape (N, n_y)
         Outputs at the trimmed points.
     """
+
+    _not_data = ("model",)  # to_dict: the arrays (the model is not data)
 
     model: EmpactModel
     x: NDArray[np.float64]
