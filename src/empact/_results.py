@@ -12,6 +12,7 @@ columns.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import os
 from typing import Any, ClassVar, Mapping
 
@@ -80,8 +81,8 @@ def frame(columns: Mapping[str, Any], owner: str) -> Any:
     ImportError
         Without pandas (one line: how to install it).
     """
-    try:
-        import pandas as pd
+    try:  # optional: imported when a table is asked for
+        pd = importlib.import_module("pandas")
     except ImportError:  # pragma: no cover - depends on the environment
         raise ImportError(f"{owner}.to_pandas needs pandas (pip install pandas); to_dict "
                           "gives the same data without it") from None
