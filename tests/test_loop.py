@@ -230,9 +230,12 @@ def test_targets_in_percentage_points_are_read_as_fractions_with_a_warning():
             "controller": {"file": "shipped:pi"},
             "targets": {"peak_slip_error_pp": 0.6, "slip_error_pp": [0.0, 0.2],
                         "macro_slip": False}}
-    with pytest.warns(DeprecationWarning, match=r"targets.peak_slip_error_pp .*0\.3\.0.*"
-                      r"targets.peak_slip_error as a fraction \[-\]"):
+    with pytest.warns(DeprecationWarning) as caught:
         sc = scenario_from_dict(data, "s.toml")
+    assert [str(w.message) for w in caught] == [
+        f"s.toml: targets.{k}_pp (percentage points) is deprecated and will be refused from "
+        f"0.3.0: give targets.{k} as a fraction [-] ({k} = {v!r} / 100)"
+        for k, v in (("peak_slip_error", 0.6), ("slip_error", [0.0, 0.2]))]
     assert sc.targets == {"peak_slip_error": (-np.inf, 0.6 / 100),
                           "slip_error": (0.0, 0.2 / 100), "macro_slip": False}
     data["targets"]["peak_slip_error"] = 0.006
