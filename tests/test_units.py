@@ -140,3 +140,17 @@ def test_report_csv_gives_slip_as_fraction(full_report):
     assert len(shown) == len(rows) - 1 > 3
     np.testing.assert_allclose([float(r[0]) for r in rows[1:]], np.array(shown) / 100,
                                rtol=1e-3)
+
+
+def test_report_csv_gives_every_slip_column_as_a_fraction():
+    """The report's CSV tables (machine-readable): a slip in % and every column in percentage
+    points (a difference of slips: the error, the reserve to the peak) divided by 100 with
+    the unit [-]; other percentages (a saving) and units stay."""
+    from empact.report.context import csv_slip_columns
+
+    head, row = csv_slip_columns(
+        ["scenario", "peak slip [%]", "peak |nu - nu*| [pp]", "reserve to the peak [pp]",
+         "saving in F_s [%]", "F_s [kN]"], [["a", 1.5, 0.5, 2.0, 20.0, 3.0]])
+    assert head == ["scenario", "peak slip [-]", "peak |nu - nu*| [-]",
+                    "reserve to the peak [-]", "saving in F_s [%]", "F_s [kN]"]
+    assert row == ["a", 1.5 / 100, 0.5 / 100, 2.0 / 100, 20.0, 3.0]
