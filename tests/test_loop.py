@@ -222,8 +222,8 @@ def test_targets(params):
 
 def test_targets_in_percentage_points_are_read_as_fractions_with_a_warning():
     """A ``[targets]`` key in percentage points (``_pp``, before 0.2.0) is read as the
-    fraction under the key without ``_pp`` (0.6 -> 0.006, exactly as 0.6 / 100), with one
-    DeprecationWarning naming the new key, its unit and the removal version; both spellings
+    fraction under the key without ``_pp`` (0.6 -> 0.006, exactly as 0.6 / 100), with a
+    DeprecationWarning per key naming the new key, its unit and the removal version; both spellings
     at once are one ParameterError line."""
     data = {"scenario": {"duration": 1.0}, "model": {"drive": "speed", "load": "torque"},
             "initial": {"r_g": 1.0, "omega_p": 300.0, "tau": 0.9, "F_s": 1e4},
