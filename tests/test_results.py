@@ -98,6 +98,7 @@ def _realization():
 #: class -> builder of a small instance, and the fields (or keys) whose arrays round-trip
 BUILDERS = {
     SimulationResult: (_sim, ("t", "x", "y", "u")),
+    TrimResult: (_trim, ("r_g", "F_s", "tau")),
     ClosedLoopResult: (lambda: ClosedLoopResult(
         _sim(), {"r_g": np.ones(5), "nu": np.full(5, 0.01)}, _trim(),
         load_scenario(example_path("slip-load-step-r1")), _controller(),
@@ -188,7 +189,6 @@ NOT_RESULTS = {
     "empact.montecarlo.analyses.AnalysisContext": "settings of an analysis",
     "empact.montecarlo.spread.Distribution": "an input distribution",
     "empact.montecarlo.spread.Spread": "an input spread",
-    "empact.nonlinear.equilibrium.TrimResult": "a trimmed point: to_dict of its scalars",
     "empact.nonlinear.model.EmpactModel": "a model",
     "empact.nonlinear.model.ModelOptions": "model settings",
     "empact.nonlinear.scenario.ControllerSpec": "a scenario's [controller] table",
