@@ -20,10 +20,10 @@ scenario = load_scenario(control_example_path("slip-load-step-r1"))
 run = empact.run_closed_loop(scenario, params)
 
 # %%
-# The metrics are judged on the machine's true signals (the Python API gives slip errors in
-# percentage points, ``_pp``); the scenario's ``[targets]`` are checked against them.
+# The metrics are judged on the machine's true signals (slips and slip errors as fractions,
+# 0.01 is 1 %); the scenario's ``[targets]`` are checked against them.
 m = run.metrics
-print(f"peak slip error {m['peak_slip_error_pp']:.2f} pp, macro slip: {m['macro_slip']}")
+print(f"peak slip error {100 * m['peak_slip_error']:.2f} pp, macro slip: {m['macro_slip']}")
 for check in check_targets(m, scenario.targets):
     print(check.describe())
 figure = plot_closed_loop([run], title="Load step of 50 % of the torque capacity at r_g = 1")

@@ -98,7 +98,7 @@ def test_loop_model_is_stable_where_the_run_settles(params):
     lm, _ = loop_model(sc, params)
     assert lm.spectral_radius() < 1
     run = run_closed_loop(sc, params)
-    assert run.metrics["slip_error_pp"] < sc.targets["slip_error_pp"][1]
+    assert run.metrics["slip_error"] < sc.targets["slip_error"][1] == 0.002
 
 
 def test_saturated_step_recovers_without_windup(params):
@@ -132,7 +132,7 @@ def test_shift_keeps_its_clamping(params):
     res = run.result
     assert res.complete
     assert res.output("tau").max() < 0.97
-    assert run.metrics["peak_slip_error_pp"] <= 0.5
+    assert run.metrics["peak_slip_error"] <= 0.005
 
 
 def test_set_point_by_torque_reserve(params, bench):
@@ -211,12 +211,39 @@ def test_discrete_export(tmp_path):
 
 def test_targets(params):
     """check_targets: upper bounds, bands and booleans; an unknown metric is one line."""
-    m = {"complete": True, "peak_slip_error_pp": 0.4, "ratio_rate": 0.3, "macro_slip": False}
-    checks = check_targets(m, {"peak_slip_error_pp": (-np.inf, 0.6), "ratio_rate": (1.0, np.inf),
+    m = {"complete": True, "peak_slip_error": 0.004, "ratio_rate": 0.3, "macro_slip": False}
+    checks = check_targets(m, {"peak_slip_error": (-np.inf, 0.006), "ratio_rate": (1.0, np.inf),
                                "macro_slip": False})
     assert [c.met for c in checks] == [True, False, True]
+    # for people: the slip metric and its bound in percentage points
+    assert checks[0].describe() == "peak_slip_error = 0.4 pp (<= 0.6 pp): met"
+    assert checks[1].describe() == "ratio_rate = 0.3 (>= 1): MISSED"
     with pytest.raises(ParameterError, match="targets.slip_eror: no such metric"):
         check_targets(m, {"slip_eror": (0, 1)})
+
+
+def test_targets_in_percentage_points_are_read_as_fractions_with_a_warning():
+    """A ``[targets]`` key in percentage points (``_pp``, before 0.2.0) is read as the
+    fraction under the key without ``_pp`` (0.6 -> 0.006, exactly as 0.6 / 100), with a
+    DeprecationWarning per key naming the new key, its unit and the removal version; both spellings
+    at once are one ParameterError line."""
+    data = {"scenario": {"duration": 1.0}, "model": {"drive": "speed", "load": "torque"},
+            "initial": {"r_g": 1.0, "omega_p": 300.0, "tau": 0.9, "F_s": 1e4},
+            "controller": {"file": "shipped:pi"},
+            "targets": {"peak_slip_error_pp": 0.6, "slip_error_pp": [0.0, 0.2],
+                        "macro_slip": False}}
+    with pytest.warns(DeprecationWarning) as caught:
+        sc = scenario_from_dict(data, "s.toml")
+    assert [str(w.message) for w in caught] == [
+        f"s.toml: targets.{k}_pp (percentage points) is deprecated and will be refused from "
+        f"0.3.0: give targets.{k} as a fraction [-] ({k} = {v!r} / 100)"
+        for k, v in (("peak_slip_error", 0.6), ("slip_error", [0.0, 0.2]))]
+    assert sc.targets == {"peak_slip_error": (-np.inf, 0.6 / 100),
+                          "slip_error": (0.0, 0.2 / 100), "macro_slip": False}
+    data["targets"]["peak_slip_error"] = 0.006
+    with pytest.warns(DeprecationWarning), pytest.raises(
+            ParameterError, match="targets.peak_slip_error_pp and targets.peak_slip_error"):
+        scenario_from_dict(data, "s.toml")
 
 
 def test_safety_factor_twin_starts_at_its_own_clamping(params):
@@ -457,7 +484,7 @@ def test_run_compiled_needs_a_compiled_law(params):
 
 def test_smallest_slip_reserve_is_the_per_sample_search(params):
     """`smallest_slip_reserve` (129 searches interpolated, 16 refined; the closed-loop
-    metrics' ``slip_reserve_pp``) against the traction peak searched at every sample, on
+    metrics' ``slip_reserve``) against the traction peak searched at every sample, on
     every shipped closed-loop run (the runs of the test above, when it ran): the same
     reserve, bitwise, at the same sample."""
     from empact.control.closed_loop import build_law

@@ -32,22 +32,23 @@ def test_control_simulate_gives_slips_as_fractions(tmp_path, params):
                                     "--json", "--out", str(tmp_path / "run.csv")])
     assert res.exit_code == 0, res.output
     doc = json.loads(res.stdout)
-    assert doc["schema"] == {"name": "empact.control.simulate", "version": 2}
+    assert doc["schema"] == {"name": "empact.control.simulate", "version": 3}
     m = doc["metrics"]
     assert not [k for k in m if k.endswith("_pp")]
-    assert doc["units"]["slip_error"] == doc["units"]["peak_slip"] == "-"
-    # the library's metrics (the report's, in percentage points and %) divided by 100,
-    # exactly (the same deterministic run)
+    assert {doc["units"][k] for k in ("slip_error", "peak_slip", "peak_slip_error",
+                                      "slip_setpoint", "slip_reserve")} == {"-"}
+    # the targets are named as the metrics (schema 3)
+    assert {t["name"] for t in doc["targets"]} <= set(m)
+    # the library's metrics (fractions), exactly (the same deterministic run)
     ref = run_closed_loop(load_scenario(control_example_path("slip-load-step-r1")),
                           params).metrics
-    assert m["slip_error"] == ref["slip_error_pp"] / 100
-    assert m["peak_slip"] == ref["peak_slip_pp"] / 100
+    assert m["slip_error"] == ref["slip_error"]
+    assert m["peak_slip"] == ref["peak_slip"]
     # the set-point by torque ratio: the slip where mu = 0.9 mu_max at r_g = 1
     from empact.nonlinear.equilibrium import slip_at_torque_ratio
     from empact.nonlinear.model import nonlinear_model
     nu_star = float(slip_at_torque_ratio(nonlinear_model(params), 0.9, 1.0))
-    assert m["slip_setpoint"] == ref["slip_setpoint_pp"] / 100 == pytest.approx(nu_star,
-                                                                               rel=1e-12)
+    assert m["slip_setpoint"] == ref["slip_setpoint"] == pytest.approx(nu_star, rel=1e-12)
     assert all(CELL.match(c) for c in _header(tmp_path / "run.csv"))
 
 
@@ -55,9 +56,9 @@ def test_control_simulate_text_keeps_percent(monkeypatch):
     """For people: the slips in percentage points and %, the other metrics with units."""
 
     class Run:
-        metrics = {"complete": True, "message": "completed", "slip_error_pp": 0.05,
-                   "peak_slip_pp": 1.5, "ratio_error": 0.002, "mean_clamping_force": 9000.0,
-                   "peak_slip_error_pp": 0.3, "macro_slip": False}
+        metrics = {"complete": True, "message": "completed", "slip_error": 0.0005,
+                   "peak_slip": 0.015, "ratio_error": 0.002, "mean_clamping_force": 9000.0,
+                   "peak_slip_error": 0.003, "macro_slip": False}
 
         class result:
             complete = True
@@ -73,10 +74,10 @@ def test_control_simulate_text_keeps_percent(monkeypatch):
 
 def test_montecarlo_closed_loop_outputs_are_fractions(monkeypatch, params):
     class Run:
-        metrics = {"complete": True, "message": "", "slip_error_pp": 0.25, "peak_slip_pp": 1.5,
-                   "slip_setpoint_pp": 1.0, "ratio_error": 0.01, "mean_clamping_force": 1.0,
+        metrics = {"complete": True, "message": "", "slip_error": 0.0025, "peak_slip": 0.015,
+                   "slip_setpoint": 0.01, "ratio_error": 0.01, "mean_clamping_force": 1.0,
                    "mean_slip_power": 2.0, "mean_actuation_power": 3.0, "mean_losses": 5.0,
-                   "peak_slip_error_pp": 0.5, "slip_reserve_pp": 2.0, "macro_slip": False,
+                   "peak_slip_error": 0.005, "slip_reserve": 0.02, "macro_slip": False,
                    "peak_T_mp": 0.4, "peak_T_ms": 8.0}
 
     monkeypatch.setattr(analyses, "run_closed_loop", lambda *a, **k: Run)
@@ -139,3 +140,17 @@ def test_report_csv_gives_slip_as_fraction(full_report):
     assert len(shown) == len(rows) - 1 > 3
     np.testing.assert_allclose([float(r[0]) for r in rows[1:]], np.array(shown) / 100,
                                rtol=1e-3)
+
+
+def test_report_csv_gives_every_slip_column_as_a_fraction():
+    """The report's CSV tables (machine-readable): a slip in % and every column in percentage
+    points (a difference of slips: the error, the reserve to the peak) divided by 100 with
+    the unit [-]; other percentages (a saving) and units stay."""
+    from empact.report.context import csv_slip_columns
+
+    head, row = csv_slip_columns(
+        ["scenario", "peak slip [%]", "peak |nu - nu*| [pp]", "reserve to the peak [pp]",
+         "saving in F_s [%]", "F_s [kN]"], [["a", 1.5, 0.5, 2.0, 20.0, 3.0]])
+    assert head == ["scenario", "peak slip [-]", "peak |nu - nu*| [-]",
+                    "reserve to the peak [-]", "saving in F_s [%]", "F_s [kN]"]
+    assert row == ["a", 1.5 / 100, 0.5 / 100, 2.0 / 100, 20.0, 3.0]

@@ -39,6 +39,7 @@ from scipy import linalg
 from scipy.linalg import eigvals as generalized_eigvals
 
 from ._lazy import lazy_module
+from ._results import Result, TableResult
 
 control = lazy_module("control")
 #: one call (`match_branches`): imported on first use, not by every command that imports lti
@@ -57,7 +58,7 @@ Spacing = Literal["linear", "log"]
 # Frequency response
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class FrequencyResponse:
+class FrequencyResponse(TableResult):
     """A frequency response ``H[i, j, k]`` from input j to output i at ``omega[k]``.
 
     Attributes
@@ -73,6 +74,12 @@ class FrequencyResponse:
     inputs: tuple[str, ...]
     outputs: tuple[str, ...]
     label: str = ""
+
+    def _columns(self) -> dict[str, NDArray]:
+        """``omega`` [rad/s], then ``H[output/input]`` (complex) per channel."""
+        return {"omega": self.omega, **{f"H[{o}/{i}]": self.H[a, b]
+                                        for a, o in enumerate(self.outputs)
+                                        for b, i in enumerate(self.inputs)}}
 
     @property
     def frequencies_hz(self) -> NDArray[np.float64]:
@@ -389,7 +396,7 @@ def cont2discrete(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, dt: fl
 
 
 @dataclass(frozen=True)
-class RootLocus:
+class RootLocus(Result):
     """Eigenvalues of ``A(p)`` along a parameter, one continuous branch per column.
 
     Attributes

@@ -39,7 +39,6 @@ __all__ = ["sweep_options", "sweep_from_options",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
            "OutputFile", "check_outputs", "check_references", "quiet_option", "Interrupted",
            "EXIT_INTERRUPTED", "parse_list", "formats_option", "parse_choices", "schema_version",
-           "fraction_metrics",
            "announce_compilation", "COMPILING"]
 
 #: suffixes of ``--plot`` files (the figure's format)
@@ -225,10 +224,12 @@ class LazyGroup(ErrorGroup):
 JSON_VERSION = 1
 
 #: Schemas whose keys or units changed since version 1 (the README's interchange section says
-#: what changed): ``control.simulate`` and ``montecarlo`` 2, slips as fractions
+#: what changed): ``control.simulate`` 2 and ``montecarlo`` 2, slips as fractions
 #: (``slip_error``, ``peak_slip``, ``slip_setpoint`` [-] in place of ``slip_error_pp``
-#: [percentage points], ``peak_slip_pp``, ``slip_setpoint_pp`` [%]).
-SCHEMA_VERSIONS = {"control.simulate": 2, "montecarlo": 2}
+#: [percentage points], ``peak_slip_pp``, ``slip_setpoint_pp`` [%]); ``control.simulate`` 3,
+#: the targets named as the metrics (``targets[].name`` ``peak_slip_error``, ``slip_error``
+#: in place of ``peak_slip_error_pp``, ``slip_error_pp``).
+SCHEMA_VERSIONS = {"control.simulate": 3, "montecarlo": 2}
 
 
 def schema_version(schema: str) -> int:
@@ -236,13 +237,6 @@ def schema_version(schema: str) -> int:
     return SCHEMA_VERSIONS.get(schema, JSON_VERSION)
 
 
-def fraction_metrics(metrics: Mapping[str, Any]) -> dict[str, Any]:
-    """Closed-loop metrics for machine-readable output: a slip in percent or percentage points
-    (a key ending ``_pp``) becomes a fraction under the key without it (``slip_error_pp``
-    0.05 -> ``slip_error`` 0.0005 [-]); percent is for people (`empact.control.closed_loop.
-    metrics` keeps it for the report)."""
-    return {(k[:-3] if k.endswith("_pp") else k): (v / 100 if k.endswith("_pp") else v)
-            for k, v in metrics.items()}
 
 #: Units of every quantity key that appears in the commands' JSON (SI; complex numbers are
 #: ``[re, im]`` pairs; arrays keep the unit of their elements).
@@ -274,6 +268,9 @@ UNITS = {
     "kappa": "-", "bandwidth_scale": "-", "alpha_min": "-", "gamma": "-", "gamma_opt": "-",
     "bandwidth_hz": "Hz", "f_keep_hz": "Hz", "omega_peak": "rad/s",
     "captured": "-", "slip_error": "-", "peak_slip": "-", "slip_setpoint": "-",
+    "peak_slip_error": "-", "slip_reserve": "-", "min_clamping_force": "N",
+    "max_clamping_force": "N", "peak_T_mp": "N m", "peak_T_ms": "N m", "T_mp_max": "N m",
+    "T_ms_max": "N m", "saturated": "-",
     "ratio_error": "-", "ratio_rate": "1/s", "ratio_span": "-",
     "mean_clamping_force": "N", "mean_slip_power": "W", "mean_actuation_power": "W",
     "mean_losses": "W", "shape": "-", "points": "-", "trimmed": "-",

@@ -18,7 +18,6 @@ from ._common import (
     check_references,
     emit_json,
     force_option,
-    fraction_metrics,
     get_params,
     json_options,
     operating_values,
@@ -383,6 +382,7 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, params_fil
         control_example_path,
         control_examples,
         run_closed_loop,
+        shown_metric,
     )
     from ..nonlinear.scenario import load_scenario
     from ..nonlinear.simulation import write_csv
@@ -406,16 +406,16 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, params_fil
         write_csv(run.result, out)
     m = run.metrics
     checks = check_targets(m, sc.targets)
-    if as_json or json_out:  # slips as fractions (schema version 2)
-        emit_json({"scenario": sc.name, "metrics": fraction_metrics(m),
+    if as_json or json_out:  # slips as fractions, as the API gives them
+        emit_json({"scenario": sc.name, "metrics": m,
                    "targets": [{"name": c.name, "met": c.met, "target": c.describe()}
                                for c in checks]}, "control.simulate", json_out)
     else:  # for people: slips in % and percentage points
         for k, v in m.items():
-            name, unit = (k[:-3], "percentage points" if "error" in k or "reserve" in k
-                          else "%") if k.endswith("_pp") else (k, UNITS.get(k, ""))
+            v, unit = shown_metric(k, v)
+            unit = {"pp": "percentage points"}.get(unit, unit) or UNITS.get(k, "")
             shown = f"{v:.6g}" if isinstance(v, float) else str(v)
-            click.echo(f"{name:22s} {shown} {unit if unit != '-' else ''}".rstrip())
+            click.echo(f"{k:22s} {shown} {unit if unit != '-' else ''}".rstrip())
         for c in checks:
             click.echo(f"target: {c.describe()}")
     if not run.result.complete:

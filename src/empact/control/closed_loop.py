@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._deprecate import warn_renamed
+from .._results import Result
 from ..errors import ParameterError
 from ..nonlinear.equilibrium import TrimResult, smallest_slip_reserve
 from ..nonlinear.model import EmpactModel
@@ -30,7 +31,7 @@ from .law import LoopConfig, LoopLaw
 
 __all__ = ["LoopLaw", "ClosedLoopResult", "run_closed_loop", "build_law", "metrics",
            "resolve_controller", "control_examples", "control_example_path",
-           "safety_factor_twin", "check_targets"]
+           "safety_factor_twin", "check_targets", "SLIP_METRICS", "shown_metric"]
 
 
 def __getattr__(name: str) -> Any:
@@ -128,7 +129,7 @@ def resolve_controller(ref: str) -> Controller:
 
 
 @dataclass(frozen=True, eq=False)
-class ClosedLoopResult:
+class ClosedLoopResult(Result):
     """A closed-loop run: the simulation (`result`), references at its sample times
     (``r_g`` and the slip set-point under the controller's slip signal), the trimmed start,
     the law that ran (`law`: its configuration, limits and sensors) and the metrics.
@@ -147,8 +148,8 @@ class ClosedLoopResult:
     controller : Controller
         The controller that ran.
     metrics : dict str -> object
-        The run's numbers (`metrics`: slip errors in percentage points, forces [N], powers
-        [W], torques [N m]).
+        The run's numbers (`metrics`: slips and slip errors [-], forces [N], powers [W],
+        torques [N m]).
     law : LoopLaw or None
         The law that ran: its configuration, limits and sensors.
     """
@@ -160,6 +161,13 @@ class ClosedLoopResult:
     controller: Controller
     metrics: dict[str, Any] = field(default_factory=dict)
     law: LoopLaw | None = None
+
+    def _data(self) -> dict[str, Any]:
+        """`to_dict`: the simulation, references, trimmed start, the scenario's name, the
+        controller and the metrics (the law and the scenario are inputs, not data)."""
+        return {"scenario": self.scenario.name, "result": self.result,
+                "references": self.references, "op": self.op, "controller": self.controller,
+                "metrics": self.metrics}
 
 
 def build_law(scenario: Scenario, params: Params, controller: Controller | None = None,
@@ -237,8 +245,8 @@ def run_closed_loop(scenario: Scenario, params: Params, controller: Controller |
     -------
     ClosedLoopResult
         The simulation (``result``), the references at its sample times, the trimmed start,
-        the law that ran and the ``metrics`` (`metrics`: slip errors in percentage points,
-        forces [N], powers [W]).
+        the law that ran and the ``metrics`` (`metrics`: slips and slip errors as fractions
+        [-], forces [N], powers [W]).
 
     Examples
     --------
@@ -250,7 +258,7 @@ def run_closed_loop(scenario: Scenario, params: Params, controller: Controller |
     >>> from empact.nonlinear.scenario import load_scenario
     >>> run = empact.run_closed_loop(load_scenario(control_example_path("slip-load-step-r1")),
     ...                              empact.load_params())
-    >>> run.metrics["macro_slip"], bool(run.metrics["peak_slip_error_pp"] < 0.6)
+    >>> run.metrics["macro_slip"], bool(run.metrics["peak_slip_error"] < 0.006)
     (False, True)
     """
     model, op = scenario_model(scenario, params)
@@ -266,12 +274,12 @@ def metrics(run: ClosedLoopResult) -> dict[str, Any]:
     """The numbers a closed-loop run is judged by (true signals of the machine, not the
     sensors'):
 
-    * ``slip_error_pp``: largest ``|nu - nu*|`` [percentage points] from 0.3 s after the load
-      step to the end (or over the shift window, or the whole run); ``peak_slip_error_pp``:
-      the largest from the load step (or the shift window's start, or 0) to the end;
-    * ``peak_slip_pp``, ``slip_setpoint_pp`` [%]; ``macro_slip``: the slip reached the
-      traction peak's slip at the current ratio somewhere (``slip_reserve_pp``: the smallest
-      distance to it [pp]);
+    * ``slip_error``: largest ``|nu - nu*|`` [-] from 0.3 s after the load step to the end
+      (or over the shift window, or the whole run); ``peak_slip_error`` [-]: the largest
+      from the load step (or the shift window's start, or 0) to the end;
+    * ``peak_slip``, ``slip_setpoint`` [-]; ``macro_slip``: the slip reached the traction
+      peak's slip at the current ratio somewhere (``slip_reserve`` [-]: the smallest
+      distance to it);
     * ``ratio_error``: largest relative ratio error ``|r_g - r*| / r*`` over the window;
       ``ratio_rate``: the mean ``|dr_g/dt|`` over the shift window [1/s] (NaN when the run
       stopped before it), ``ratio_span`` its first and last ratio;
@@ -291,7 +299,9 @@ def metrics(run: ClosedLoopResult) -> dict[str, Any]:
     -------
     dict str -> object
         The numbers above (floats, ``ratio_span`` a list of two ratios [-], ``macro_slip`` a
-        bool), with ``complete`` (bool) and ``message`` (str) of the simulation.
+        bool), with ``complete`` (bool) and ``message`` (str) of the simulation.  Every slip
+        is a fraction (0.01 is 1 %); `shown_metric` writes them in % and percentage points
+        for people.
     """
     res, sc = run.result, run.scenario
     t = res.t
@@ -315,14 +325,14 @@ def metrics(run: ClosedLoopResult) -> dict[str, Any]:
     if not np.any(after):
         after = np.ones_like(t, dtype=bool)
     err = np.abs(nu - nu_ref)
-    out["slip_error_pp"] = float(100 * np.max(err[window]))
-    out["peak_slip_error_pp"] = float(100 * np.max(err[after]))
-    out["peak_slip_pp"] = float(100 * np.max(nu))
-    out["slip_setpoint_pp"] = float(100 * np.max(nu_ref))
+    out["slip_error"] = float(np.max(err[window]))
+    out["peak_slip_error"] = float(np.max(err[after]))
+    out["peak_slip"] = float(np.max(nu))
+    out["slip_setpoint"] = float(np.max(nu_ref))
     model = run.op.model  # the machine's own traction curve (not the controller's knowledge)
     if model is not None:
-        reserve = 100 * smallest_slip_reserve(model, np.clip(r, 0.3, 3.0), res.output("nu"))[0]
-        out["slip_reserve_pp"] = reserve
+        reserve = smallest_slip_reserve(model, np.clip(r, 0.3, 3.0), res.output("nu"))[0]
+        out["slip_reserve"] = reserve
         out["macro_slip"] = bool(reserve <= 0.0 or not res.complete)
     out["ratio_error"] = float(np.max(np.abs(r - r_ref)[window] / r_ref[window]))
     if sc.shift_window is not None:
@@ -412,8 +422,38 @@ def safety_factor_twin(scenario: Scenario, params: Params, mu_design: str = "rat
                    references=refs, targets={})
 
 
+#: The slip metrics (fractions [-] in `metrics`) and how people read them: ``"pp"``
+#: (percentage points, a difference of slips) or ``"%"`` (a slip).
+SLIP_METRICS = {"slip_error": "pp", "peak_slip_error": "pp", "peak_slip": "%",
+                "slip_setpoint": "%", "slip_reserve": "pp"}
+
+
+def shown_metric(name: str, value: Any) -> tuple[Any, str]:
+    """A metric as people read it: a slip metric (`SLIP_METRICS`) times 100 with its unit
+    (``"pp"`` or ``"%"``), any other value as it is with the unit ``""``.
+
+    Parameters
+    ----------
+    name : str
+        The metric's name (a key of `metrics`).
+    value : object
+        Its value (a fraction [-] for a slip metric).
+
+    Returns
+    -------
+    value : object
+        ``100 * value`` for a slip metric, else `value`.
+    unit : str
+        ``"pp"``, ``"%"`` or ``""``.
+    """
+    unit = SLIP_METRICS.get(name, "")
+    if unit and isinstance(value, (int, float)) and not isinstance(value, bool):
+        return 100 * value, unit
+    return value, unit
+
+
 @dataclass(frozen=True)
-class TargetCheck:
+class TargetCheck(Result):
     """One target of a run: the metric, its value, the target and whether it is met."""
 
     name: str
@@ -422,15 +462,18 @@ class TargetCheck:
     met: bool
 
     def describe(self) -> str:
-        """``name = value (target ...): met|MISSED``."""
+        """``name = value (target ...): met|MISSED``, for people: a slip metric and its
+        target in percentage points or % (`shown_metric`)."""
+        unit = SLIP_METRICS.get(self.name, "")
+        scale, sfx = (100.0, f" {unit}") if unit else (1.0, "")
         if isinstance(self.target, bool):
             want = f"must be {str(self.target).lower()}"
         else:
-            lo, hi = self.target
-            want = (f"<= {hi:g}" if lo == -np.inf else f">= {lo:g}" if hi == np.inf
-                    else f"in [{lo:g}, {hi:g}]")
+            lo, hi = (scale * x for x in self.target)
+            want = (f"<= {hi:g}{sfx}" if lo == -np.inf else f">= {lo:g}{sfx}" if hi == np.inf
+                    else f"in [{lo:g}, {hi:g}]{sfx}")
         v = self.value
-        shown = str(v).lower() if isinstance(v, bool) else f"{v:.4g}"
+        shown = str(v).lower() if isinstance(v, bool) else f"{scale * v:.4g}{sfx}"
         return f"{self.name} = {shown} ({want}): {'met' if self.met else 'MISSED'}"
 
 

@@ -271,7 +271,19 @@ class Controller:
         return done
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain data (the file layout)."""
+        """The controller as plain JSON types (the file layout of `save`'s JSON: matrices
+        as nested lists, NaN as None).
+
+        Returns
+        -------
+        dict
+            ``A``, ``B``, ``C``, ``D``, the names and units, ``dt`` [s], ``method``,
+            ``design`` and ``schedule``.
+        """
+        return jsonable(self._layout())
+
+    def _layout(self) -> dict[str, Any]:
+        """Arrays and names (the file layout: `save` writes it)."""
         return {"A": self.A, "B": self.B, "C": self.C, "D": self.D,
                 "inputs": list(self.inputs), "measured": list(self.measured),
                 "outputs": list(self.outputs), "dt": self.dt, "method": self.method,
@@ -289,7 +301,7 @@ class Controller:
             The file: ``.json`` or ``.mat``.
         """
         suffix = Path(path).suffix.lower()
-        data = self.to_dict()
+        data = self._layout()
         if suffix == ".json":
             atomic_write_text(path, json.dumps(jsonable({"schema": SCHEMA, **data}),
                                                indent=1) + "\n")

@@ -45,9 +45,11 @@ from numpy.typing import NDArray
 from .._deprecate import warn_renamed
 from .._io import atomic_write_text
 from .._lazy import lazy_module
+from .._results import Result
 from .._validate import check_choice, check_values
 from ..errors import ParameterError
 from ..export import jsonable, read_npz, write_arrays
+from ..lti import channel_zeros
 from ..nonlinear.equilibrium import trim_grid
 from ..nonlinear.linearization import (
     BENCH_OPTIONS,
@@ -63,8 +65,8 @@ from ..sweep import SweepOptions, plan_chunks, run_chunks
 
 interpolate = lazy_module("scipy.interpolate")
 
-__all__ = ["VARIABLES", "PlantFamily", "plant_family", "save_family", "load_family",
-           "BENCH_OPTIONS", "DESIGN_GRID", "LOOP_FAMILY_OUTPUTS", "design_family"]
+__all__ = ["VARIABLES", "PlantFamily", "FamilyRoots", "plant_family", "save_family",
+           "load_family", "BENCH_OPTIONS", "DESIGN_GRID", "LOOP_FAMILY_OUTPUTS", "design_family"]
 
 #: operating variables of a family: unit, and whether it is interpolated in its logarithm
 #: (when all its grid values are positive: the plant depends on the slip through the slope of
@@ -227,8 +229,52 @@ class PlantFamily:
                      "PlantFamily.interpolate(...).state_space()")
         return self.interpolate(**point).system
 
+    def roots(self, f_max_hz: float = 60.0) -> "FamilyRoots":
+        """The poles and the zeros of ``T_mp -> r_g`` and ``T_ms -> nu`` of every trimmed
+        plant, those of magnitude below `f_max_hz`.
+
+        Parameters
+        ----------
+        f_max_hz : float
+            Poles and zeros of magnitude above ``2 pi f_max_hz`` [rad/s] are left out [Hz].
+
+        Returns
+        -------
+        FamilyRoots
+            Per trimmed point (in grid order): its ratio, poles and channel zeros [rad/s].
+        """
+        w_max = 2 * np.pi * f_max_hz
+        r_g, poles = [], []
+        zeros: dict[str, list[NDArray[np.complex128]]] = {c: [] for c in FamilyRoots.CHANNELS}
+        for k in range(self.size):
+            idx = np.unravel_index(k, self.shape)
+            if not self.ok[idx]:
+                continue
+            r_g.append(float(self.operating["r_g"][idx]))
+            p = np.linalg.eigvals(self.A[idx])
+            poles.append(p[np.abs(p) < w_max])
+            plant = self.plant(idx)
+            for c in FamilyRoots.CHANNELS:
+                inp, out = c.split("->")
+                zeros[c].append(channel_zeros(plant, inp, out, max_abs=w_max))
+        return FamilyRoots(np.array(r_g), tuple(poles),
+                           {c: tuple(z) for c, z in zeros.items()}, float(f_max_hz))
+
     def to_dict(self) -> dict[str, Any]:
-        """Plain arrays and names (the export layout)."""
+        """The family as plain JSON types (the export layout of `_layout`, as `save_family`
+        writes it to JSON: arrays as nested lists, NaN as None).
+
+        Returns
+        -------
+        dict
+            ``A``, ``B``, ``C``, ``D``, the names and their units, ``axis_<name>``,
+            ``grid_<name>``, ``operating_<name>``, ``ok``, ``reason``, ``fixed``,
+            ``options``.
+        """
+        return jsonable(self._layout())
+
+    def _layout(self) -> dict[str, Any]:
+        """Arrays and names (the export layout: `save_family` writes it)."""
         grids = np.meshgrid(*self.axes.values(), indexing="ij") if self.axes else []
         d: dict[str, Any] = {
             "A": self.A, "B": self.B, "C": self.C, "D": self.D,
@@ -248,6 +294,32 @@ class PlantFamily:
             d[f"operating_{name}"] = values
         d["fixed"] = dict(self.fixed)
         return d
+
+
+@dataclass(frozen=True, eq=False)
+class FamilyRoots(Result):
+    """The poles and channel zeros of every trimmed plant of a family (`PlantFamily.roots`).
+
+    Attributes
+    ----------
+    r_g : ndarray, shape (n,)
+        The ratio [-] of each trimmed point (grid order).
+    poles : tuple of ndarray
+        Each point's poles [rad/s] below the bound (complex, shapes vary).
+    zeros : dict str -> tuple of ndarray
+        Per channel (`CHANNELS`, ``"T_mp->r_g"``, ``"T_ms->nu"``) each point's finite
+        zeros [rad/s] below the bound.
+    f_max_hz : float
+        The bound on the magnitude [Hz].
+    """
+
+    #: the channels whose zeros are taken (input->output)
+    CHANNELS = ("T_mp->r_g", "T_ms->nu")
+
+    r_g: NDArray[np.float64]
+    poles: tuple[NDArray[np.complex128], ...]
+    zeros: dict[str, tuple[NDArray[np.complex128], ...]]
+    f_max_hz: float
 
 
 def _axis(name: str, value) -> NDArray[np.float64]:
@@ -430,7 +502,7 @@ def save_family(family: PlantFamily, path: str | os.PathLike[str], fmt: str | No
     """
     fmt = check_choice("format", fmt or Path(path).suffix.lstrip(".").lower(),
                        ("npz", "json", "mat"))
-    data = family.to_dict()
+    data = family._layout()
     if fmt == "json":
         doc = {"schema": {"name": "empact.plants", "version": 1}, **data}
         atomic_write_text(path, json.dumps(jsonable(doc)) + "\n")

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._lazy import lazy_module
+from .._results import Result, TableResult
 from ..errors import ParameterError
 from ..nonlinear.linearization import linearize
 from ..nonlinear.model import EmpactModel, nonlinear_model
@@ -42,7 +43,8 @@ linalg = lazy_module("scipy.linalg")
 _CHUNK_BYTES = 32e6
 
 __all__ = ["LoopModel", "loop_model", "predict_scenario", "family_loops", "LoopPrediction",
-           "PERFORMANCE", "LOOP_FAMILY_OUTPUTS", "linear_preprocess", "zoh", "default_omega"]
+           "LoopShapes", "DiskMarginMap", "disk_margin_map", "PERFORMANCE",
+           "LOOP_FAMILY_OUTPUTS", "linear_preprocess", "zoh", "default_omega"]
 
 #: the machine's signals a loop model predicts (with the servo torques ``T_mp``, ``T_ms``)
 PERFORMANCE = ("r_g", "nu", "nu_r", "F_s", "T_ds", "tau")
@@ -136,7 +138,7 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
 
 
 @dataclass(frozen=True, eq=False)
-class LoopPrediction:
+class LoopPrediction(TableResult):
     """A linear prediction of a closed-loop run: the signals at the loop's samples.
 
     Attributes
@@ -149,6 +151,9 @@ class LoopPrediction:
 
     t: NDArray[np.float64]
     signals: dict[str, NDArray[np.float64]]
+
+    def _columns(self) -> dict[str, NDArray[np.float64]]:
+        return {"t": self.t, **self.signals}
 
     def output(self, name: str) -> NDArray[np.float64]:
         """One predicted signal by name.
@@ -165,7 +170,7 @@ class LoopPrediction:
 
 
 @dataclass(frozen=True, eq=False)
-class LoopModel:
+class LoopModel(Result):
     """The linear closed loop of a law around the machine (one point, or stacked over a
     family's grid: leading dimensions ``shape``), discrete at the law's sample time.
 
@@ -344,6 +349,30 @@ class LoopModel:
         return {"input": a_in, "output": a_out,
                 "alpha": np.where(stable, np.minimum(a_in, a_out), 0.0)}
 
+    def loop_shapes(self, f_hz: NDArray | None = None) -> "LoopShapes":
+        """The diagonal loop gains ``L_ii = (K G)_ii`` at the servo torques over frequency,
+        at every point.
+
+        Parameters
+        ----------
+        f_hz : array, shape (n_f,), optional
+            Frequencies [Hz] (default: 150 from 0.01 Hz to 100 Hz or just below the
+            Nyquist frequency, whichever is lower).
+
+        Returns
+        -------
+        LoopShapes
+            The frequencies and the complex gains, shape (n_points, n_f, 2).
+        """
+        nyq = 0.49 / self.dt
+        f = np.logspace(-2, np.log10(min(100.0, nyq)), 150) if f_hz is None \
+            else np.asarray(f_hz, float)
+        w = 2 * np.pi * f
+        G = self.plant_response(w).reshape((-1, len(w), 2, 2))
+        K = self.controller_response(w) * self.mask[None, :, None]
+        L = K @ G
+        return LoopShapes(f, np.stack([L[..., 0, 0], L[..., 1, 1]], axis=-1))
+
     def predict(self, w: NDArray, r: NDArray) -> NDArray[np.float64]:
         """Outputs (deviations, ``(n_k, n_y)``) for input deviations ``w`` ``(n_k, n_w)``
         and ``r`` ``(n_k, 4)`` at the samples (one point only).
@@ -365,6 +394,70 @@ class LoopModel:
             y[k] = C @ x + D @ v[k]
             x = A @ x + B @ v[k]
         return y
+
+
+@dataclass(frozen=True, eq=False)
+class LoopShapes(Result):
+    """Diagonal loop gains of a loop model at the servo torques (`LoopModel.loop_shapes`).
+
+    Attributes
+    ----------
+    f_hz : ndarray, shape (n_f,)
+        Frequencies [Hz].
+    gains : ndarray of complex, shape (n_points, n_f, 2)
+        ``L_ii = (K G)_ii`` [-] of the ratio loop (``T_mp``, 0) and the slip loop (``T_ms``,
+        1) at every point of the model (one point: ``n_points = 1``).
+    """
+
+    f_hz: NDArray[np.float64]
+    gains: NDArray[np.complex128]
+
+
+@dataclass(frozen=True, eq=False)
+class DiskMarginMap(Result):
+    """A loop model's multiloop disk margins over a family's grid (`disk_margin_map`).
+
+    Attributes
+    ----------
+    axes : dict str -> ndarray
+        The family's axes (SI), in order; the margins have shape ``tuple(len(v) for v in
+        axes.values())``.
+    alpha : ndarray
+        The smaller of `input` and `output` [-], 0 where the loop is unstable.
+    input, output : ndarray
+        The disk margins at the servo torques and at the errors [-].
+    """
+
+    axes: dict[str, NDArray[np.float64]]
+    alpha: NDArray[np.float64]
+    input: NDArray[np.float64]
+    output: NDArray[np.float64]
+
+
+def disk_margin_map(family: PlantFamily, loop: LoopModel) -> DiskMarginMap:
+    """The disk margins of a loop model built on a family (`family_loops`), with its axes.
+
+    Parameters
+    ----------
+    family : PlantFamily
+        The family `loop` was built on.
+    loop : LoopModel
+        Stacked over the family's grid (``loop.shape == family.shape``).
+
+    Returns
+    -------
+    DiskMarginMap
+
+    Raises
+    ------
+    ParameterError
+        When the loop model's grid is not the family's.
+    """
+    if loop.shape != family.shape:
+        raise ParameterError(f"the loop model's grid {loop.shape} is not the family's "
+                             f"{family.shape}")
+    dm = loop.disk_margins()
+    return DiskMarginMap(dict(family.axes), dm["alpha"], dm["input"], dm["output"])
 
 
 def default_omega(dt: float) -> NDArray[np.float64]:

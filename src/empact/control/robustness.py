@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._lazy import lazy_module
+from .._results import Result
 from .family import PlantFamily
 
 slycot = lazy_module("slycot")
@@ -168,7 +169,7 @@ def closed_loop_matrix(A, B, C, Ac, Bc, Cc, Dc) -> NDArray[np.float64]:
 
 
 @dataclass(frozen=True)
-class RobustnessMap:
+class RobustnessMap(Result):
     """A controller against every plant of a family.
 
     Attributes

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._results import TableResult
 from ..errors import ParameterError
 from ..hardware import ServoLimits
 from ..nonlinear.equilibrium import trim_grid
@@ -45,7 +46,7 @@ CREEP_SHARE = 0.5
 
 
 @dataclass(frozen=True, eq=False)
-class ShiftEnvelope:
+class ShiftEnvelope(TableResult):
     """The largest upshift rate at each ratio and what stops it.
 
     Attributes
@@ -71,6 +72,10 @@ class ShiftEnvelope:
     omega_p: float
     T_l: float
     tau: float
+
+    def _columns(self) -> dict[str, NDArray]:
+        return {"r_g": self.r_g, "rate": self.rate, "binding": self.binding, "F_s": self.F_s,
+                "T_mp": self.T_mp}
 
     def rate_at(self, r_g: ArrayLike) -> NDArray[np.float64]:
         """The envelope at ratio(s) `r_g` (linear in ``ln r_g``).

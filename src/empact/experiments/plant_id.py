@@ -20,6 +20,7 @@ from typing import Sequence
 
 import numpy as np
 
+from .._results import Result
 from .._validate import check_number
 from ..errors import ParameterError
 from ..identification.realization import RealizationResult, realize_steps
@@ -36,7 +37,7 @@ OUTPUTS = ("r_g", "nu", "nu_r")
 
 
 @dataclass(frozen=True, eq=False)
-class StepExperiment:
+class StepExperiment(Result):
     """Step responses of the nonlinear model around a trimmed point.
 
     Attributes
@@ -55,7 +56,7 @@ class StepExperiment:
 
 
 @dataclass(frozen=True, eq=False)
-class PlantIdentification:
+class PlantIdentification(Result):
     """Identified and exact plant at one operating point.
 
     Attributes

@@ -23,6 +23,7 @@ import numpy as np
 
 from .._deprecate import warn_renamed
 from .._lazy import lazy_module
+from .._results import TableResult
 from .._validate import check_choice, check_int, check_number
 from ..errors import ParameterError
 from ..identification.frf_estimation import FRFEstimate, estimate_frf
@@ -165,7 +166,7 @@ class RigSettings:
 
 
 @dataclass(frozen=True, eq=False)
-class RigRecord:
+class RigRecord(TableResult):
     """Records of one rig experiment.
 
     Attributes
@@ -186,6 +187,10 @@ class RigRecord:
     complete: bool
     message: str
 
+    def _columns(self) -> dict[str, np.ndarray]:
+        """``t`` [s], then the signals (`to_csv`'s columns)."""
+        return {"t": self.t, **self.signals}
+
     def to_csv(self) -> str:
         """CSV text: a ``#`` comment line (the experiment), a header of names with units in
         brackets (``theta_ms [rad]``, as `empact simulate` writes them), one row per
@@ -196,9 +201,10 @@ class RigRecord:
                   f"{s.nu:g}, F_s = {s.F_s:g} N, omega_p = {s.omega_p:g} rad/s; signals are "
                   "deviations from the operating point\n")
         w = csv.writer(buf, lineterminator="\n")
+        columns = self._columns()
         w.writerow([header_cell("time", "s")] + [header_cell(n, RECORD_UNITS[n])
-                                                  for n in self.signals])
-        data = np.column_stack([self.t, *self.signals.values()])
+                                                  for n in list(columns)[1:]])
+        data = np.column_stack(list(columns.values()))
         w.writerows([f"{v:.9g}" for v in row] for row in data)
         return buf.getvalue()
 

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._lazy import lazy_module
+from .._results import TableResult
 
 sig = lazy_module("scipy.signal")
 
@@ -30,7 +31,7 @@ UNEXCITED = 1e-10
 
 
 @dataclass(frozen=True)
-class FRFEstimate:
+class FRFEstimate(TableResult):
     """Result of `estimate_frf`.
 
     Attributes
@@ -61,6 +62,17 @@ class FRFEstimate:
     inputs: tuple[str, ...]
     outputs: tuple[str, ...]
     n_averages: int
+
+    def _columns(self) -> dict[str, np.ndarray]:
+        """``omega`` [rad/s], then ``H[output/input]`` (complex) and
+        ``coherence[output/input]`` per channel, ``multiple_coherence[output]`` per output."""
+        pairs = [(a, o, b, i) for a, o in enumerate(self.outputs)
+                 for b, i in enumerate(self.inputs)]
+        return {"omega": self.omega,
+                **{f"H[{o}/{i}]": self.H[a, b] for a, o, b, i in pairs},
+                **{f"coherence[{o}/{i}]": self.coherence[a, b] for a, o, b, i in pairs},
+                **{f"multiple_coherence[{o}]": self.multiple_coherence[a]
+                   for a, o in enumerate(self.outputs)}}
 
     @property
     def frequencies_hz(self) -> np.ndarray:

@@ -21,6 +21,7 @@ import numpy as np
 import scipy.linalg as sla
 from threadpoolctl import threadpool_limits
 
+from .._results import Result
 from ..lti import statespace
 
 __all__ = ["RealizationResult", "realize_steps"]
@@ -30,7 +31,7 @@ MAX_FIT_ORDER = 40
 
 
 @dataclass(frozen=True)
-class RealizationResult:
+class RealizationResult(Result):
     """Result of `realize_steps`.
 
     Attributes

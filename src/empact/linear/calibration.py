@@ -40,6 +40,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from .._lazy import lazy_module
+from .._results import Result
 from ..errors import ParameterError
 from ..params import _SECTIONS, DampingLevel, Params, read_toml
 from .actuation import KINEMATICS, actuation_model
@@ -90,7 +91,7 @@ class Target:
 
 
 @dataclass(frozen=True)
-class CalibrationResult:
+class CalibrationResult(Result):
     """Result of `calibrate`.
 
     Attributes

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigh
 
+from .._results import Result
 from ..lti import FrequencyResponse, index, statespace
 
 __all__ = ["LumpedModel", "Modes", "element_matrix"]
@@ -48,7 +49,7 @@ def element_matrix(rows: ArrayLike, values: ArrayLike) -> NDArray[np.float64]:
 
 
 @dataclass(frozen=True)
-class Modes:
+class Modes(Result):
     """Undamped modes of a `LumpedModel` (mode index last in the shape arrays).
 
     Attributes

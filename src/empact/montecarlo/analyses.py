@@ -147,9 +147,7 @@ def _closed_loop(params: Params, context: AnalysisContext) -> dict[str, float]:
                           nominal=context.nominal)
     if not run.metrics["complete"]:
         raise RunFailed(run.metrics["message"])
-    m = run.metrics  # slips as fractions (the metrics give them in % and percentage points)
-    return {k: float(m[k + "_pp"]) / 100 if k + "_pp" in m else float(m[k])
-            for k in OUTPUTS["closed-loop"]}
+    return {k: float(run.metrics[k]) for k in OUTPUTS["closed-loop"]}
 
 
 _EVALUATE = {"plant": _plant, "slip": _slip, "closed-loop": _closed_loop}

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._io import atomic_folder
+from .._results import TableResult
 from .._validate import check_int
 from ..control.closed_loop import resolve_controller
 from ..errors import ParameterError, TrimError
@@ -49,7 +50,7 @@ FILES = ("runs.csv", "runs.json", "summary.json")
 
 
 @dataclass(frozen=True, eq=False)
-class MonteCarloResult:
+class MonteCarloResult(TableResult):
     """The runs of a study.
 
     Attributes
@@ -119,6 +120,12 @@ class MonteCarloResult:
                 "failure_reasons": reasons,
                 "spread": {d.name: d.describe() for d in self.spread.distributions},
                 "outputs": stats}
+
+    def _columns(self) -> dict[str, NDArray]:
+        """`table` by column: ``run``, ``status``, the parameters, the outputs, ``reason``."""
+        rows = self.table()
+        names = ["run", "status", *self.spread.names, *self.outputs, "reason"]
+        return {n: np.array([r[n] for r in rows]) for n in names}
 
     def table(self) -> list[dict[str, Any]]:
         """One dict per run: ``run``, ``status``, the parameters, the outputs, ``reason``."""

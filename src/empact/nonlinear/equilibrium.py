@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._deprecate import warn_renamed
+from .._results import Result
 from ..errors import ParameterError, TrimError
 from ..params import OperatingPoint
 from ..variator.geometry import check_ratio, radii, ratio_range, stretched_radii
@@ -101,7 +102,7 @@ class TrimResult:
 
 
 @dataclass(frozen=True, eq=False)
-class TrimGrid:
+class TrimGrid(Result):
     """Trimmed operating points of one model, many at once (`trim_grid`).
 
     Attributes
@@ -122,6 +123,8 @@ class TrimGrid:
     y : array, shape (N, n_y)
         Outputs at the trimmed points.
     """
+
+    _not_data = ("model",)  # to_dict: the arrays (the model is not data)
 
     model: EmpactModel
     x: NDArray[np.float64]

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._deprecate import warn_renamed
+from .._results import Result
 from ..lti import index, statespace
 from ..params import OperatingPoint, Params
 from .equilibrium import TrimResult, trim
@@ -168,7 +169,7 @@ def linearize_many(model: EmpactModel, X: NDArray, U: NDArray, r_g0: NDArray,
 
 
 @dataclass(frozen=True, eq=False)
-class Plant:
+class Plant(Result):
     """An exact linear plant at one operating point: what `plant` and
     `empact.control.family.PlantFamily.plant` return.
 

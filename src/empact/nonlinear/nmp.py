@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._deprecate import warn_renamed
+from .._results import Result
 from .._validate import check_choice, check_number
 from ..lti import channel_zeros
 from ..params import OperatingPoint, Params
@@ -40,7 +41,7 @@ SLIPS = ("nu", "nu_r")
 
 
 @dataclass(frozen=True)
-class BeltLengthChange:
+class BeltLengthChange(Result):
     """Sec. 2.3 geometry over ratios (arrays of shape (n_r,)).
 
     Attributes
@@ -91,7 +92,7 @@ def belt_length_change(params: Params, r_g: ArrayLike, delta: float = 1e-5) -> B
 
 
 @dataclass(frozen=True)
-class NmpResult:
+class NmpResult(Result):
     """Zeros of T_mp -> nu over the ratio, and the Sec. 2.3 geometry.
 
     Attributes

@@ -60,9 +60,9 @@ and, optionally, a controller and its references::
     tau = [[0.0, 0.9]]        # or nu / nu_r: tau is the slip where mu = tau mu_max
 
     [targets]                 # optional: what a closed-loop run must meet (metric names of
-    peak_slip_error_pp = 0.6  # empact.control.closed_loop.metrics): a number is an upper
-    ratio_rate = [1.0, inf]   # bound, [lo, hi] a band, a boolean the value
-    macro_slip = false
+    peak_slip_error = 0.006   # empact.control.closed_loop.metrics, in their units: slips
+    ratio_rate = [1.0, inf]   # as fractions): a number is an upper bound, [lo, hi] a band,
+    macro_slip = false        # a boolean the value
 
     [solver]                  # optional
     rtol = 1e-4
@@ -91,6 +91,7 @@ from __future__ import annotations
 
 import os
 import tomllib
+import warnings
 from dataclasses import dataclass, field, fields, replace
 from importlib import resources
 from pathlib import Path
@@ -462,11 +463,33 @@ def _controller(table: Mapping[str, Any], src: str) -> ControllerSpec:
         raise ParameterError(f"{src}: {exc}") from None
 
 
+#: The release that stops reading a ``[targets]`` key in percentage points or % (``_pp``).
+PP_TARGETS_REMOVAL = "0.3.0"
+
+
 def _targets(table: Mapping[str, Any], src: str) -> dict[str, Any]:
     """A scenario's ``[targets]``: name -> upper bound (number), band ``[lo, hi]`` or a
-    boolean; the names are checked against the metrics when the run is judged."""
+    boolean; the names are checked against the metrics when the run is judged.  A key in
+    percentage points or % (``peak_slip_error_pp = 0.6``, before 0.2.0) is read as the
+    fraction under the key without ``_pp`` (``peak_slip_error = 0.006``), with a
+    DeprecationWarning, until `PP_TARGETS_REMOVAL`."""
     out: dict[str, Any] = {}
-    for name, value in table.items():
+    for key, given in table.items():
+        name, value = key, given
+        if key.endswith("_pp") and not isinstance(given, bool):
+            name = key[:-3]
+            warnings.warn(f"{src}: targets.{key} (percentage points) is deprecated and will "
+                          f"be refused from {PP_TARGETS_REMOVAL}: give targets.{name} as a "
+                          f"fraction [-] ({name} = {given!r} / 100)", DeprecationWarning,
+                          stacklevel=4)
+            if isinstance(given, (int, float)):
+                value = given / 100
+            elif isinstance(given, list):
+                value = [v / 100 if isinstance(v, (int, float)) and not isinstance(v, bool)
+                         else v for v in given]
+            if name in table:
+                raise ParameterError(f"{src}: targets.{key} and targets.{name}: give one "
+                                     f"({name}, a fraction [-])")
         where = f"{src}: targets.{name}"
         if isinstance(value, bool):
             out[name] = value

@@ -18,15 +18,16 @@ import csv
 import io
 import os
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
-from typing import Mapping, Protocol, runtime_checkable
+from typing import Any, Mapping, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._io import atomic_write_text
 from .._progress import progress as progress_bar
+from .._results import frame, plain
 from .._validate import check_choice, check_number
 from ..errors import ParameterError
 from ..params import Params
@@ -76,6 +77,36 @@ class SimulationResult:
     message: str
     scenario: str = ""
     stats: Mapping[str, float] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The run as plain JSON types (SI; the result contract of `empact._results`):
+        ``t``, ``x``, ``y``, ``u`` as nested lists (shapes as the fields), the names,
+        ``complete``, ``message``, ``scenario`` and ``stats``; NaN as None.
+
+        Returns
+        -------
+        dict
+            Field name -> value, ready for ``json.dumps(..., allow_nan=False)``.
+        """
+        return plain({f.name: getattr(self, f.name) for f in fields(self)})
+
+    def to_pandas(self) -> Any:
+        """The run as a table: a pandas.DataFrame with ``t`` [s], then every output and
+        every input (SI, the model's names; pandas is optional).
+
+        Returns
+        -------
+        pandas.DataFrame
+
+        Raises
+        ------
+        ImportError
+            Without pandas.
+        """
+        columns = {"t": self.t, **{n: self.y[:, k] for k, n in enumerate(self.outputs)},
+                   **{n: self.u[:, k] for k, n in enumerate(self.inputs)
+                      if n not in self.outputs}}
+        return frame(columns, "SimulationResult")
 
     def output(self, name: str) -> NDArray[np.float64]:
         """One output (or state, or input) over time, shape (n_t,).

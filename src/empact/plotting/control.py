@@ -1,5 +1,6 @@
 """Figures of the control results: the family's poles and zeros, loop shapes, robustness
-maps and closed-loop runs (drawn from `empact.control` result objects)."""
+maps and closed-loop runs, drawn from `empact.control` result objects only (they compute:
+`PlantFamily.roots`, `LoopModel.loop_shapes`, `disk_margin_map`)."""
 from __future__ import annotations
 
 from typing import Any, Mapping, Sequence
@@ -8,10 +9,9 @@ import matplotlib
 import numpy as np
 
 from ..control.closed_loop import ClosedLoopResult
-from ..control.family import PlantFamily
-from ..control.loop import LoopModel, LoopPrediction
+from ..control.family import FamilyRoots
+from ..control.loop import DiskMarginMap, LoopPrediction, LoopShapes
 from ..control.shifting import ShiftEnvelope
-from ..lti import channel_zeros
 from ._common import STYLES, Plot, new_axes, styled, symbol
 
 __all__ = ["plot_family_poles", "plot_loop_shapes", "plot_robustness_maps",
@@ -19,18 +19,15 @@ __all__ = ["plot_family_poles", "plot_loop_shapes", "plot_robustness_maps",
 
 
 @styled
-def plot_family_poles(family: PlantFamily, f_max_hz: float = 60.0, title: str = "",
-                      ax: Any = None) -> Plot:
+def plot_family_poles(roots: FamilyRoots, title: str = "", ax: Any = None) -> Plot:
     """Poles (left) and the zeros of T_mp -> r_g and T_ms -> nu (right) of every plant of a
-    family below `f_max_hz` [Hz], coloured by ratio (complex plane in Hz).
+    family, coloured by ratio (complex plane in Hz).
 
     Parameters
     ----------
-    family : PlantFamily
-        The family (`empact.plant_family`, `empact.control.family.design_family`); points
-        that did not trim are skipped.
-    f_max_hz : float
-        Poles and zeros of magnitude above this [Hz] are left out.
+    roots : FamilyRoots
+        The family's poles and zeros below a bound (`empact.control.family.PlantFamily.roots`
+        of `empact.plant_family` or `empact.control.family.design_family`).
     title : str
         Figure title.
     ax : array of Axes, shape (1, 2), optional
@@ -42,22 +39,16 @@ def plot_family_poles(family: PlantFamily, f_max_hz: float = 60.0, title: str = 
         The figure, the axes (shape (1, 2)) and the markers drawn.
     """
     fig, axs = new_axes(ax, 1, 2, size=(11, 4.2))
-    r = family.operating["r_g"].ravel()
+    r = roots.r_g
     norm = (np.log(r) - np.log(r).min()) / max(np.ptp(np.log(r)), 1e-12)
     cmap = matplotlib.colormaps["viridis"]
     artists = []
-    for k in range(family.size):
-        idx = np.unravel_index(k, family.shape)
-        if not family.ok[idx]:
-            continue
+    for k in range(r.size):
         c = cmap(norm[k])
-        p = np.linalg.eigvals(family.A[idx])
-        p = p[np.abs(p) < 2 * np.pi * f_max_hz] / (2 * np.pi)
+        p = roots.poles[k] / (2 * np.pi)
         artists += axs[0, 0].plot(p.real, p.imag, "x", color=c, ms=4)
-        sys = family.plant(idx).system
-        for inp, out, mk in (("T_mp", "r_g", "o"), ("T_ms", "nu", "s")):
-            z = channel_zeros(sys, inp, out, max_abs=2 * np.pi * f_max_hz)
-            z = z / (2 * np.pi)
+        for channel, mk in zip(FamilyRoots.CHANNELS, ("o", "s")):
+            z = roots.zeros[channel][k] / (2 * np.pi)
             artists += axs[0, 1].plot(z.real, z.imag, mk, mfc="none", color=c, ms=4)
     for ax, what in zip(axs[0], ("poles", "zeros (o: T_mp -> r_g, s: T_ms -> nu)")):
         ax.axvline(0, color="k", lw=0.6)
@@ -72,20 +63,17 @@ def plot_family_poles(family: PlantFamily, f_max_hz: float = 60.0, title: str = 
 
 
 @styled
-def plot_loop_shapes(loops: Mapping[str, LoopModel], f_hz: np.ndarray | None = None,
-                     title: str = "", ax: Any = None) -> Plot:
-    """Diagonal loop gains ``|L_ii| = |(K G)_ii|`` of the sampled loops at the servo torques
-    (`empact.control.loop.LoopModel`, one thin line per plant of the family) for each
-    controller (one column per loop, one colour per controller).
+def plot_loop_shapes(shapes: Mapping[str, LoopShapes], title: str = "",
+                     ax: Any = None) -> Plot:
+    """Diagonal loop gains ``|L_ii| = |(K G)_ii|`` of sampled loops at the servo torques
+    (one thin line per plant of the family) for each controller (one column per loop, one
+    colour per controller).
 
     Parameters
     ----------
-    loops : dict of str to LoopModel
-        The loop models by controller name (`empact.control.loop.family_loops`), all
-        sampled at the first one's rate.
-    f_hz : array, shape (n_f,), optional
-        Frequencies [Hz] (default: 150 from 0.01 Hz to 100 Hz or just below the Nyquist
-        frequency, whichever is lower).
+    shapes : dict of str to LoopShapes
+        The loop gains by controller name (`empact.control.loop.LoopModel.loop_shapes` of
+        `empact.control.loop.family_loops`).
     title : str
         Figure title.
     ax : array of Axes, shape (1, 2), optional
@@ -96,20 +84,13 @@ def plot_loop_shapes(loops: Mapping[str, LoopModel], f_hz: np.ndarray | None = N
     Plot
         The figure, the axes (shape (1, 2)) and the lines drawn.
     """
-    first = next(iter(loops.values()))
-    nyq = 0.49 / first.dt
-    f = np.logspace(-2, np.log10(min(100.0, nyq)), 150) if f_hz is None else np.asarray(f_hz)
-    w = 2 * np.pi * f
     fig, axs = new_axes(ax, 1, 2, size=(11, 4.0), sharex=True)
     artists = []
-    for c, (name, lm) in enumerate(loops.items()):
-        G = lm.plant_response(w).reshape((-1, len(w), 2, 2))
-        K = lm.controller_response(w) * lm.mask[None, :, None]
-        L = K @ G
+    for c, (name, ls) in enumerate(shapes.items()):
         for j in range(2):
-            for k in range(L.shape[0]):
-                artists += axs[0, j].loglog(f, np.abs(L[k, :, j, j]), color=f"C{c}", lw=0.6,
-                                            alpha=0.5, label=name if k == 0 else None)
+            for k in range(ls.gains.shape[0]):
+                artists += axs[0, j].loglog(ls.f_hz, np.abs(ls.gains[k, :, j]), color=f"C{c}",
+                                            lw=0.6, alpha=0.5, label=name if k == 0 else None)
     for j, loop in enumerate(("ratio loop (T_mp)", "slip loop (T_ms)")):
         ax = axs[0, j]
         ax.axhline(1, color="k", lw=0.6)
@@ -124,44 +105,44 @@ def plot_loop_shapes(loops: Mapping[str, LoopModel], f_hz: np.ndarray | None = N
 
 
 @styled
-def plot_robustness_maps(family: PlantFamily, loops: Mapping[str, LoopModel],
-                         title: str = "", ax: Any = None) -> Plot:
-    """Multiloop disk margin of each loop model over the family: one row per controller,
+def plot_robustness_maps(maps: Mapping[str, DiskMarginMap], title: str = "",
+                         ax: Any = None) -> Plot:
+    """Multiloop disk margin of each loop model over its family: one row per controller,
     one panel per value of a third axis (the clamping force), ratio x torque ratio in each
     (0: unstable).
 
     Parameters
     ----------
-    family : PlantFamily
-        The family the loops were built on, with two or three axes (the first two the
-        rows and columns of each panel, the third one panel per value).
-    loops : dict of str to LoopModel
-        The loop models by controller name (`empact.control.loop.family_loops`).
+    maps : dict of str to DiskMarginMap
+        The disk margins by controller name (`empact.control.loop.disk_margin_map`), on a
+        family of two or three axes (the first two the rows and columns of each panel, the
+        third one panel per value).
     title : str
         Figure title.
-    ax : array of Axes, shape (len(loops), n3), optional
+    ax : array of Axes, shape (len(maps), n3), optional
         ``n3`` the number of values of the third axis (1 with two axes); default a new
         figure.
 
     Returns
     -------
     Plot
-        The figure, the axes (shape (len(loops), n3)) and the meshes drawn.
+        The figure, the axes (shape (len(maps), n3)) and the meshes drawn.
 
     Raises
     ------
     ValueError
         When the family has neither two nor three axes.
     """
-    names = list(family.axes)
+    axes = next(iter(maps.values())).axes
+    names = list(axes)
     if len(names) not in (2, 3):
         raise ValueError("robustness maps need a family with two or three axes")
-    n3 = len(family.axes[names[2]]) if len(names) == 3 else 1
-    fig, axs = new_axes(ax, len(loops), n3, size=(4.2 * n3, 3.6 * len(loops)))
+    n3 = len(axes[names[2]]) if len(names) == 3 else 1
+    fig, axs = new_axes(ax, len(maps), n3, size=(4.2 * n3, 3.6 * len(maps)))
     artists = []
-    x, y = family.axes[names[0]], family.axes[names[1]]
-    for row, (name, lm) in enumerate(loops.items()):
-        dm = lm.disk_margins()["alpha"]
+    x, y = axes[names[0]], axes[names[1]]
+    for row, (name, dmap) in enumerate(maps.items()):
+        dm = dmap.alpha
         dm = dm[..., None] if dm.ndim == 2 else dm
         for k in range(n3):
             ax = axs[row, k]
@@ -179,7 +160,7 @@ def plot_robustness_maps(family: PlantFamily, loops: Mapping[str, LoopModel],
             ax.set_ylabel(symbol(names[0]))
             third = ""
             if len(names) == 3:
-                v3 = family.axes[names[2]][k]
+                v3 = axes[names[2]][k]
                 shown = f"{v3 / 1e3:.3g} kN" if names[2] == "F_s" else f"{v3:.3g}"
                 third = f", {symbol(names[2])} = {shown}"
             ax.set_title(f"{name}: disk margin{third}", fontsize=8)

@@ -52,16 +52,18 @@ class Section:
     cost: float = 1.0
 
 
-#: a slip column given in percent or percentage points: "nu [%]", "peak slip [%]",
-#: "max |nu - nu*| [pp]"
-_SLIP_PERCENT = re.compile(r"^(.*\bslip\b.*|\|?nu\b.*|max \|nu.*) \[(%|pp)\]$")
+#: a slip column given in percent or percentage points: "nu [%]", "peak slip [%]", and every
+#: column in percentage points (a difference of slips: "max |nu - nu*| [pp]", "reserve to the
+#: peak [pp]")
+_SLIP_PERCENT = re.compile(r"^(.*\bslip\b.*|\|?nu\b.*) \[%\]$|^.* \[pp\]$")
 
 
 def csv_slip_columns(header: Sequence[str], rows: Sequence[Sequence[object]]
                      ) -> list[list[object]]:
     """Header and rows for a CSV file, a slip column in % or percentage points as a fraction.
 
-    A slip column has a header ``... slip ... [%]``, ``nu [%]`` or ``max |nu - nu*| [pp]``; it
+    A slip column has a header ``... slip ... [%]``, ``nu [%]`` or ``... [pp]`` (percentage
+    points: ``max |nu - nu*| [pp]``, ``reserve to the peak [pp]``); it
     becomes a fraction ``[-]`` (one unit per quantity in machine-readable output; % is for the
     page).
 

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..control.closed_loop import shown_metric
+from ..control.loop import disk_margin_map
 from ..plotting import (
     plot_closed_loop,
     plot_family_poles,
@@ -60,10 +62,12 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
         pred = res.predictions.get(n)
         for c in checks:
             lin = ""
-            if pred is not None and c.name == "peak_slip_error_pp":
-                lin = f"{pred.peak_slip_error_pp:.3g}"
+            if pred is not None and c.name == "peak_slip_error":
+                lin = f"{100 * pred.peak_slip_error:.3g} pp"
+            value, unit = shown_metric(c.name, c.value)
             target_rows.append([n, c.name, c.describe().split("(")[1].split(")")[0],
-                                lin, _fmt(c.value), "met" if c.met else "MISSED",
+                                lin, _fmt(value) + (f" {unit}" if unit else ""),
+                                "met" if c.met else "MISSED",
                                 f"{m['peak_T_mp']:.2f} / {m['T_mp_max']:g}",
                                 f"{m['peak_T_ms']:.2f} / {m['T_ms_max']:g}"])
     env = res.envelope
@@ -86,13 +90,17 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
         "held and sampled) gives every margin and pole below. Set-points are torque ratios "
         "on the traction curve (tau = 0.9: an 11 % torque reserve). Targets are issue 21's; "
         "verdicts below.</p>"
-        + ctx.figure(plot_family_poles(fam, title="Plant family: poles and zeros below 60 Hz"),
+        + ctx.figure(plot_family_poles(fam.roots(60.0),
+                                       title="Plant family: poles and zeros below 60 Hz"),
                      "control_family", "Poles and zeros of every plant of the design family")
-        + ctx.figure(plot_loop_shapes(res.loops, title="Loop shapes over the family"),
+        + ctx.figure(plot_loop_shapes({n: lm.loop_shapes() for n, lm in res.loops.items()},
+                                      title="Loop shapes over the family"),
                      "control_loops", "Diagonal loop gains of the shipped controllers on "
                      "the sampled loop (sensors, feedforwards) against every plant")
-        + ctx.figure(plot_robustness_maps(fam, res.loops, title="Multiloop disk margin "
-                                          "over the family"), "control_robustness",
+        + ctx.figure(plot_robustness_maps({n: disk_margin_map(fam, lm)
+                                           for n, lm in res.loops.items()},
+                                          title="Multiloop disk margin over the family"),
+                     "control_robustness",
                      "The multiloop disk margin (the smaller of servo torques and errors) "
                      "at every plant of the family; 0 where unstable")
         + ctx.table("control_designs", ["controller", "states", "scheduled", "stable",
@@ -142,8 +150,8 @@ def studies(ctx: Context, res: rep.StudiesSection) -> str:
         HTML: a note, the tables of the traction-estimate runs, the Monte Carlo quantiles and the
         clamping saving, and the claims.
     """
-    te_rows = [[n, f"{f:.3g}", m["peak_slip_pp"], m["peak_slip_error_pp"],
-                m.get("slip_reserve_pp", float("nan")), _fmt(m.get("macro_slip"))]
+    te_rows = [[n, f"{f:.3g}", 100 * m["peak_slip"], 100 * m["peak_slip_error"],
+                100 * m.get("slip_reserve", float("nan")), _fmt(m.get("macro_slip"))]
                for (n, f), m in res.traction_error.items()]
     mc = res.montecarlo
     mc_rows = []

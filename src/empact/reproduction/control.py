@@ -63,10 +63,23 @@ SRC = "issue 21 (beyond the paper)"
 @dataclass(frozen=True, eq=False)
 class Prediction:
     """A scenario's linear prediction against its nonlinear run: the peak excursions of the
-    slip (from its value at the start) and the largest relative difference."""
+    slip (from its value at the start) and the largest relative difference.
+
+    Attributes
+    ----------
+    prediction : LoopPrediction
+        The linear prediction.
+    peak_slip_error : float
+        Its largest ``|nu - nu*|`` from the load step (or the shift's start) [-].
+    peak_F_s_change : float
+        Its largest clamping-force excursion from the start [N].
+    relative_difference : float
+        The largest difference of the slip's and the clamping force's excursions, linear
+        against nonlinear, as a share of the nonlinear excursion [-].
+    """
 
     prediction: LoopPrediction
-    peak_slip_error_pp: float
+    peak_slip_error: float
     peak_F_s_change: float
     relative_difference: float
 
@@ -164,7 +177,7 @@ def _prediction(scenario: Scenario, params: Params, run: ClosedLoopResult) -> Pr
     start = scenario.load_step_time or (scenario.shift_window or (0.0,))[0]
     after = pred.t >= start
     err = np.abs(pred.output(run.law.slip_signal) - ref)[after]
-    return Prediction(pred, float(100 * err.max()), peaks["F_s"], max(diffs))
+    return Prediction(pred, float(err.max()), peaks["F_s"], max(diffs))
 
 
 def control(params: Params) -> ControlSection:
@@ -290,7 +303,7 @@ def _claims(family, loops, runs, targets, predictions, envelope) -> list[Claim]:
         peak = f"peak servo torques {m['peak_T_mp']:.2f} / {m['peak_T_ms']:.2f} N m " \
                f"(limits {m['T_mp_max']:g} / {m['T_ms_max']:g})"
         pred = predictions.get(n)
-        lin = (f"; linear prediction: peak |nu - nu*| {pred.peak_slip_error_pp:.3g} pp"
+        lin = (f"; linear prediction: peak |nu - nu*| {100 * pred.peak_slip_error:.3g} pp"
                if pred else "")
         why = WHY_SHIFT if n == "shift-low-od" else (
             "A target is missed: see the values.")
@@ -339,11 +352,11 @@ def _study_claims(traction_error, mc, saving) -> list[Claim]:
         key="control.traction_error", source=SRC,
         claim="the 50 % load steps stay out of macro slip with the feedforward's traction "
               "estimate 5 % high and 5 % low",
-        computed="; ".join(f"{n} x{f:.3g}: peak slip {m['peak_slip_pp']:.2f} %, reserve to "
-                           f"the peak {m.get('slip_reserve_pp', float('nan')):.2f} pp"
+        computed="; ".join(f"{n} x{f:.3g}: peak slip {100 * m['peak_slip']:.2f} %, reserve "
+                           f"to the peak {100 * m.get('slip_reserve', float('nan')):.2f} pp"
                            for (n, f), m in te),
         shown=not bad, explanation=f"Macro slip in {', '.join(bad)}.",
-        values={f"{n}@{f:.4g}": m.get("slip_reserve_pp") for (n, f), m in te}))
+        values={f"{n}@{f:.4g}": m.get("slip_reserve") for (n, f), m in te}))
     i = list(mc.outputs).index("macro_slip")
     macro = np.where(mc.ok, mc.values[:, i], 1.0)
     share = float(np.mean(macro < 0.5))

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._deprecate import warn_renamed
+from .._results import Result
 from .._validate import check_values
 from ..params import OPERATING_VARIABLES, OperatingPoint, Params
 from ..variator.geometry import variator_state
@@ -169,7 +170,7 @@ def belt_torque(params: Params, nu: ArrayLike, r_g: ArrayLike, F_s: ArrayLike,
 # --------------------------------------------------------------------------------------------
 # Linearisation (eq. 3) and the state-space model
 @dataclass(frozen=True)
-class BeltLinearisation:
+class BeltLinearisation(Result):
     """The belt torque linearised at an operating point (eq. 3).
 
     Attributes

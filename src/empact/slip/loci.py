@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import eigvals as generalized_eigvals
 from scipy.linalg import null_space
 
+from .._results import Result
 from .._validate import check_choice, check_number
 from ..errors import ParameterError
 from ..lti import (
@@ -78,7 +79,7 @@ def coupled_limit(params: Params, r_g: float, nu0: float = 0.0) -> NDArray[np.co
 
 
 @dataclass(frozen=True)
-class BeltRootLocus:
+class BeltRootLocus(Result):
     """Root locus of the slip model over the paper's ``c_b`` from 0 to infinity (Fig. 9).
 
     Attributes
@@ -183,7 +184,7 @@ def grid_values(name: str, values: ArrayLike) -> NDArray[np.float64]:
 
 
 @dataclass(frozen=True)
-class PoleSweep:
+class PoleSweep(Result):
     """Non-structural poles of the slip model along one operating-point variable (Fig. 11).
 
     Attributes
@@ -323,7 +324,7 @@ def slip_frequency_responses(params: Params, ops: Sequence[OperatingPoint],
 # Fig. 13: zeros of F_s -> nu over the ratio
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class ZeroLocus:
+class ZeroLocus(Result):
     """Zeros of ``F_s -> nu`` away from the origin, over the ratio (Fig. 13).
 
     Attributes

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._progress import progress as progress_bar
+from .._results import Result
 from .._validate import check_choice, check_int
 from ..errors import ParameterError
 from ..lti import damping_ratio
@@ -74,7 +75,7 @@ def _measures(p: NDArray[np.complex128]) -> tuple[NDArray[np.float64], NDArray[n
 
 
 @dataclass(frozen=True)
-class StabilityMap:
+class StabilityMap(Result):
     """Largest pole real part and smallest damping ratio over a grid of two variables.
 
     Attributes

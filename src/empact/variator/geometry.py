@@ -27,6 +27,7 @@ from typing import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._results import Result
 from .._section import Section, param
 from .._validate import check_values
 from ..errors import ParameterError
@@ -364,7 +365,7 @@ def primary_radius_per_ratio(r_g: ArrayLike, variator: VariatorParams) -> NDArra
 
 
 @dataclass(frozen=True)
-class VariatorState:
+class VariatorState(Result):
     """Geometry of the variator at one or more ratios (arrays broadcast like `r_g`).
 
     Attributes

@@ -37,6 +37,7 @@ from typing import Callable, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._results import Result
 from .._section import Section, param
 from ..errors import ParameterError
 from ._tables import check_curve, encode_curves, interpolate_curves, read_curves
@@ -348,7 +349,7 @@ def ratio_stability(kmap: AnalyticThrustRatio | TabulatedThrustRatio, variator: 
 
 
 @dataclass(frozen=True)
-class RatioStabilityMap:
+class RatioStabilityMap(Result):
     """`ratio_stability` over a grid of torque ratios and ratios.
 
     Attributes
