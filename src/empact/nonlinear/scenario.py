@@ -91,7 +91,6 @@ from __future__ import annotations
 
 import os
 import tomllib
-import warnings
 from dataclasses import dataclass, field, fields, replace
 from importlib import resources
 from pathlib import Path
@@ -100,6 +99,7 @@ from typing import Any, Mapping
 import numpy as np
 from numpy.typing import NDArray
 
+from .._deprecate import REMOVAL, warn_renamed
 from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
 from ..hardware import SensorParams, ServoLimits
@@ -464,7 +464,7 @@ def _controller(table: Mapping[str, Any], src: str) -> ControllerSpec:
 
 
 #: The release that stops reading a ``[targets]`` key in percentage points or % (``_pp``).
-PP_TARGETS_REMOVAL = "0.3.0"
+PP_TARGETS_REMOVAL = REMOVAL
 
 
 def _targets(table: Mapping[str, Any], src: str) -> dict[str, Any]:
@@ -472,16 +472,15 @@ def _targets(table: Mapping[str, Any], src: str) -> dict[str, Any]:
     boolean; the names are checked against the metrics when the run is judged.  A key in
     percentage points or % (``peak_slip_error_pp = 0.6``, before 0.2.0) is read as the
     fraction under the key without ``_pp`` (``peak_slip_error = 0.006``), with a
-    DeprecationWarning, until `PP_TARGETS_REMOVAL`."""
+    deprecation warning (`warn_renamed`), until `PP_TARGETS_REMOVAL`."""
     out: dict[str, Any] = {}
     for key, given in table.items():
         name, value = key, given
         if key.endswith("_pp") and not isinstance(given, bool):
             name = key[:-3]
-            warnings.warn(f"{src}: targets.{key} (percentage points) is deprecated and will "
-                          f"be refused from {PP_TARGETS_REMOVAL}: give targets.{name} as a "
-                          f"fraction [-] ({name} = {given!r} / 100)", DeprecationWarning,
-                          stacklevel=4)
+            warn_renamed(f"{src}: targets.{key} (percentage points)",
+                         f"targets.{name} as a fraction [-] ({name} = {given!r} / 100)",
+                         removal=PP_TARGETS_REMOVAL, stacklevel=4)
             if isinstance(given, (int, float)):
                 value = given / 100
             elif isinstance(given, list):
