@@ -235,8 +235,8 @@ def test_targets_in_percentage_points_are_read_as_fractions_with_a_warning():
     with pytest.warns(DeprecationWarning) as caught:
         sc = scenario_from_dict(data, "s.toml")
     assert [str(w.message) for w in caught] == [
-        f"s.toml: targets.{k}_pp (percentage points) is deprecated and will be refused from "
-        f"0.3.0: give targets.{k} as a fraction [-] ({k} = {v!r} / 100)"
+        f"s.toml: targets.{k}_pp (percentage points) is deprecated and will be removed in "
+        f"empact 0.3.0; use targets.{k} as a fraction [-] ({k} = {v!r} / 100)"
         for k, v in (("peak_slip_error", 0.6), ("slip_error", [0.0, 0.2]))]
     assert sc.targets == {"peak_slip_error": (-np.inf, 0.6 / 100),
                           "slip_error": (0.0, 0.2 / 100), "macro_slip": False}
