@@ -26,6 +26,7 @@ from ._common import (
     quiet_option,
     sweep_from_options,
     sweep_options,
+    traction_option,
 )
 from .slip import parse_values
 
@@ -63,7 +64,7 @@ def grid_options(fn):
     fn = click.option("--load", "load_mode", type=LoadMode(), default="torque",
                       show_default=True, help="Load motor torque- or speed-controlled (the "
                       "load torque is --load-torque).")(fn)
-    return fn
+    return traction_option(fn)
 
 
 class LoadMode(click.Choice):
@@ -83,9 +84,10 @@ class LoadMode(click.Choice):
 
 def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_law: str,
                         drive: str = "speed", load: str = "torque", sweep=None,
-                        loop_outputs: bool = True):
+                        loop_outputs: bool = True, traction_table=None):
     """Parse the grid options (each checked under its name) and build the family (with the
-    outputs the loop model needs, `empact.control.family.LOOP_FAMILY_OUTPUTS`)."""
+    outputs the loop model needs, `empact.control.family.LOOP_FAMILY_OUTPUTS`) on the
+    analytic traction curve or the measured one (`traction_table`, ``--traction``)."""
     from ..control.family import LOOP_FAMILY_OUTPUTS, plant_family
     from ..variator.geometry import check_ratio
 
@@ -100,7 +102,8 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
             check_number(f"--{opt}", x, lo, hi, lo_open=var in ("r_g", "F_s", "omega_p"),
                          unit=unit)
         if var == "nu":
-            operating_values(params, "slip", v)  # within the traction curve's valid range
+            # within the traction curve's valid range
+            operating_values(params, "slip", v, traction=traction_table)
         if var == "r_g":
             check_ratio(v, params.variator, "--ratio")
         values[var] = v if v.size > 1 else float(v[0])
@@ -112,9 +115,11 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
     if sum(k in values for k in ("nu", "tau", "F_s", "T_l")) > 2:
         raise InputError("give at most two of --slip (or --tau), --clamp, --load-torque (the "
                          "trim solves the third)")
+    tables = {} if traction_table is None else {"traction": traction_table}
     return plant_family(params, damping=damping, kinematics=kinematics, shift_law=shift_law,
                         drive=drive, load=load, sweep=sweep,
-                        outputs=LOOP_FAMILY_OUTPUTS if loop_outputs else None, **values)
+                        outputs=LOOP_FAMILY_OUTPUTS if loop_outputs else None, **tables,
+                        **values)
 
 
 def _summary(fam) -> dict:
@@ -135,8 +140,8 @@ def _summary(fam) -> dict:
 @force_option
 @quiet_option
 def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics, shift_law,
-               drive, load_mode, out, scheduler, workers, scheduler_timeout, params_file,
-               as_json, json_out, force, quiet) -> None:
+               drive, load_mode, traction_table, out, scheduler, workers, scheduler_timeout,
+               params_file, as_json, json_out, force, quiet) -> None:
     """Trim and exactly linearise the machine over a grid of operating points (a plant
     family: T_mp, T_ms and the load -> r_g, nu, nu_r), for control design and LPV models."""
     from ..control.family import save_family
@@ -147,7 +152,8 @@ def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics,
     fam = family_from_options(params, {"ratio": ratio, "slip": slip, "tau": tau,
                                        "clamp": clamp, "speed": speed,
                                        "load-torque": load_torque}, damping, kinematics,
-                              shift_law, drive, load_mode, sweep)
+                              shift_law, drive, load_mode, sweep,
+                              traction_table=traction_table)
     wall = time.perf_counter() - t0
     if out:
         save_family(fam, out)
@@ -217,7 +223,8 @@ loop_option = click.option(
 @quiet_option
 def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loop_scenario,
                ratio, slip, tau, clamp, speed, load_torque, damping, kinematics, shift_law,
-               drive, load_mode, out, params_file, as_json, json_out, force, quiet) -> None:
+               drive, load_mode, traction_table, out, params_file, as_json, json_out, force,
+               quiet) -> None:
     """Design a controller (T_mp, T_ms) from the errors of (r_g, slip) on a plant family
     (default: empact.control.family.DESIGN_GRID: r_g 0.5..2 (7, geometric) x torque ratio
     tau 0.8, 0.9, 0.95 x clamping force 8, 16, 32 kN at [operating]'s speed)."""
@@ -255,7 +262,7 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
     with progress_bar(total=2, desc=f"control design ({method}): family, design",
                       unit="step", enabled=not quiet) as bar:
         fam = family_from_options(params, raw, damping, kinematics, shift_law, drive,
-                                  load_mode, loop_outputs=True)
+                                  load_mode, loop_outputs=True, traction_table=traction_table)
         bar.update(1)
         if not fam.ok.all():
             raise InputError(f"{int((~fam.ok).sum())} grid points do not trim ("
@@ -294,12 +301,13 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
               "margin is below --min-disk-margin (without it: report and exit 0).")
 @click.option("--mu", is_flag=True, help="Also the structured singular value bound "
               "(slycot ab13md, continuous loop) over a parametric spread covering the family.")
+@traction_option
 @params_option
 @json_options
 @force_option
 @quiet_option
-def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, params_file,
-              as_json, json_out, force, quiet) -> None:
+def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, traction_table,
+              params_file, as_json, json_out, force, quiet) -> None:
     """Closed-loop poles and disk margins of CONTROLLER on the loop that runs (sampled, with
     the loop's sensors and feedforwards; empact.control.loop) against every plant of a
     family."""
@@ -309,10 +317,14 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, params
     from ..control.robustness import disk_gain_phase, mu_upper_bound
 
     check_number("--min-disk-margin", min_dm, 0.0, 1.99)
+    if family_file and traction_table is not None:
+        raise InputError("--traction: give it with the design family, not with --family (a "
+                         "family file records its own model options)")
     ctrl = load_controller(controller)
     params = get_params(params_file)
     loop = _loop_from(loop_scenario, params)
-    fam = load_family(family_file) if family_file else design_family(params)
+    tables = {} if traction_table is None else {"traction": traction_table}
+    fam = load_family(family_file) if family_file else design_family(params, **tables)
     for name in ctrl.measured:
         base = name[3:] if name.startswith("ln_") else name
         if base not in fam.outputs:
@@ -370,12 +382,13 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, params
               "exits 1 either way).")
 @click.option("--out", "out", type=OutputFile(("csv",)), default=None,
               help="Write the time histories (.csv; an existing file only with --force).")
+@traction_option
 @params_option
 @json_options
 @force_option
 @quiet_option
-def simulate_cmd(scenario, example, list_ex, controller, strict, out, params_file, as_json,
-                 json_out, force, quiet) -> None:
+def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_table,
+                 params_file, as_json, json_out, force, quiet) -> None:
     """Closed loop on the nonlinear machine: print the scenario's metrics and its targets
     (exit 1 when the run stops early, or with --strict when a target is missed)."""
     from ..control.closed_loop import (
@@ -399,6 +412,8 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, params_fil
                          "with 'empact simulate')")
     if controller:
         sc = sc.with_controller(controller)
+    if traction_table is not None:
+        sc = sc.with_options(traction=traction_table)
     params = get_params(params_file)
     check_references(sc, params)
     run = run_closed_loop(sc, params, progress=not quiet)

@@ -118,8 +118,12 @@ from ..linear.actuation import actuation_model
 from ..params import DAMPING_LEVELS, Params
 from ..variator.shift_law import SHIFT_LAWS, CreepMap, g_beta, load_creep_map
 from ..variator.thrust_ratio import TabulatedThrustRatio, load_thrust_ratio
-from ..variator.traction import (MagicFormulaTraction, TabulatedTraction, load_traction,
-                                 traction_from_params)
+from ..variator.traction import (
+    MagicFormulaTraction,
+    TabulatedTraction,
+    load_traction,
+    traction_from_params,
+)
 from . import _kernel as K
 
 control = lazy_module("control")

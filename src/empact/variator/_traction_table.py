@@ -19,11 +19,12 @@ outside the tabulated ratios.
 
 ``mu_max(r_g)``, the denominator of the torque ratio ``tau = mu / mu_max``, is the true peak
 of the interpolated curve at that ratio over the slips that both neighbouring curves cover
-(``TabulatedTraction.nu_range`` when all curves cover the same slips): the largest value of the piecewise-cubic blend ``(1 - w) mu_i + w mu_(i+1)``,
-found exactly (the blend's stationary points on each interval between the union of both
-curves' knots, a quadratic's roots, and the interval ends).  Its slope in ``r_g`` follows
-from the envelope theorem: ``d mu_max / d w = mu_(i+1)(nu*) - mu_i(nu*)`` at the peak's slip
-``nu*``.  For the analytic magic formula ``mu_max`` is its coefficient ``D(r_g)``, the same
+(``TabulatedTraction.nu_range`` when all curves cover the same slips): the largest value of
+the piecewise-cubic blend ``(1 - w) mu_i + w mu_(i+1)``, found exactly (the blend's
+stationary points on each interval between the union of both curves' knots, a quadratic's
+roots, and the interval ends).  Its slope in ``r_g`` follows from the envelope theorem:
+``d mu_max / d w = mu_(i+1)(nu*) - mu_i(nu*)`` at the peak's slip ``nu*``.  For the analytic
+magic formula ``mu_max`` is its coefficient ``D(r_g)``, the same
 definition (the formula's peak).
 
 Every function takes real or complex ``nu`` / ``r_g`` where the kernel's complex step needs
