@@ -9,6 +9,7 @@ import numpy as np
 
 from .._progress import progress as progress_bar
 from .._validate import check_number
+from ..control.designs import CONTROLLER_TYPES
 from ._common import (
     UNITS,
     ErrorGroup,
@@ -195,17 +196,18 @@ loop_option = click.option(
 
 
 @control_group.command("design")
-@click.option("--method", type=click.Choice(["pi", "hinf"]), default="pi", show_default=True,
-              help="Decentralised PI checked on the loop that runs (gain-scheduled by "
-                   "default), or H-infinity mixed sensitivity on the continuous plant.")
+@click.option("--method", type=click.Choice(list(CONTROLLER_TYPES)), default="pi",
+              show_default=True, help="The controller type (empact.control.designs): "
+              + "; ".join(f"{t.name}: {t.summary}" for t in CONTROLLER_TYPES.values()) + ".")
 @click.option("--bandwidth", default=None, metavar="RATIO,SLIP",
-              help="Loop bandwidths [Hz] (default: the shipped designs: 0.5,1 for pi, "
-                   "0.1,0.05 for hinf).")
-@click.option("--alpha-min", "alpha_min", type=float, default=0.3, show_default=True,
-              help="PI: smallest multiloop disk margin at every grid point.")
-@click.option("--schedule/--no-schedule", default=True, show_default=True,
+              help="Loop bandwidths [Hz] (default: the design function's, the shipped "
+                   "design's: design_pi 0.5,1; design_hinf 0.1,0.05).")
+@click.option("--alpha-min", "alpha_min", type=float, default=None,
+              help="PI: smallest multiloop disk margin at every grid point (default: "
+                   "design_pi's, 0.3, the shipped design's).")
+@click.option("--schedule/--no-schedule", default=None,
               help="PI: gain-schedule the proportional gains over the family's axes (r_g, "
-                   "tau, F_s).")
+                   "tau, F_s) (default: design_pi's: scheduled, on the loop that runs).")
 @click.option("--slip-signal", "slip_signal",
               type=click.Choice(["nu", "nu_r", "ln_nu", "ln_nu_r"]), default="nu",
               show_default=True, help="The measured slip, or its logarithm (ln_: the slip's "
@@ -229,19 +231,29 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
     (default: empact.control.family.DESIGN_GRID: r_g 0.5..2 (7, geometric) x torque ratio
     tau 0.8, 0.9, 0.95 x clamping force 8, 16, 32 kN at [operating]'s speed)."""
     from ..control.family import DESIGN_GRID
-    from ..control.hinf import design_hinf
-    from ..control.pi import design_pi
 
-    bw_text = bandwidth or ("0.5,1" if method == "pi" else "0.1,0.05")
-    try:
-        bw = tuple(float(x) for x in bw_text.split(","))
-    except ValueError:
-        raise InputError(f"--bandwidth {bw_text!r}: two numbers RATIO,SLIP [Hz]") from None
-    if len(bw) != 2:
-        raise InputError(f"--bandwidth {bw_text!r}: two numbers RATIO,SLIP [Hz]")
-    for b in bw:
-        check_number("--bandwidth", b, 0.0, 50.0, lo_open=True, unit="Hz")
-    if method == "pi":
+    kind = CONTROLLER_TYPES[method]
+    # only what the user gives: the defaults are the design function's (one source)
+    given: dict = {"slip": slip_signal}
+    if bandwidth is not None:
+        try:
+            bw = tuple(float(x) for x in bandwidth.split(","))
+        except ValueError:
+            raise InputError(f"--bandwidth {bandwidth!r}: two numbers RATIO,SLIP [Hz]") from None
+        if len(bw) != 2:
+            raise InputError(f"--bandwidth {bandwidth!r}: two numbers RATIO,SLIP [Hz]")
+        for b in bw:
+            check_number("--bandwidth", b, 0.0, 50.0, lo_open=True, unit="Hz")
+        given["bandwidth_hz"] = bw
+    for option, name, value in (("--alpha-min", "alpha_min", alpha_min),
+                                ("--schedule/--no-schedule", "schedule", schedule)):
+        if value is None:
+            continue
+        if not kind.accepts(name):
+            raise InputError(f"{option}: not an option of --method {method} "
+                             f"({kind.function})")
+        given[name] = value
+    if alpha_min is not None:
         check_number("--alpha-min", alpha_min, 0.05, 1.9,
                      note="the multiloop disk margin each plant must keep")
     params = get_params(params_file)
@@ -271,11 +283,9 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
         if nom is not None and (len(nom) != len(fam.shape)
                                 or any(not 0 <= i < s for i, s in zip(nom, fam.shape))):
             raise InputError(f"--nominal {nominal!r}: indices in a grid of shape {fam.shape}")
-        if method == "pi":
-            ctrl = design_pi(fam, bw, alpha_min=alpha_min, slip=slip_signal, nominal=nom,
-                             loop=loop, params=params, schedule=schedule)
-        else:
-            ctrl = design_hinf(fam, bw, slip=slip_signal, nominal=nom)
+        if kind.accepts("loop"):  # checked on the loop that runs
+            given.update(loop=loop, params=params)
+        ctrl = kind.design_function()(fam, nominal=nom, **given)
         bar.update(1)
     ctrl.save(out)
     if as_json or json_out:
