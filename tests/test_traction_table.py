@@ -192,3 +192,139 @@ def test_a_sampled_table_reproduces_a_load_step(params, sampled):
 def test_a_table_is_refused_as_an_option_when_not_a_table(params):
     with pytest.raises(ParameterError, match="traction = .*TabulatedTraction"):
         nonlinear_model(params, traction=traction_from_params(params))
+
+
+# -- the command line -----------------------------------------------------------------------
+def _write_sampled(path, params):
+    """The shipped magic formula sampled at its knot ratios as a CSV table (r_g,nu,mu)."""
+    magic = traction_from_params(params)
+    nu = np.concatenate([[0.0], np.geomspace(1e-5, 0.01, 40, endpoint=False),
+                         np.linspace(0.01, 0.2, 77)])
+    rows = [f"{r:g},{n:.10g},{float(magic.mu(n, r)):.12g}" for r in KNOTS for n in nu]
+    path.write_text("r_g,nu,mu\n" + "\n".join(rows) + "\n")
+    return path
+
+
+#: every command that builds the nonlinear model (and the slip commands), with arguments
+#: that would run it
+MODEL_COMMANDS = [["simulate", "--example", "servo-torque-steps"], ["linearize"], ["nmp"], ["plants"],
+                  ["rig", "--out", "r.csv"], ["identify"],
+                  ["control", "design", "--out", "c.json"], ["control", "check", "c.json"],
+                  ["control", "simulate", "--example", "slip-load-step-r1"],
+                  ["montecarlo", "--spread", "s.toml"], ["slip", "poles"]]
+
+
+@pytest.mark.parametrize("args", MODEL_COMMANDS, ids=lambda a: " ".join(a[:2]))
+def test_a_bad_table_is_one_line_before_any_work(tmp_path, args):
+    from click.testing import CliRunner
+
+    from empact.cli import main
+
+    bad = tmp_path / "bad.csv"
+    bad.write_text("r_g,nu,mu\n1,0,0\n1,0.02,0.09\n1,0.01,0.1\n")
+    res = CliRunner().invoke(main, args + ["--traction", str(bad)])
+    assert res.exit_code == 2, res.output
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("error:") and "--traction" in lines[0] \
+        and "nu must increase" in lines[0]
+
+
+def test_control_simulate_with_a_table_meets_its_targets(tmp_path, params):
+    """``control simulate --example slip-load-step-r1 --traction table.csv``: the closed loop
+    on a table sampled from the shipped formula meets the scenario's targets, and its metrics
+    are the analytic run's to within the interpolation (measured: slip error 0.0936 against
+    0.0918 percentage points, peak slip error 0.2789 against 0.2795)."""
+    import json
+
+    from click.testing import CliRunner
+
+    from empact.cli import main
+
+    table = _write_sampled(tmp_path / "table.csv", params)
+    runs = {}
+    for name, extra in (("table", ["--traction", str(table)]), ("analytic", [])):
+        res = CliRunner().invoke(main, ["control", "simulate", "--example",
+                                        "slip-load-step-r1", "--json", "--quiet", "--strict",
+                                        *extra])
+        assert res.exit_code == 0, res.output
+        runs[name] = json.loads(res.output)
+    t, a = runs["table"], runs["analytic"]
+    assert all(c["met"] for c in t["targets"]) and t["metrics"]["complete"]
+    for key in ("slip_error", "peak_slip_error", "mean_clamping_force", "ratio_error"):
+        assert t["metrics"][key] == pytest.approx(a["metrics"][key], rel=0.05), key
+    assert t["metrics"] != a["metrics"]  # the table was used
+
+
+def test_the_model_commands_take_a_table(tmp_path, params):
+    """linearize names the table in its model options; a family records it and a check on the
+    saved family rebuilds the model from it; a scenario's [model] table names it relative
+    to the scenario file."""
+    import json
+
+    from click.testing import CliRunner
+
+    from empact.cli import main
+    from empact.nonlinear.scenario import load_scenario
+
+    table = _write_sampled(tmp_path / "table.csv", params)
+    res = CliRunner().invoke(main, ["linearize", "--traction", str(table)])
+    assert res.exit_code == 0, res.output
+    doc, _ = json.JSONDecoder().raw_decode(res.output)  # (stderr may follow: compiling)
+    assert doc["model_options"]["traction"] == str(table)
+    fam = tmp_path / "fam.npz"
+    res = CliRunner().invoke(main, ["plants", "--ratio", "0.5,1,2", "--tau", "0.9",
+                                    "--traction", str(table), "--out", str(fam), "--quiet"])
+    assert res.exit_code == 0, res.output
+    z = np.load(fam)
+    assert str(z["options_traction"]) == str(table)
+    (tmp_path / "sc.toml").write_text(
+        '[scenario]\nname = "t"\nduration = 0.1\n[model]\ntraction = "table.csv"\n'
+        '[initial]\nr_g = 1.0\nomega_p = 300.0\nnu = 0.01\nF_s = 10000.0\n')
+    sc = load_scenario(tmp_path / "sc.toml")
+    assert sc.options.traction is not None and sc.options.traction.source == str(table)
+
+
+def test_controller_types_come_from_one_registry_with_the_api_defaults():
+    """The CLI's --method choices are the registry's; its design options have no default of
+    their own (the design function's apply), and those are the shipped designs' recipe
+    (`SHIPPED_DESIGNS`, the ``design`` records of data/control/pi.json and hinf.json)."""
+    import json
+    from importlib import resources
+
+    from empact.cli.control import design_cmd
+    from empact.control.designs import CONTROLLER_TYPES
+    from empact.reproduction.control import SHIPPED_DESIGNS
+
+    opts = {p.name: p for p in design_cmd.params}
+    assert list(opts["method"].type.choices) == list(CONTROLLER_TYPES)
+    for name in ("bandwidth", "alpha_min", "schedule"):
+        assert opts[name].default is None, name
+    for kind, recipe in SHIPPED_DESIGNS.items():
+        defaults = CONTROLLER_TYPES[kind].defaults()
+        shipped = json.loads(resources.files("empact.data").joinpath(
+            "control", f"{kind}.json").read_text())["design"]
+        assert tuple(defaults["bandwidth_hz"]) == tuple(recipe["bandwidth_hz"])
+        if "alpha_min" in recipe:
+            assert defaults["alpha_min"] == recipe["alpha_min"] == shipped["alpha_min"]
+        if kind == "hinf":
+            assert list(defaults["bandwidth_hz"]) == shipped["bandwidth_hz"]
+    # schedule: on when the design runs on the loop (as the shipped PI), as the CLI does
+    assert CONTROLLER_TYPES["pi"].defaults()["schedule"] is None
+
+
+def test_design_hinf_from_the_cli_uses_the_api_default(tmp_path):
+    from click.testing import CliRunner
+
+    from empact.cli import main
+    from empact.control.controller import load_controller
+
+    out = tmp_path / "k.json"
+    res = CliRunner().invoke(main, ["control", "design", "--method", "hinf", "--ratio",
+                                    "0.8,1,1.25", "--tau", "0.9", "--clamp", "16000", "--out",
+                                    str(out), "--quiet"])
+    assert res.exit_code == 0, res.output
+    assert load_controller(out).design["bandwidth_hz"] == [0.1, 0.05]
+    res = CliRunner().invoke(main, ["control", "design", "--method", "hinf", "--alpha-min",
+                                    "0.3", "--out", str(tmp_path / "k2.json")])
+    assert res.exit_code == 2 and "--alpha-min: not an option of --method hinf" in res.output
