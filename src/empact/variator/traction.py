@@ -61,6 +61,8 @@ from ..errors import ParameterError
 from ._tables import check_curve, read_curves
 
 interpolate = lazy_module("scipy.interpolate")
+#: the compiled law (numba: loaded when a peak is first asked for)
+_compiled = lazy_module("empact.variator._traction_table")
 
 __all__ = ["TractionParams", "TractionModel", "MagicFormulaTraction", "TabulatedTraction",
            "TractionCurves", "traction_from_params", "load_traction", "traction_curves",
@@ -402,8 +404,6 @@ class TabulatedTraction:
         (the whole `nu_range` when every curve covers the same slips), found exactly on the
         piecewise-cubic interpolant by the compiled law the nonlinear model uses
         (`empact.variator._traction_table.table_peak`)."""
-        from . import _traction_table as T
-
         r = np.asarray(r_g, float)
         if np.any(~np.isfinite(r) | (r <= 0)):
             bad = r[~np.isfinite(r) | (r <= 0)] if r.ndim else r
@@ -412,8 +412,8 @@ class TabulatedTraction:
         flat = np.ascontiguousarray(r.ravel())
         n = flat.size
         mu, dmu, nu_pk, mu_pk = (np.empty(n) for _ in range(4))
-        T.table_many(np.full(n, float(self.nu_data[0][0])), flat, self.encode(), 0, mu, dmu,
-                     nu_pk, mu_pk)
+        _compiled.table_many(np.full(n, float(self.nu_data[0][0])), flat, self.encode(), 0, mu,
+                             dmu, nu_pk, mu_pk)
         return nu_pk.reshape(r.shape), mu_pk.reshape(r.shape)
 
     def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
