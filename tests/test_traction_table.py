@@ -111,6 +111,43 @@ def test_mu_max_is_the_peak_of_the_interpolant(which, sampled):
     assert_allclose(tab.mu(nu_pk, ratios), mu_pk, rtol=0, atol=1e-15)
 
 
+def _dense_peak_any(tab, r):
+    """The largest value of `tab` at ratio `r`: 40001 slips, each of the five highest local
+    maxima of the grid refined by a bounded scalar search (to 1e-13 in slip)."""
+    from scipy.optimize import minimize_scalar
+
+    lo, hi = tab.nu_range
+    grid = np.linspace(lo, hi, 40001)
+    v = tab.mu(grid, r)
+    peaks = [k for k in range(grid.size) if (k == 0 or v[k] >= v[k - 1])
+             and (k == grid.size - 1 or v[k] >= v[k + 1])]
+    best = float(v.max())
+    for k in sorted(peaks, key=lambda k: -v[k])[:5]:
+        a, b = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
+        res = minimize_scalar(lambda x: -float(tab.mu(x, r)), bounds=(a, b),
+                              method="bounded", options={"xatol": 1e-13})
+        best = max(best, float(-res.fun))
+    return best
+
+
+def test_mu_max_of_random_many_peaked_tables():
+    """Seeded random tables (3-25 knots per curve on different grids, values with several
+    local maxima): the compiled peak (its pruned search included) equals the dense search's
+    to 1e-12, between and outside the tabulated ratios."""
+    rng = np.random.default_rng(6)
+    for _ in range(12):
+        k = int(rng.integers(1, 4))
+        curves = {}
+        for r in np.sort(rng.uniform(0.4, 2.5, k)):
+            n = int(rng.integers(3, 26))
+            nu = np.sort(rng.choice(np.linspace(0.0, 0.2, 401)[1:], n, replace=False))
+            curves[float(r)] = (nu, rng.uniform(0.0, 0.2, n))
+        tab = TabulatedTraction.from_curves(curves, source="random")
+        ratios = np.concatenate([tab.ratios, rng.uniform(0.3, 2.7, 6)])
+        ref = np.array([_dense_peak_any(tab, r) for r in ratios])
+        assert_allclose(tab.mu_max(ratios), ref, rtol=0, atol=1e-12)
+
+
 def test_table_helpers_against_the_complex_step():
     """`table_mu_d` and `table_peak` (the forward mode's partials) equal the complex step of
     `table_mu` and `table_mu_max` (the kernel's complex routines), at and between knots and
@@ -207,8 +244,8 @@ def _write_sampled(path, params):
 
 #: every command that builds the nonlinear model (and the slip commands), with arguments
 #: that would run it
-MODEL_COMMANDS = [["simulate", "--example", "servo-torque-steps"], ["linearize"], ["nmp"], ["plants"],
-                  ["rig", "--out", "r.csv"], ["identify"],
+MODEL_COMMANDS = [["simulate", "--example", "servo-torque-steps"], ["linearize"], ["nmp"],
+                  ["plants"], ["rig", "--out", "r.csv"], ["identify"],
                   ["control", "design", "--out", "c.json"], ["control", "check", "c.json"],
                   ["control", "simulate", "--example", "slip-load-step-r1"],
                   ["montecarlo", "--spread", "s.toml"], ["slip", "poles"]]

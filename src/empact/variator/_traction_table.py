@@ -4,13 +4,16 @@
 The table is encoded by `TabulatedTraction.encode` into a flat float vector that the kernel
 appends to its parameter vector ``p`` (its offset in ``p`` is ``base``)::
 
-    [n_r, r_1 .. r_n, start_1 .. start_n,
-     (n, nu_1 .. nu_n, mu_1 .. mu_n, d_1 .. d_n) per curve]
+    [n_r, r_1 .. r_n, start_1 .. start_n, nu_lo, nu_hi,
+     (n, nu_1 .. nu_n, mu_1 .. mu_n, d_1 .. d_n, o_1 .. o_(n-1)) per curve]
 
 with the ratios ``r_i`` [-] (not their logarithms: the table is linear in ``r_g``), each
-curve's start as an offset from the beginning of the table, and per curve the knots ``nu``
+curve's start as an offset from the beginning of the table, the slips every curve covers
+(``TabulatedTraction.nu_range``), and per curve the knots ``nu``
 [-], the values ``mu`` [-] and the knot slopes ``d = d mu / d nu`` [-] that
-`scipy.interpolate.PchipInterpolator` computed when the table was loaded.  Between two knots
+`scipy.interpolate.PchipInterpolator` computed when the table was loaded, and the curve's
+segments ordered by their larger knot value, largest first (``o``: the peak search visits
+only the segments that can hold the peak).  Between two knots
 the curve is scipy's cubic Hermite polynomial (the same coefficients, formed as
 `scipy.interpolate.CubicHermiteSpline` forms them); outside its knots a curve is held at its
 end value (slope 0: the model is only valid inside ``TabulatedTraction.nu_range``, where it
@@ -18,14 +21,15 @@ equals ``TabulatedTraction.mu``).  Between the curves: linear in ``r_g``, held c
 outside the tabulated ratios.
 
 ``mu_max(r_g)``, the denominator of the torque ratio ``tau = mu / mu_max``, is the true peak
-of the interpolated curve at that ratio over the slips that both neighbouring curves cover
-(``TabulatedTraction.nu_range`` when all curves cover the same slips): the largest value of
+of the interpolated curve at that ratio over the slips every curve covers
+(``TabulatedTraction.nu_range``, where the model is valid): the largest value of
 the piecewise-cubic blend ``(1 - w) mu_i + w mu_(i+1)``, found exactly (the blend's
 stationary points on each interval between the union of both curves' knots, a quadratic's
-roots, and the interval ends).  Its slope in ``r_g`` follows from the envelope theorem:
-``d mu_max / d w = mu_(i+1)(nu*) - mu_i(nu*)`` at the peak's slip ``nu*``.  For the analytic
-magic formula ``mu_max`` is its coefficient ``D(r_g)``, the same
-definition (the formula's peak).
+roots, and the interval ends; PCHIP is monotone on every segment, so a segment whose knot
+values stay below a value already found cannot hold the peak and is not searched).  Its
+slope in ``r_g`` follows from the envelope theorem: ``d mu_max / d w = mu_(i+1)(nu*) -
+mu_i(nu*)`` at the peak's slip ``nu*``.  For the analytic magic formula ``mu_max`` is its
+coefficient ``D(r_g)``, the same definition (the formula's peak).
 
 Every function takes real or complex ``nu`` / ``r_g`` where the kernel's complex step needs
 it (branches on the real part; a knot counts to the segment on its left), and the ``_d``
@@ -63,10 +67,18 @@ def _segment(xr, p, start):
     n = int(p[start])
     if xr < p[start + 1]:
         return -1
-    for j in range(n - 1):
-        if xr <= p[start + 2 + j]:
-            return j
-    return n - 1
+    if xr > p[start + n]:
+        return n - 1
+    if xr <= p[start + 2]:
+        return 0
+    lo, hi = 1, n - 1  # bisection: nu_lo < xr <= nu_hi
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if p[start + 1 + mid] < xr:
+            lo = mid
+        else:
+            hi = mid
+    return lo
 
 
 @njit(cache=True)
@@ -118,6 +130,13 @@ def _start(p, base, i):
 
 
 @njit(cache=True)
+def _nu_range(p, base):
+    """``(nu_lo, nu_hi)``: the slips every curve of the table at ``p[base:]`` covers."""
+    n_r = int(p[base])
+    return p[base + 1 + 2 * n_r], p[base + 2 + 2 * n_r]
+
+
+@njit(cache=True)
 def table_mu(nu, r_g, p, base):
     """Tabulated traction coefficient ``mu(nu, r_g)`` [-] (real or complex arguments)."""
     i, k = _bracket(r_g.real, p, base)
@@ -159,59 +178,110 @@ def _blend_at(x, w, p, sa, ja, sb, jb):
 
 
 @njit(cache=True)
-def _peak(w, p, sa, sb):
-    """``(nu*, mu_a(nu*), mu_b(nu*))``: the slip of the largest value of the blend
-    ``(1 - w) mu_a + w mu_b`` (real `w` in [0, 1]) over the slips both curves cover, and the
-    two curves' values there.
+def _interval_peak(a, b, w, p, sa, ja, sb, jb):
+    """``(value, nu)``: the largest value of the blend ``(1 - w) mu_a + w mu_b`` on ``[a, b]``,
+    where the curves stay on their segments `ja`, `jb`: the blend is one cubic there, so its
+    largest value is at an end or at a root of its derivative, a quadratic whose coefficients
+    follow from the derivative at the ends and the middle (exact for a quadratic).  The first
+    of equal values wins."""
+    L = b - a
+    best, g0 = _blend_at(a, w, p, sa, ja, sb, jb)
+    best_x = a
+    _, gm = _blend_at(a + 0.5 * L, w, p, sa, ja, sb, jb)
+    vb, g1 = _blend_at(b, w, p, sa, ja, sb, jb)
+    if vb > best:
+        best, best_x = vb, b
+    # g(z) = q2 z^2 + q1 z + q0 on z = nu - a in [0, L] through g0, gm, g1
+    q0 = g0
+    q2 = 2.0 * (g1 - 2.0 * gm + g0) / (L * L)
+    q1 = (g1 - g0) / L - q2 * L
+    z1 = -1.0
+    z2 = -1.0
+    if q2 == 0.0:
+        if q1 != 0.0:
+            z1 = -q0 / q1
+    else:
+        disc = q1 * q1 - 4.0 * q2 * q0
+        if disc >= 0.0:
+            qq = -0.5 * (q1 + np.copysign(np.sqrt(disc), q1))
+            z1 = qq / q2
+            if qq != 0.0:
+                z2 = q0 / qq
+    for z in (z1, z2):
+        if 0.0 < z < L:
+            v, _ = _blend_at(a + z, w, p, sa, ja, sb, jb)
+            if v > best:
+                best, best_x = v, a + z
+    return best, best_x
 
-    The blend is one cubic on each interval between the union of both curves' knots: its
-    largest value is at an interval's end or at a root of its derivative, a quadratic whose
-    coefficients follow from the derivative at the interval's ends and middle (exact for a
-    quadratic).  The first of equal largest values wins."""
+
+@njit(cache=True)
+def _bound(w, p, sa, ja, sb, jb):
+    """An upper bound of the blend on the segments `ja`, `jb`: PCHIP is monotone on every
+    segment (shape-preserving), so each curve stays between its segment's knot values."""
     na = int(p[sa])
     nb = int(p[sb])
-    lo = max(p[sa + 1], p[sb + 1])
-    hi = min(p[sa + na], p[sb + nb])
-    ja = max(_segment(lo, p, sa), 0)
-    jb = max(_segment(lo, p, sb), 0)
+    ya = max(p[sa + 1 + na + ja], p[sa + 2 + na + ja])
+    yb = max(p[sb + 1 + nb + jb], p[sb + 2 + nb + jb])
+    return (1.0 - w) * ya + w * yb
+
+
+@njit(cache=True)
+def _peak(w, p, sa, sb, lo, hi):
+    """``(nu*, mu_a(nu*), mu_b(nu*))``: the slip of the largest value of the blend
+    ``(1 - w) mu_a + w mu_b`` (real `w` in [0, 1]) on ``[lo, hi]`` (slips both curves
+    cover), and the two curves' values there.
+
+    The blend is one cubic on each interval between the union of both curves' knots
+    (`_interval_peak` finds its largest value exactly).  At the peak ``nu*`` the blend is at
+    most the larger of the two curves' segment maxima there (each is its larger knot value:
+    PCHIP is monotone on a segment), so the peak lies on a segment of either curve whose
+    larger knot value, blended with the other curve's largest, exceeds the best value found:
+    each curve's segments are visited largest first (the encoded order) until that bound
+    falls to it, and only the intervals whose bound (`_bound`) exceeds it are searched - a
+    few near the peak, whatever the number of knots.  (A value equal to the best found is
+    not searched again: of equal largest values the one found first is kept.)"""
+    best, _ = _blend_at(lo, w, p, sa, max(_segment(lo, p, sa), 0), sb,
+                        max(_segment(lo, p, sb), 0))
     best_x = lo
-    best, _ = _blend_at(lo, w, p, sa, ja, sb, jb)
-    a = lo
-    while a < hi:
-        # the interval [a, b]: both curves on one segment (ja, jb) throughout
-        while ja < na - 2 and p[sa + 2 + ja] <= a:
-            ja += 1
-        while jb < nb - 2 and p[sb + 2 + jb] <= a:
-            jb += 1
-        b = min(p[sa + 2 + ja], p[sb + 2 + jb], hi)
-        L = b - a
-        _, g0 = _blend_at(a, w, p, sa, ja, sb, jb)
-        _, gm = _blend_at(a + 0.5 * L, w, p, sa, ja, sb, jb)
-        vb, g1 = _blend_at(b, w, p, sa, ja, sb, jb)
-        if vb > best:
-            best, best_x = vb, b
-        # g(z) = q2 z^2 + q1 z + q0 on z = nu - a in [0, L] through g0, gm, g1
-        q0 = g0
-        q2 = 2.0 * (g1 - 2.0 * gm + g0) / (L * L)
-        q1 = (g1 - g0) / L - q2 * L
-        z1 = -1.0
-        z2 = -1.0
-        if q2 == 0.0:
-            if q1 != 0.0:
-                z1 = -q0 / q1
-        else:
-            disc = q1 * q1 - 4.0 * q2 * q0
-            if disc >= 0.0:
-                qq = -0.5 * (q1 + np.copysign(np.sqrt(disc), q1))
-                z1 = qq / q2
-                if qq != 0.0:
-                    z2 = q0 / qq
-        for z in (z1, z2):
-            if 0.0 < z < L:
-                v, _ = _blend_at(a + z, w, p, sa, ja, sb, jb)
-                if v > best:
-                    best, best_x = v, a + z
-        a = b
+    for s in (sa, sb):  # a high first value: the blend at each curve's highest knot
+        n = int(p[s])
+        j = int(p[s + 1 + 3 * n])
+        k = j if p[s + 1 + n + j] >= p[s + 2 + n + j] else j + 1
+        x = p[s + 1 + k]
+        if lo <= x <= hi:
+            v, _ = _blend_at(x, w, p, sa, max(_segment(x, p, sa), 0), sb,
+                             max(_segment(x, p, sb), 0))
+            if v > best:
+                best, best_x = v, x
+    for which in range(2):
+        s, so = (sa, sb) if which == 0 else (sb, sa)
+        n = int(p[s])
+        no = int(p[so])
+        jo = int(p[so + 1 + 3 * no])
+        top_o = max(p[so + 1 + no + jo], p[so + 2 + no + jo])  # the other curve's largest
+        ws, wo = (1.0 - w, w) if which == 0 else (w, 1.0 - w)
+        for r in range(n - 1):
+            j = int(p[s + 1 + 3 * n + r])
+            if ws * max(p[s + 1 + n + j], p[s + 2 + n + j]) + wo * top_o <= best:
+                break  # no point of this segment, nor of a later (lower) one, is higher
+            x0 = max(p[s + 1 + j], lo)
+            x1 = min(p[s + 2 + j], hi)
+            if not x0 < x1:
+                continue
+            jo = max(_segment(x0, p, so), 0)
+            a = x0
+            while a < x1:
+                # [a, b]: this curve on segment j, the other on jo throughout
+                while jo < no - 2 and p[so + 2 + jo] <= a:
+                    jo += 1
+                b = min(p[so + 2 + jo], x1)
+                ja, jb = (j, jo) if which == 0 else (jo, j)
+                if _bound(w, p, sa, ja, sb, jb) > best:
+                    v, x = _interval_peak(a, b, w, p, sa, ja, sb, jb)
+                    if v > best or (v == best and x < best_x):
+                        best, best_x = v, x
+                a = b
     va = _curve(best_x, p, sa)
     vb = _curve(best_x, p, sb)
     return best_x, va, vb
@@ -223,13 +293,14 @@ def table_peak(r_g, p, base):
     interpolated curve's peak, the peak [-] and its slope (envelope theorem)."""
     i, k = _bracket(r_g, p, base)
     sa = _start(p, base, i)
+    lo, hi = _nu_range(p, base)
     if i == k:
-        x, va, _ = _peak(0.0, p, sa, sa)
+        x, va, _ = _peak(0.0, p, sa, sa, lo, hi)
         return x, va, 0.0
     r0 = p[base + 1 + i]
     dr = p[base + 1 + k] - r0
     w = (r_g - r0) / dr
-    x, va, vb = _peak(w, p, sa, _start(p, base, k))
+    x, va, vb = _peak(w, p, sa, _start(p, base, k), lo, hi)
     return x, va + w * (vb - va), (vb - va) * r_g / dr
 
 
@@ -240,12 +311,13 @@ def table_mu_max(r_g, p, base):
     order by the envelope theorem)."""
     i, k = _bracket(r_g.real, p, base)
     sa = _start(p, base, i)
+    lo, hi = _nu_range(p, base)
     if i == k:
-        x, va, _ = _peak(0.0, p, sa, sa)
+        x, va, _ = _peak(0.0, p, sa, sa, lo, hi)
         return va + 0.0 * r_g
     r0 = p[base + 1 + i]
     w = (r_g - r0) / (p[base + 1 + k] - r0)
-    x, va, vb = _peak(w.real, p, sa, _start(p, base, k))
+    x, va, vb = _peak(w.real, p, sa, _start(p, base, k), lo, hi)
     return va + w * (vb - va)
 
 

@@ -387,23 +387,25 @@ class TabulatedTraction:
     def encode(self) -> NDArray[np.float64]:
         """Flat encoding for the compiled model (layout in `empact.variator._traction_table`):
         the ratios, and per curve the knots, values and the knot slopes of its
-        `~scipy.interpolate.PchipInterpolator`."""
+        `~scipy.interpolate.PchipInterpolator`, and its segments by their larger knot value,
+        largest first."""
         head = [float(len(self.ratios)), *self.ratios]
         starts: list[float] = []
         body: list[float] = []
         for nu, mu, slope in zip(self.nu_data, self.mu_data, self._slope):
-            starts.append(float(1 + 2 * len(self.ratios) + len(body)))
-            body += [float(len(nu)), *nu, *mu, *np.asarray(slope(nu), float)]
-        return np.array(head + starts + body, dtype=float)
+            starts.append(float(3 + 2 * len(self.ratios) + len(body)))
+            order = np.argsort(-np.maximum(mu[:-1], mu[1:]), kind="stable")
+            body += [float(len(nu)), *nu, *mu, *np.asarray(slope(nu), float),
+                     *order.astype(float)]
+        return np.array(head + starts + list(self.nu_range) + body, dtype=float)
 
     def peak(self, r_g: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Slip [-] and value [-] of the interpolated curve's peak at ratio(s) `r_g`, each
         shaped like `r_g`.
 
-        The true largest value of ``mu(., r_g)`` over the slips both neighbouring curves cover
-        (the whole `nu_range` when every curve covers the same slips), found exactly on the
-        piecewise-cubic interpolant by the compiled law the nonlinear model uses
-        (`empact.variator._traction_table.table_peak`)."""
+        The true largest value of ``mu(., r_g)`` over `nu_range` (the slips every curve
+        covers), found exactly on the piecewise-cubic interpolant by the compiled law the
+        nonlinear model uses (`empact.variator._traction_table.table_peak`)."""
         r = np.asarray(r_g, float)
         if np.any(~np.isfinite(r) | (r <= 0)):
             bad = r[~np.isfinite(r) | (r <= 0)] if r.ndim else r
