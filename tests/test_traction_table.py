@@ -365,3 +365,26 @@ def test_design_hinf_from_the_cli_uses_the_api_default(tmp_path):
     res = CliRunner().invoke(main, ["control", "design", "--method", "hinf", "--alpha-min",
                                     "0.3", "--out", str(tmp_path / "k2.json")])
     assert res.exit_code == 2 and "--alpha-min: not an option of --method hinf" in res.output
+
+
+def test_a_table_where_it_cannot_apply_is_one_line(tmp_path, params):
+    """--traction with a family file (whose options are recorded in it) and with the slip
+    Monte Carlo analysis (which draws the analytic curve's coefficients): one line, exit 2."""
+    from importlib import resources
+
+    from click.testing import CliRunner
+
+    from empact.cli import main
+
+    table = _write_sampled(tmp_path / "table.csv", params)
+    spread = tmp_path / "s.toml"
+    spread.write_text(resources.files("empact.data").joinpath(
+        "montecarlo", "example-spread.toml").read_text())
+    for args, match in ((["control", "check", "c.json", "--family", "f.npz"],
+                         "--traction: give it with the design family, not with --family"),
+                        (["montecarlo", "--spread", str(spread), "--analysis", "slip"],
+                         "--traction: the slip analysis draws the analytic curve")):
+        res = CliRunner().invoke(main, args + ["--traction", str(table)])
+        assert res.exit_code == 2, res.output
+        lines = res.output.strip().splitlines()
+        assert len(lines) == 1 and match in lines[0], lines
