@@ -33,7 +33,7 @@ PAGES = {
                 ["empact.control.family", "empact.control.pi", "empact.control.hinf",
                  "empact.control.controller", "empact.control.robustness",
                  "empact.control.law", "empact.control.loop", "empact.control.closed_loop",
-                 "empact.control.shifting"]),
+                 "empact.control.shifting", "empact.control.designs"]),
     "montecarlo": ("empact.montecarlo: parameter spreads and studies",
                    ["empact.montecarlo.spread", "empact.montecarlo.analyses",
                     "empact.montecarlo.study"]),

@@ -22,6 +22,7 @@ from .nonlinear.model import nonlinear_model
 from .nonlinear.scenario import load_scenario
 from .nonlinear.simulation import simulate
 from .params import OperatingPoint, default_params
+from .variator.traction import TabulatedTraction
 
 __all__ = ["compile_all", "drop_stale_cache"]
 
@@ -54,7 +55,9 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     if folder is not None:
         return _drop_stale(Path(folder) / "__pycache__", "*", list(Path(folder).glob("*.py")))
     here = Path(__file__).resolve().parent
-    nonlinear = list((here / "nonlinear").glob("*.py"))
+    # the kernel compiles in the tabulated traction law of `empact.variator`
+    nonlinear = list((here / "nonlinear").glob("*.py")) + [here / "variator" /
+                                                           "_traction_table.py"]
     # the compiled closed loop calls the kernel, the integrator and the law's sample
     loop_sources = nonlinear + [here / "control" / "_law_core.py",
                                 here / "control" / "_loop_core.py"]
@@ -94,6 +97,8 @@ def compile_all() -> float:
             linearize_many(model, tr.x[None], tr.u[None], np.array([tr.r_g]),
                            np.array([tr.nu]))
     plant(params)
+    # the tabulated traction law's own entry point (`TabulatedTraction.peak`)
+    TabulatedTraction.from_curves({1.0: ([0.0, 0.01, 0.02], [0.0, 0.05, 0.08])}).mu_max(1.0)
     # the sampled loop law's compiled arithmetic (`empact.control._law_core`): a sample,
     # the linearisation's ideal sample, the sensors alone, the gain schedule
     sc = load_scenario(control_example_path("slip-load-step-r1"))

@@ -39,6 +39,7 @@ __all__ = ["sweep_options", "sweep_from_options",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
            "OutputFile", "check_outputs", "check_references", "quiet_option", "Interrupted",
            "EXIT_INTERRUPTED", "parse_list", "formats_option", "parse_choices", "schema_version",
+           "traction_option",
            "announce_compilation", "COMPILING"]
 
 #: suffixes of ``--plot`` files (the figure's format)
@@ -309,6 +310,29 @@ force_option = click.option("--force", is_flag=True,
                             help="Replace existing output (in a folder: only empact's own "
                                  "files).")
 quiet_option = click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
+
+
+def _load_traction(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
+    """``--traction FILE`` read while the options are parsed (before any work): a bad table is
+    one line and exit 2."""
+    if value is None:
+        return None
+    from ..variator.traction import load_traction
+
+    try:
+        return load_traction(value)
+    except ParameterError as exc:
+        raise InputError(f"--traction: {exc}") from None
+
+
+#: ``--traction FILE``: measured traction curves for every command that builds a traction
+#: model (the slip commands, the nonlinear model's); the value (``traction_table``) is a
+#: `TabulatedTraction` or None
+traction_option = click.option(
+    "--traction", "traction_table", type=click.Path(dir_okay=False), default=None,
+    callback=_load_traction,
+    help="Measured traction curves mu(nu, r_g): .csv (columns r_g,nu,mu) or .toml "
+         "([[curve]] tables); default: the analytic magic formula of [traction].")
 formats_option = click.option(
     "--formats", default="png", show_default=True,
     help="Figure formats, comma-separated: png, svg, pdf (png,svg or png,pdf adds vector "
@@ -434,8 +458,11 @@ def parse_list(text: str, option: str, *, most: int, example: str = "0.5,1,2") -
 def check_references(scenario: Any, params: Params) -> None:
     """A closed-loop scenario's ``[references]`` within what the machine can follow, checked
     before the run (not found out when the simulation stops): a slip (``nu``, ``nu_r``, a
-    fraction) within the traction curve's valid range, a ratio within the variator's."""
-    lo, hi = traction_from_params(params).nu_range
+    fraction) within the traction curve's valid range (the scenario's measured curves, or
+    the analytic curve of `params`), a ratio within the variator's."""
+    options = getattr(scenario, "options", None)
+    table = getattr(options, "traction", None)
+    lo, hi = (table if table is not None else traction_from_params(params)).nu_range
     src = getattr(scenario, "source", "") or getattr(scenario, "name", "scenario")
     for name, points in scenario.references.items():
         values = np.asarray(points, float)[:, 1]
@@ -549,17 +576,17 @@ def operating_values(params: Params, option: str, values: Any, *, trim: bool = F
 _PAIR = ("nu", "tau", "F_s", "T_l")
 
 
-def operating_point(params: Params, *, trim: bool = False, **options: float | None) \
-        -> OperatingPoint:
+def operating_point(params: Params, *, trim: bool = False, traction: Any = None,
+                    **options: float | None) -> OperatingPoint:
     """The ``[operating]`` point of `params` with the given options (``ratio``, ``slip``,
     ``clamp``, ``speed``, ``tau``, ``load_torque``; None keeps the file's value), each
-    checked by `operating_values`.
+    checked by `operating_values` (a slip against `traction`, default the analytic curve).
 
     Two of ``--slip`` (or ``--tau``), ``--clamp``, ``--load-torque`` state the point; one of
     them changes that variable of the file's point (``--slip`` and ``--tau`` replace each
     other); one that the file's point does not give is an error naming the choice."""
     values = {OPTION_VARIABLE[opt.replace("_", "-")]: float(operating_values(
-        params, opt.replace("_", "-"), v, trim=trim))
+        params, opt.replace("_", "-"), v, trim=trim, traction=traction))
         for opt, v in options.items() if v is not None}
     given = [k for k in _PAIR if k in values]
     if "nu" in given and "tau" in given:

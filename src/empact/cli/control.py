@@ -9,6 +9,7 @@ import numpy as np
 
 from .._progress import progress as progress_bar
 from .._validate import check_number
+from ..control.designs import CONTROLLER_TYPES
 from ._common import (
     UNITS,
     ErrorGroup,
@@ -25,6 +26,7 @@ from ._common import (
     quiet_option,
     sweep_from_options,
     sweep_options,
+    traction_option,
 )
 from .slip import parse_values
 
@@ -62,7 +64,7 @@ def grid_options(fn):
     fn = click.option("--load", "load_mode", type=LoadMode(), default="torque",
                       show_default=True, help="Load motor torque- or speed-controlled (the "
                       "load torque is --load-torque).")(fn)
-    return fn
+    return traction_option(fn)
 
 
 class LoadMode(click.Choice):
@@ -82,9 +84,10 @@ class LoadMode(click.Choice):
 
 def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_law: str,
                         drive: str = "speed", load: str = "torque", sweep=None,
-                        loop_outputs: bool = True):
+                        loop_outputs: bool = True, traction_table=None):
     """Parse the grid options (each checked under its name) and build the family (with the
-    outputs the loop model needs, `empact.control.family.LOOP_FAMILY_OUTPUTS`)."""
+    outputs the loop model needs, `empact.control.family.LOOP_FAMILY_OUTPUTS`) on the
+    analytic traction curve or the measured one (`traction_table`, ``--traction``)."""
     from ..control.family import LOOP_FAMILY_OUTPUTS, plant_family
     from ..variator.geometry import check_ratio
 
@@ -99,7 +102,8 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
             check_number(f"--{opt}", x, lo, hi, lo_open=var in ("r_g", "F_s", "omega_p"),
                          unit=unit)
         if var == "nu":
-            operating_values(params, "slip", v)  # within the traction curve's valid range
+            # within the traction curve's valid range
+            operating_values(params, "slip", v, traction=traction_table)
         if var == "r_g":
             check_ratio(v, params.variator, "--ratio")
         values[var] = v if v.size > 1 else float(v[0])
@@ -111,9 +115,11 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
     if sum(k in values for k in ("nu", "tau", "F_s", "T_l")) > 2:
         raise InputError("give at most two of --slip (or --tau), --clamp, --load-torque (the "
                          "trim solves the third)")
+    tables = {} if traction_table is None else {"traction": traction_table}
     return plant_family(params, damping=damping, kinematics=kinematics, shift_law=shift_law,
                         drive=drive, load=load, sweep=sweep,
-                        outputs=LOOP_FAMILY_OUTPUTS if loop_outputs else None, **values)
+                        outputs=LOOP_FAMILY_OUTPUTS if loop_outputs else None, **tables,
+                        **values)
 
 
 def _summary(fam) -> dict:
@@ -134,8 +140,8 @@ def _summary(fam) -> dict:
 @force_option
 @quiet_option
 def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics, shift_law,
-               drive, load_mode, out, scheduler, workers, scheduler_timeout, params_file,
-               as_json, json_out, force, quiet) -> None:
+               drive, load_mode, traction_table, out, scheduler, workers, scheduler_timeout,
+               params_file, as_json, json_out, force, quiet) -> None:
     """Trim and exactly linearise the machine over a grid of operating points (a plant
     family: T_mp, T_ms and the load -> r_g, nu, nu_r), for control design and LPV models."""
     from ..control.family import save_family
@@ -146,7 +152,8 @@ def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics,
     fam = family_from_options(params, {"ratio": ratio, "slip": slip, "tau": tau,
                                        "clamp": clamp, "speed": speed,
                                        "load-torque": load_torque}, damping, kinematics,
-                              shift_law, drive, load_mode, sweep)
+                              shift_law, drive, load_mode, sweep,
+                              traction_table=traction_table)
     wall = time.perf_counter() - t0
     if out:
         save_family(fam, out)
@@ -188,17 +195,18 @@ loop_option = click.option(
 
 
 @control_group.command("design")
-@click.option("--method", type=click.Choice(["pi", "hinf"]), default="pi", show_default=True,
-              help="Decentralised PI checked on the loop that runs (gain-scheduled by "
-                   "default), or H-infinity mixed sensitivity on the continuous plant.")
+@click.option("--method", type=click.Choice(list(CONTROLLER_TYPES)), default="pi",
+              show_default=True, help="The controller type (empact.control.designs): "
+              + "; ".join(f"{t.name}: {t.summary}" for t in CONTROLLER_TYPES.values()) + ".")
 @click.option("--bandwidth", default=None, metavar="RATIO,SLIP",
-              help="Loop bandwidths [Hz] (default: the shipped designs: 0.5,1 for pi, "
-                   "0.1,0.05 for hinf).")
-@click.option("--alpha-min", "alpha_min", type=float, default=0.3, show_default=True,
-              help="PI: smallest multiloop disk margin at every grid point.")
-@click.option("--schedule/--no-schedule", default=True, show_default=True,
+              help="Loop bandwidths [Hz] (default: the design function's, the shipped "
+                   "design's: design_pi 0.5,1; design_hinf 0.1,0.05).")
+@click.option("--alpha-min", "alpha_min", type=float, default=None,
+              help="PI: smallest multiloop disk margin at every grid point (default: "
+                   "design_pi's, 0.3, the shipped design's).")
+@click.option("--schedule/--no-schedule", default=None,
               help="PI: gain-schedule the proportional gains over the family's axes (r_g, "
-                   "tau, F_s).")
+                   "tau, F_s) (default: design_pi's: scheduled, on the loop that runs).")
 @click.option("--slip-signal", "slip_signal",
               type=click.Choice(["nu", "nu_r", "ln_nu", "ln_nu_r"]), default="nu",
               show_default=True, help="The measured slip, or its logarithm (ln_: the slip's "
@@ -216,24 +224,35 @@ loop_option = click.option(
 @quiet_option
 def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loop_scenario,
                ratio, slip, tau, clamp, speed, load_torque, damping, kinematics, shift_law,
-               drive, load_mode, out, params_file, as_json, json_out, force, quiet) -> None:
+               drive, load_mode, traction_table, out, params_file, as_json, json_out, force,
+               quiet) -> None:
     """Design a controller (T_mp, T_ms) from the errors of (r_g, slip) on a plant family
     (default: empact.control.family.DESIGN_GRID: r_g 0.5..2 (7, geometric) x torque ratio
     tau 0.8, 0.9, 0.95 x clamping force 8, 16, 32 kN at [operating]'s speed)."""
     from ..control.family import DESIGN_GRID
-    from ..control.hinf import design_hinf
-    from ..control.pi import design_pi
 
-    bw_text = bandwidth or ("0.5,1" if method == "pi" else "0.1,0.05")
-    try:
-        bw = tuple(float(x) for x in bw_text.split(","))
-    except ValueError:
-        raise InputError(f"--bandwidth {bw_text!r}: two numbers RATIO,SLIP [Hz]") from None
-    if len(bw) != 2:
-        raise InputError(f"--bandwidth {bw_text!r}: two numbers RATIO,SLIP [Hz]")
-    for b in bw:
-        check_number("--bandwidth", b, 0.0, 50.0, lo_open=True, unit="Hz")
-    if method == "pi":
+    kind = CONTROLLER_TYPES[method]
+    # only what the user gives: the defaults are the design function's (one source)
+    given: dict = {"slip": slip_signal}
+    if bandwidth is not None:
+        try:
+            bw = tuple(float(x) for x in bandwidth.split(","))
+        except ValueError:
+            raise InputError(f"--bandwidth {bandwidth!r}: two numbers RATIO,SLIP [Hz]") from None
+        if len(bw) != 2:
+            raise InputError(f"--bandwidth {bandwidth!r}: two numbers RATIO,SLIP [Hz]")
+        for b in bw:
+            check_number("--bandwidth", b, 0.0, 50.0, lo_open=True, unit="Hz")
+        given["bandwidth_hz"] = bw
+    for option, name, value in (("--alpha-min", "alpha_min", alpha_min),
+                                ("--schedule/--no-schedule", "schedule", schedule)):
+        if value is None:
+            continue
+        if not kind.accepts(name):
+            raise InputError(f"{option}: not an option of --method {method} "
+                             f"({kind.function})")
+        given[name] = value
+    if alpha_min is not None:
         check_number("--alpha-min", alpha_min, 0.05, 1.9,
                      note="the multiloop disk margin each plant must keep")
     params = get_params(params_file)
@@ -254,7 +273,7 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
     with progress_bar(total=2, desc=f"control design ({method}): family, design",
                       unit="step", enabled=not quiet) as bar:
         fam = family_from_options(params, raw, damping, kinematics, shift_law, drive,
-                                  load_mode, loop_outputs=True)
+                                  load_mode, loop_outputs=True, traction_table=traction_table)
         bar.update(1)
         if not fam.ok.all():
             raise InputError(f"{int((~fam.ok).sum())} grid points do not trim ("
@@ -263,11 +282,9 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
         if nom is not None and (len(nom) != len(fam.shape)
                                 or any(not 0 <= i < s for i, s in zip(nom, fam.shape))):
             raise InputError(f"--nominal {nominal!r}: indices in a grid of shape {fam.shape}")
-        if method == "pi":
-            ctrl = design_pi(fam, bw, alpha_min=alpha_min, slip=slip_signal, nominal=nom,
-                             loop=loop, params=params, schedule=schedule)
-        else:
-            ctrl = design_hinf(fam, bw, slip=slip_signal, nominal=nom)
+        if kind.accepts("loop"):  # checked on the loop that runs
+            given.update(loop=loop, params=params)
+        ctrl = kind.design_function()(fam, nominal=nom, **given)
         bar.update(1)
     ctrl.save(out)
     if as_json or json_out:
@@ -293,12 +310,13 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
               "margin is below --min-disk-margin (without it: report and exit 0).")
 @click.option("--mu", is_flag=True, help="Also the structured singular value bound "
               "(slycot ab13md, continuous loop) over a parametric spread covering the family.")
+@traction_option
 @params_option
 @json_options
 @force_option
 @quiet_option
-def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, params_file,
-              as_json, json_out, force, quiet) -> None:
+def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, traction_table,
+              params_file, as_json, json_out, force, quiet) -> None:
     """Closed-loop poles and disk margins of CONTROLLER on the loop that runs (sampled, with
     the loop's sensors and feedforwards; empact.control.loop) against every plant of a
     family."""
@@ -308,10 +326,14 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, params
     from ..control.robustness import disk_gain_phase, mu_upper_bound
 
     check_number("--min-disk-margin", min_dm, 0.0, 1.99)
+    if family_file and traction_table is not None:
+        raise InputError("--traction: give it with the design family, not with --family (a "
+                         "family file records its own model options)")
     ctrl = load_controller(controller)
     params = get_params(params_file)
     loop = _loop_from(loop_scenario, params)
-    fam = load_family(family_file) if family_file else design_family(params)
+    tables = {} if traction_table is None else {"traction": traction_table}
+    fam = load_family(family_file) if family_file else design_family(params, **tables)
     for name in ctrl.measured:
         base = name[3:] if name.startswith("ln_") else name
         if base not in fam.outputs:
@@ -369,12 +391,13 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, params
               "exits 1 either way).")
 @click.option("--out", "out", type=OutputFile(("csv",)), default=None,
               help="Write the time histories (.csv; an existing file only with --force).")
+@traction_option
 @params_option
 @json_options
 @force_option
 @quiet_option
-def simulate_cmd(scenario, example, list_ex, controller, strict, out, params_file, as_json,
-                 json_out, force, quiet) -> None:
+def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_table,
+                 params_file, as_json, json_out, force, quiet) -> None:
     """Closed loop on the nonlinear machine: print the scenario's metrics and its targets
     (exit 1 when the run stops early, or with --strict when a target is missed)."""
     from ..control.closed_loop import (
@@ -399,6 +422,8 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, params_fil
                          "with 'empact simulate')")
     if controller:
         sc = sc.with_controller(controller)
+    if traction_table is not None:
+        sc = sc.with_options(traction=traction_table)
     params = get_params(params_file)
     check_references(sc, params)
     run = run_closed_loop(sc, params, progress=not quiet)

@@ -3,6 +3,8 @@
 rig's records (Fig. 14)."""
 from __future__ import annotations
 
+from typing import Any
+
 import click
 import numpy as np
 
@@ -23,6 +25,7 @@ from ._common import (
     parse_list,
     quiet_option,
     to_jsonable,
+    traction_option,
 )
 from .linear import plot_option
 
@@ -45,6 +48,7 @@ def _ratios(text: str) -> list[float]:
 @click.option("--order", type=int, default=None, help="Model order (default: by fit).")
 @click.option("--step", "step", type=float, default=1e-4, show_default=True,
               help="Servo torque step size [N m].")
+@traction_option
 @params_option
 @json_options
 @click.option("--out", type=click.Path(file_okay=False), default=None,
@@ -54,12 +58,14 @@ def _ratios(text: str) -> list[float]:
 @force_option
 @quiet_option
 def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | None,
-             order: int | None, step: float, params_file: str | None, as_json: bool,
+             order: int | None, step: float, traction_table: Any, params_file: str | None,
+             as_json: bool,
              json_out: str | None, out: str | None, plot: str | None, force: bool,
              quiet: bool) -> None:
     """Identify (T_mp, T_ms) -> (r_g, nu) from step responses of the nonlinear model (Fig 2)."""
     from .._io import atomic_folder
     from ..experiments.plant_id import identify_plant
+    from ..nonlinear.model import nonlinear_model
 
     if order is not None:
         order = check_int("--order", order, 1, 200)
@@ -69,9 +75,13 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
     r_list = _ratios(ratios)
     dest = None if out is None else output_folder(out, "--out", force=force)
     params = get_params(params_file)
-    base = operating_point(params, trim=True, slip=nu, clamp=F_s, speed=omega_p)
+    base = operating_point(params, trim=True, traction=traction_table, slip=nu, clamp=F_s,
+                           speed=omega_p)
     check_ratio(r_list, params.variator, "--ratios")
-    results = [identify_plant(params, base.replace(r_g=r), order=order, amplitudes=(step, step))
+    machine = {} if traction_table is None else {
+        "model": nonlinear_model(params, traction=traction_table)}
+    results = [identify_plant(params, base.replace(r_g=r), order=order, amplitudes=(step, step),
+                              **machine)
                for r in progress_bar(r_list, desc="identify", unit="ratio", enabled=not quiet)]
     models = [{"r_g": res.r_g, "operating_point": res.experiment.op.to_dict(),
                "order": res.realization.order, "fit_percent": res.realization.fit,
@@ -124,6 +134,7 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
 @click.option("--friction", type=float, default=0.2, show_default=True,
               help="Spindle Coulomb friction torque [N m] (both spindles).")
 @click.option("--seed", type=int, default=1, show_default=True)
+@traction_option
 @params_option
 @click.option("--out", required=True, type=OutputFile(("csv",)),
               help="CSV records (time, T_mp, T_ms, theta_mp, theta_ms, nu; units in the "
@@ -132,7 +143,8 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
 @click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
 def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p: float,
         rms: float, band: str, duration: float, fs: float, friction: float, seed: int,
-        params_file: str | None, out: str, force: bool, quiet: bool) -> None:
+        traction_table: Any, params_file: str | None, out: str, force: bool,
+        quiet: bool) -> None:
     """Virtual test rig: excite a servo torque of the nonlinear model (Fig 14).
 
     The model has spindle Coulomb friction and sensor noise; the records it writes are what
@@ -160,13 +172,14 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
     friction = check_number("--friction", friction, 0.0, 100.0, unit="N m")
     seed = check_int("--seed", seed, 0, 2**32 - 1)
     params = get_params(params_file)
-    op = operating_point(params, trim=True, ratio=r_g, slip=nu, clamp=F_s, speed=omega_p)
+    op = operating_point(params, trim=True, traction=traction_table, ratio=r_g, slip=nu,
+                         clamp=F_s, speed=omega_p)
     settings = RigSettings(r_g=op.r_g, nu=op.nu, F_s=op.F_s, omega_p=op.omega_p, excite=excite,
                            excitation=excitation, band_hz=(lo, hi), rms=rms, duration=duration,
                            sample_rate=fs, coulomb=(friction, friction), seed=seed,
                            period=min(2048, int(duration * fs)),
                            settle=0.0)  # the records are written whole
-    rec = run_rig(params, settings, progress=not quiet)
+    rec = run_rig(params, settings, progress=not quiet, traction=traction_table)
     if not rec.complete:
         raise InputError(f"rig simulation incomplete, nothing written: {rec.message}")
     atomic_write_text(out, rec.to_csv())

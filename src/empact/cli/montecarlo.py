@@ -16,6 +16,7 @@ from ._common import (
     quiet_option,
     sweep_from_options,
     sweep_options,
+    traction_option,
 )
 
 
@@ -41,13 +42,14 @@ from ._common import (
 @click.option("--out", "out", type=click.Path(file_okay=False), default=None,
               help="Folder for runs.csv, runs.json and summary.json.")
 @sweep_options
+@traction_option
 @params_option
 @json_options
 @force_option
 @quiet_option
 def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, example, controller,
-                   seed, out, scheduler, workers, scheduler_timeout, params_file, as_json,
-                   json_out, force, quiet) -> None:
+                   seed, out, scheduler, workers, scheduler_timeout, traction_table,
+                   params_file, as_json, json_out, force, quiet) -> None:
     """Monte Carlo over parameter spread: each run draws the spread's parameters, evaluates
     the analysis and is recorded (a failed run with its reason); prints the summary
     (quantiles, failure count).
@@ -68,6 +70,10 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
     runs = check_int("--runs", runs, 1, 1_000_000)
     seed = check_int("--seed", seed, 0, 2**63 - 1)
     closed = analysis == "closed-loop"
+    if traction_table is not None and analysis == "slip":
+        raise InputError("--traction: the slip analysis draws the analytic curve's "
+                         "coefficients; a measured table serves --analysis plant and "
+                         "closed-loop")
     if not closed and (scenario or example or controller):
         raise InputError(f"--analysis {analysis}: --scenario, --example and --controller "
                          "belong to --analysis closed-loop")
@@ -88,10 +94,12 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
         if not sc.closed_loop:
             raise InputError(f"--scenario {scenario}: no [controller] table (the closed-loop "
                              "analysis needs a closed-loop scenario)")
+        if traction_table is not None:
+            sc = sc.with_options(traction=traction_table)
         check_references(sc, params)
         ctrl = resolve_controller(controller or sc.controller.file)
     result = monte_carlo(params, spread, runs, analysis, seed=seed, scenario=sc,
-                         controller=ctrl, sweep=sweep)
+                         controller=ctrl, sweep=sweep, traction=traction_table)
     if result.failures == result.runs:
         kind, f = next(iter(result.summary()["failure_reasons"].items()))
         raise Failed(f"every one of the {result.runs} runs failed ({f['count']} x {kind}, "

@@ -1,6 +1,8 @@
 """``empact simulate``, ``empact linearize`` and ``empact nmp``: the nonlinear model."""
 from __future__ import annotations
 
+from typing import Any
+
 import click
 import numpy as np
 
@@ -22,6 +24,7 @@ from ._common import (
     params_option,
     parse_choices,
     parse_list,
+    traction_option,
 )
 from .linear import plot_option
 
@@ -42,12 +45,14 @@ MAX_SAMPLES = 5_000_000
 @click.option("--states", "states", is_flag=True, help="Also write the states to the CSV.")
 @click.option("--keep-partial", is_flag=True,
               help="When the run stops early, write what was computed (marked INCOMPLETE).")
+@traction_option
 @params_option
 @force_option
 @click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
 def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: str | None,
                  formats: str, duration: float | None, states: bool, keep_partial: bool,
-                 params_file: str | None, force: bool, quiet: bool) -> None:
+                 traction_table: Any, params_file: str | None, force: bool,
+                 quiet: bool) -> None:
     """Simulate SCENARIO.toml (or --example NAME); write CSV (units in the header) and a figure
     (PNG; --formats png,svg adds the vector figure).
 
@@ -69,6 +74,8 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
     fmts = parse_choices("--formats", formats, PLOT_SUFFIXES)
     sc = load_scenario(example_path(example) if example else scenario)
+    if traction_table is not None:
+        sc = sc.with_options(traction=traction_table)
     if duration is not None:
         sc = sc.with_duration(check_number("--duration", duration, 0.0, 3600.0, lo_open=True,
                                            unit="s"))
@@ -98,9 +105,12 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
 
 
 def _options(drive: str, load: str, damping: str, kinematics: str, shift_law: str,
-             thrust_ratio: str | None, creep_map: str | None = None) -> dict:
+             thrust_ratio: str | None, creep_map: str | None = None,
+             traction_table: Any = None) -> dict:
     opts = {"drive": drive, "load": load, "damping": damping, "kinematics": kinematics,
             "shift_law": shift_law}
+    if traction_table is not None:
+        opts["traction"] = traction_table
     if thrust_ratio:
         from ..variator.thrust_ratio import load_thrust_ratio
 
@@ -112,7 +122,7 @@ def _options(drive: str, load: str, damping: str, kinematics: str, shift_law: st
     return opts
 
 
-_TABLES = ("thrust_ratio", "creep_map")
+_TABLES = ("thrust_ratio", "creep_map", "traction")
 
 
 def _described(opts: dict) -> dict:
@@ -147,6 +157,7 @@ def model_options_for(drive: str = "torque") -> list:
         click.option("--creep-map", "creep_map", type=click.Path(dir_okay=False),
                      default=None, help="Measured shift-speed map K_c(r_g, F_s), .csv "
                      "(r_g,F_s,K_c) or .toml (default: the analytic creep law of [shift])."),
+        traction_option,
     ]
 
 
@@ -180,7 +191,8 @@ def _add(options):
 @params_option
 @force_option
 def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, drive, load,
-                  kinematics, shift_law, thrust_ratio, creep_map, params_file, force) -> None:
+                  kinematics, shift_law, thrust_ratio, creep_map, traction_table, params_file,
+                  force) -> None:
     """Exact linear plant at an operating point: A, B, C, D.
 
     Inputs T_mp, T_ms (control) and the load T_l (or omega_l_ref with --load speed) as the
@@ -201,9 +213,10 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, dr
     if out is None and fmt not in (None, "json"):
         raise InputError(f"--format {fmt} needs --out FILE")
     params = get_params(params_file)
-    point = operating_point(params, trim=True, ratio=r_g, slip=nu, tau=tau, clamp=F_s,
-                            load_torque=T_l, speed=omega_p)
-    opts = _options(drive, load, damping, kinematics, shift_law, thrust_ratio, creep_map)
+    point = operating_point(params, trim=True, traction=traction_table, ratio=r_g, slip=nu,
+                            tau=tau, clamp=F_s, load_torque=T_l, speed=omega_p)
+    opts = _options(drive, load, damping, kinematics, shift_law, thrust_ratio, creep_map,
+                    traction_table)
     model = nonlinear_model(params, **opts)
     op = trim(model, point)
     dist = disturbance_input(model)
@@ -244,20 +257,20 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, dr
 @json_options
 @force_option
 def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, damping, drive, load,
-            kinematics, shift_law, thrust_ratio, creep_map, params_file, as_json, json_out,
-            force) -> None:
+            kinematics, shift_law, thrust_ratio, creep_map, traction_table, params_file, as_json,
+            json_out, force) -> None:
     """Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio (Sec 2.3)."""
     from ..nonlinear.nmp import nmp_analysis
 
     r = parse_list(ratios, "--ratios", most=200)
     f_max = check_number("--fmax", f_max, 0.0, 1e5, lo_open=True, unit="Hz")
     params = get_params(params_file)
-    base = operating_point(params, trim=True, slip=nu, tau=tau, clamp=F_s, load_torque=T_l,
-                           speed=omega_p)
+    base = operating_point(params, trim=True, traction=traction_table, slip=nu, tau=tau,
+                           clamp=F_s, load_torque=T_l, speed=omega_p)
     check_ratio(r, params.variator, "--ratios")
     res = nmp_analysis(params, r, base=base, f_max_hz=f_max, slip=slip_signal,
                        **_options(drive, load, damping, kinematics, shift_law, thrust_ratio,
-                                  creep_map))
+                                  creep_map, traction_table))
     if plot:
         from ..plotting import plot_nmp
 

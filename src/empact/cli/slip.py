@@ -28,7 +28,7 @@ from ..slip import (
     stability_map,
     zero_locus,
 )
-from ..variator.traction import TractionModel, load_traction, traction_curves, traction_from_params
+from ..variator.traction import TractionModel, traction_curves, traction_from_params
 from ._common import (
     LINEAR_OPTIONS,
     OPTION_VARIABLE,
@@ -43,6 +43,7 @@ from ._common import (
     quiet_option,
     sweep_from_options,
     sweep_options,
+    traction_option,
 )
 from .linear import frequency_grid, plot_option
 
@@ -97,16 +98,14 @@ def op_options(fn: Callable) -> Callable:
         unit, doc = VARIABLES[var]
         fn = click.option(f"--{name}", name, default=None, metavar="VALUE|LIST|RANGE",
                           help=f"{doc} [{unit}] ({var}); default from the parameter file.")(fn)
-    fn = click.option("--traction", "traction_file", type=click.Path(dir_okay=False),
-                      default=None, help="Tabulated traction curves (CSV r_g,nu,mu or TOML "
-                                         "[[curve]]); default: the analytic curve.")(fn)
+    fn = traction_option(fn)
     return params_option(fn)
 
 
-def _setup(params_file: str | None, traction_file: str | None) \
+def _setup(params_file: str | None, traction_table: TractionModel | None) \
         -> tuple[Params, TractionModel]:
     params = get_params(params_file)
-    tr = load_traction(traction_file) if traction_file else traction_from_params(params)
+    tr = traction_table if traction_table is not None else traction_from_params(params)
     return params, tr
 
 
@@ -146,10 +145,10 @@ def slip_group() -> None:
 @op_options
 @json_options
 @force_option
-def statespace(ratio, slip, clamp, speed, traction_file, params_file, as_json,
+def statespace(ratio, slip, clamp, speed, traction_table, params_file, as_json,
                json_out, force) -> None:
     """The linearised slip model at one operating point (A, B, C, D with names)."""
-    params, tr = _setup(params_file, traction_file)
+    params, tr = _setup(params_file, traction_table)
     base, _ = _grid(params, tr, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed),
                     max_sweeps=0)
     m = slip_model(params, base, tr)
@@ -178,10 +177,10 @@ def statespace(ratio, slip, clamp, speed, traction_file, params_file, as_json,
 @json_options
 @plot_option
 @force_option
-def poles(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_out, plot,
+def poles(ratio, slip, clamp, speed, traction_table, params_file, as_json, json_out, plot,
           force) -> None:
     """Poles at one operating point, or over one swept variable (Fig. 11: --slip range)."""
-    params, tr = _setup(params_file, traction_file)
+    params, tr = _setup(params_file, traction_table)
     base, sweeps = _grid(params, tr, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed),
                          max_sweeps=1)
     name, values = next(iter(sweeps.items())) if sweeps else ("nu", np.array([base.nu]))
@@ -273,10 +272,10 @@ def rootlocus(ratio, slip, cb_min, cb_max, params_file, as_json, json_out, plot,
 @json_options
 @plot_option
 @force_option
-def frf(ratio, slip, clamp, speed, traction_file, params_file, inp, out, fmin, fmax, n,
+def frf(ratio, slip, clamp, speed, traction_table, params_file, inp, out, fmin, fmax, n,
         as_json, json_out, plot, force) -> None:
     """Frequency response (default F_s -> nu) at one or several points (Fig. 12)."""
-    params, tr = _setup(params_file, traction_file)
+    params, tr = _setup(params_file, traction_table)
     f = frequency_grid(fmin, fmax, n)
     base, sweeps = _grid(params, tr, dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed),
                          max_sweeps=1, limit=max(2, min(MAX_SWEEP, 10_000_000 // len(f))))
@@ -314,10 +313,10 @@ def frf(ratio, slip, clamp, speed, traction_file, params_file, inp, out, fmin, f
 @json_options
 @plot_option
 @force_option
-def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_out, plot,
+def zeros(ratio, slip, clamp, speed, traction_table, params_file, as_json, json_out, plot,
           force) -> None:
     """Zeros of F_s -> nu at one ratio or over a --ratio list/range (Fig. 13)."""
-    params, tr = _setup(params_file, traction_file)
+    params, tr = _setup(params_file, traction_table)
     raw = dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed)
     base, sweeps = _grid(params, tr, raw, max_sweeps=1)
     if sweeps and "r_g" not in sweeps:
@@ -360,10 +359,10 @@ def zeros(ratio, slip, clamp, speed, traction_file, params_file, as_json, json_o
 @plot_option
 @force_option
 @quiet_option
-def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk, scheduler,
+def map_cmd(ratio, slip, clamp, speed, traction_table, params_file, method, chunk, scheduler,
             workers, scheduler_timeout, as_json, json_out, plot, force, quiet) -> None:
     """Stability map over two ranges (--slip 0.001:0.06:200 --ratio 0.5:2.2:200)."""
-    params, tr = _setup(params_file, traction_file)
+    params, tr = _setup(params_file, traction_table)
     raw = dict(ratio=ratio, slip=slip, clamp=clamp, speed=speed)
     base, sweeps = _grid(params, tr, raw, max_sweeps=2, exact=2, limit=MAX_MAP // 2)
     order = ["nu", "F_s", "omega_p", "r_g"]  # x axis: the first of these that is swept
@@ -398,18 +397,17 @@ def map_cmd(ratio, slip, clamp, speed, traction_file, params_file, method, chunk
               metavar="LIST|RANGE", help="Ratios r_g [-].")
 @click.option("--slip", "slip", default="0:0.1:101", show_default=True, metavar="LIST|RANGE",
               help="Slips nu [-] (0.01 is 1 %).")
-@click.option("--traction", "traction_file", type=click.Path(dir_okay=False), default=None,
-              help="Tabulated traction curves instead of the analytic one.")
+@traction_option
 @params_option
 @json_options
 @plot_option
 @force_option
-def traction(ratio, slip, traction_file, params_file, as_json, json_out, plot, force) -> None:
+def traction(ratio, slip, traction_table, params_file, as_json, json_out, plot, force) -> None:
     """Traction coefficient mu and slope mu' over slip at some ratios (Fig. 10)."""
-    params, tr = _setup(params_file, traction_file)
+    params, tr = _setup(params_file, traction_table)
     r = operating_values(params, "ratio", parse_values(ratio, "ratio"))
     nu = operating_values(params, "slip", parse_values(slip, "slip"), traction=tr)
-    curves = traction_curves(tr, r, nu, label="(tabulated)" if traction_file else "")
+    curves = traction_curves(tr, r, nu, label="(tabulated)" if traction_table is not None else "")
     if plot:
         from ..plotting import plot_traction
 

@@ -111,7 +111,9 @@ class PlantFamily:
         Points that trimmed (the others hold NaN and a `reason`).
     reason : array of str, shape ``grid``
     options : dict
-        The model options.
+        The model options: drive, load, damping, kinematics, shift law, and each tabulated
+        law given (``thrust_ratio``, ``creep_map``, ``traction``; `to_dict` and the saved
+        file name it by its source file, which `nonlinear_model` reads back).
     """
 
     axes: dict[str, NDArray[np.float64]]
@@ -285,7 +287,7 @@ class PlantFamily:
             "states_units": [STATE_UNITS[s] for s in self.states],
             "inputs_units": [INPUT_UNITS[s] for s in self.inputs],
             "outputs_units": [OUTPUT_UNITS[s] for s in self.outputs],
-            "options": dict(self.options)}
+            "options": {k: getattr(v, "source", v) for k, v in self.options.items()}}
         for name, values in self.axes.items():
             d[f"axis_{name}"] = values
         for name, g in zip(self.axes, grids):
@@ -425,8 +427,21 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
         states=model.states, inputs=inputs, outputs=outputs,
         operating={k: v.reshape(grid) for k, v in op_all.items()},
         ok=res["ok"].reshape(grid), reason=res["reason"].reshape(grid),
-        options={k: getattr(model.options, k) for k in ("drive", "load", "damping",
-                                                        "kinematics", "shift_law")})
+        options=_family_options(model.options))
+
+
+#: the model options a family records (and a design rebuilds its model from); the tabulated
+#: laws only when given
+_FAMILY_OPTIONS = ("drive", "load", "damping", "kinematics", "shift_law")
+_TABLE_OPTIONS = ("thrust_ratio", "creep_map", "traction")
+
+
+def _family_options(options) -> dict[str, Any]:
+    """The options of `_FAMILY_OPTIONS`, and each tabulated law that is given."""
+    out = {k: getattr(options, k) for k in _FAMILY_OPTIONS}
+    out.update({k: getattr(options, k) for k in _TABLE_OPTIONS
+                if getattr(options, k) is not None})
+    return out
 
 
 def design_family(params: Params, **options) -> "PlantFamily":

@@ -245,7 +245,7 @@ def mixed_sensitivity_plant(G, bandwidth_hz, *, M: float = 2.0, A_low: float = 1
     return P, W1, W2, Gs
 
 
-def design_hinf(family: PlantFamily, bandwidth_hz=(0.5, 0.2), *, slip: str = "nu",
+def design_hinf(family: PlantFamily, bandwidth_hz=(0.1, 0.05), *, slip: str = "nu",
                 nominal: tuple[int, ...] | None = None, f_keep_hz: float = 100.0,
                 u_scale: float = 1.0, f_keep: float | None = None) -> Controller:
     """H-infinity S / KS mixed-sensitivity controller on the family's nominal plant, checked
@@ -255,7 +255,7 @@ def design_hinf(family: PlantFamily, bandwidth_hz=(0.5, 0.2), *, slip: str = "nu
     ----------
     family : PlantFamily
     bandwidth_hz : (ratio, slip)
-        Performance bandwidths of W1 [Hz].
+        Performance bandwidths of W1 [Hz] (default: the shipped design's).
     slip : measured slip signal (see `empact.control.pi.design_pi`)
     nominal : grid index of the nominal plant (default: the well-posed point nearest the
         grid's middle; a given point that is ill-posed is an error)

@@ -88,10 +88,10 @@ def pi_controller(kp, wi, wf, measured=("r_g", "nu"), outputs=("T_mp", "T_ms"),
                       design or {})
 
 
-def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float = 0.5,
+def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float = 0.3,
               slip: str = "nu", nominal: tuple[int, ...] | None = None,
               loop: LoopConfig | None = None, params: Params | None = None,
-              schedule: bool = False) -> Controller:
+              schedule: bool | None = None) -> Controller:
     """The decentralised PI controller of the module notes for every plant of `family`.
 
     Parameters
@@ -101,8 +101,9 @@ def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float 
     bandwidth_hz : (ratio, slip)
         Requested crossovers of the ratio and slip loops [Hz] on the nominal plant.
     alpha_min : float
-        Smallest multiloop disk margin allowed at any grid point (0.5: simultaneous gain
-        0.6-1.67, i.e. +-4.4 dB, and +-28 deg in both loops).
+        Smallest multiloop disk margin allowed at any grid point (the default 0.3, the
+        shipped design's: simultaneous gain 0.74-1.35, i.e. +-2.6 dB, and +-17 deg in both
+        loops; 0.5: +-4.4 dB and +-28 deg).
     slip : {"nu", "nu_r", "ln_nu", "ln_nu_r"}
         The measured slip signal, or its logarithm: the slip's response to the clamping
         force varies by orders of magnitude between micro-slip and the flat top of the
@@ -116,9 +117,10 @@ def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float 
         y)`` alone.
     params : Params
         With `loop`.
-    schedule : bool
+    schedule : bool, optional
         Gain-schedule the proportional gains over the family's axes (``r_g``, ``tau``,
-        ``F_s``; with `loop`): each loop's crossover is the requested one at every grid
+        ``F_s``; with `loop`; default: scheduled when `loop` is given, as the shipped
+        design, not scheduled without it): each loop's crossover is the requested one at every grid
         point (``|k_p(sigma) G_ii(j w_c; sigma)| = 1``), interpolated between them
         (`empact.control.controller.Schedule`).
 
@@ -146,6 +148,8 @@ def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float 
     >>> bool((check.max_real_pole < 0).all()), bool(check.disk_margin.min() >= 0.3)
     (True, True)
     """
+    if schedule is None:
+        schedule = loop is not None
     if loop is not None:
         return _design_pi_loop(family, bandwidth_hz, alpha_min, slip, nominal, loop, params,
                                schedule)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import csv
 import io
 from dataclasses import InitVar, dataclass, field
-from typing import Literal, Mapping
+from typing import Any, Literal, Mapping
 
 import numpy as np
 
@@ -209,7 +209,8 @@ class RigRecord(TableResult):
         return buf.getvalue()
 
 
-def run_rig(params, settings: RigSettings | None = None, *, progress: bool = False) -> RigRecord:
+def run_rig(params, settings: RigSettings | None = None, *, progress: bool = False,
+            traction: Any = None) -> RigRecord:
     """Run one virtual rig experiment (nonlinear model, Coulomb friction, sensor noise).
 
     Parameters
@@ -221,6 +222,9 @@ def run_rig(params, settings: RigSettings | None = None, *, progress: bool = Fal
         (default `RigSettings()`).
     progress : bool
         A progress bar on stderr.
+    traction : TabulatedTraction, optional
+        Measured traction curves for the machine (`empact.variator.traction.load_traction`);
+        default the analytic curve of ``params.traction``.
 
     Returns
     -------
@@ -231,7 +235,7 @@ def run_rig(params, settings: RigSettings | None = None, *, progress: bool = Fal
     """
     s = settings or RigSettings()
     model = nonlinear_model(params, coulomb_sp=float(s.coulomb[0]),
-                            coulomb_ss=float(s.coulomb[1]))
+                            coulomb_ss=float(s.coulomb[1]), traction=traction)
     op = trim(model, OperatingPoint(r_g=s.r_g, nu=s.nu, F_s=s.F_s, omega_p=s.omega_p))
     n = int(round(s.duration * s.sample_rate))
     t = np.arange(n) / s.sample_rate

@@ -77,18 +77,26 @@ class AnalysisContext:
     controller : `empact.control.controller.Controller` (closed loop only)
     nominal : the nominal `empact.params.Params` the controller knows (closed loop: its
         traction curve, geometry and holding torques; each run's machine differs from it)
+    traction : measured traction curves (`empact.variator.traction.TabulatedTraction`) of
+        the plant analysis's model (the closed loop's are in its scenario's options); None:
+        the analytic curve
     """
 
     kind: str
     scenario: Any = None
     controller: Any = None
     nominal: Any = None
+    traction: Any = None
 
     def __post_init__(self) -> None:
         if self.kind not in ANALYSES:
             raise ParameterError(f"analysis {self.kind!r}: choose one of {', '.join(ANALYSES)}")
         if self.kind == "closed-loop" and self.scenario is None:
             raise ParameterError("the closed-loop analysis needs a scenario")
+        if self.kind == "slip" and self.traction is not None:
+            raise ParameterError("traction: the slip analysis draws the analytic curve's "
+                                 "coefficients; a measured table serves the plant and "
+                                 "closed-loop analyses")
 
 
 def evaluate(params: Params, context: AnalysisContext) -> dict[str, float]:
@@ -117,7 +125,8 @@ def evaluate(params: Params, context: AnalysisContext) -> dict[str, float]:
 
 
 def _plant(params: Params, context: AnalysisContext) -> dict[str, float]:
-    pl = plant(params, params.operating, disturbance=False)
+    tables = {} if context.traction is None else {"traction": context.traction}
+    pl = plant(params, params.operating, disturbance=False, **tables)
     sys, op = pl.system, pl.trim
     poles = np.linalg.eigvals(sys.A)
     f, zeta = oscillatory(poles)

@@ -204,7 +204,7 @@ def failure_kind(exc: BaseException) -> str:
 
 def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plant", *,
                 seed: int = 0, scenario: Any = None, controller: Any = None,
-                sweep: SweepOptions | None = None) -> MonteCarloResult:
+                sweep: SweepOptions | None = None, traction: Any = None) -> MonteCarloResult:
     """Evaluate an analysis over `runs` parameter sets drawn from `spread`.
 
     Parameters
@@ -218,6 +218,9 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
         and controller
         (`Controller`, default the scenario's own)
     sweep : where the runs are computed (`empact.sweep.SweepOptions`; default in process)
+    traction : measured traction curves of the machine (`empact.variator.traction.
+        TabulatedTraction`; the plant and closed-loop analyses; default the analytic curve of
+        each run's ``[traction]``, which a spread may vary; the table is not varied)
 
     Returns
     -------
@@ -241,8 +244,10 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
     if analysis == "closed-loop" and controller is None and scenario is not None:
         controller = resolve_controller(scenario.controller.file)
     # the controller knows the nominal machine; each run's differs
+    if traction is not None and scenario is not None:
+        scenario = scenario.with_options(traction=traction)
     context = AnalysisContext(analysis, scenario, controller,
-                              params if analysis == "closed-loop" else None)
+                              params if analysis == "closed-loop" else None, traction)
     tasks = [(params, spread, context, seed, s.start, s.stop)
              for s in plan_chunks(runs, SECONDS_PER_RUN[analysis], sweep)]
     parts = run_chunks(_run_chunk, tasks, sweep, desc=f"monte carlo ({analysis})")

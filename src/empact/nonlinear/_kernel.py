@@ -6,8 +6,9 @@ Private: the public interface, the state ordering and the sign conventions are d
 * ``x`` state, shape (n,); ``u`` inputs, shape (4,);
 * ``p`` float parameters, shape (NP + n_tables,), laid out by the ``P_*`` indices below and
   followed by the optional tabulated maps (a measured thrust-ratio map and a measured
-  shift-speed map, `empact.variator._tables.encode_curves`), each found at the offset that
-  ``p[P_TAB]`` / ``p[P_CTAB]`` holds (0: the analytic law);
+  shift-speed map, `empact.variator._tables.encode_curves`; measured traction curves,
+  `empact.variator._traction_table`), each found at the offset that ``p[P_TAB]`` /
+  ``p[P_CTAB]`` / ``p[P_MTAB]`` holds (0: the analytic law);
 * ``ix`` int64, shape (4,): positions in ``x`` of the optional states (belt stretch, drive and
   load speed-loop integrators, ratio-controller integrator), -1 when absent.
 
@@ -34,6 +35,8 @@ from typing import Mapping
 import numpy as np
 from numba import njit
 
+from ..variator._traction_table import table_mu, table_mu_d, table_mu_max, table_peak
+
 # -- parameter vector layout ---------------------------------------------------------------
 (P_A, P_TB, P_COSB, P_RMIN, P_RMAX, P_L0,
  P_JMP, P_JMS, P_JSP, P_JSS, P_MP, P_MS, P_IW, P_IC, P_IE, P_S,
@@ -45,8 +48,8 @@ from numba import njit
  P_B0, P_B1, P_B2, P_C0, P_C1, P_C2, P_D0, P_D1, P_D2, P_E0, P_E1, P_E2,
  P_DKP, P_DKI, P_LKP, P_LKI, P_RKP, P_RKD, P_RKI, P_SIG, P_RS0,
  P_LAW, P_DREF, P_FREF, P_KD, P_A1, P_A2, P_GAIN, P_W0, P_XSAT, P_GBETA,
- P_KP0, P_KB0, P_KB1, P_RREF, P_TAB, P_CTAB) = range(77)
-NP = 77
+ P_KP0, P_KB0, P_KB1, P_RREF, P_TAB, P_CTAB, P_MTAB) = range(78)
+NP = 78
 
 #: names of the parameter vector's entries, in the order of the ``P_*`` indices
 PARAMETER_NAMES = (
@@ -62,7 +65,8 @@ PARAMETER_NAMES = (
     "drive_kp", "drive_ki", "load_kp", "load_ki", "ratio_kp", "ratio_kd", "ratio_ki",
     "sheave_sense", "R_s0",
     "shift_law", "D_ref", "F_ref", "k_D", "a1", "a2", "gain", "omega_0", "xi_sat", "g_beta",
-    "kappa_p0", "kappa_b0", "kappa_b1", "r_ref", "thrust_table", "creep_table")
+    "kappa_p0", "kappa_b0", "kappa_b1", "r_ref", "thrust_table", "creep_table",
+    "traction_table")
 assert len(PARAMETER_NAMES) == NP
 
 #: the kernel's parameters read back by name (`constants`)
@@ -94,22 +98,25 @@ NY = len(OUTPUTS)
 
 
 def pack_parameters(values: Mapping[str, float], thrust_table: np.ndarray,
-                    creep_table: np.ndarray) -> np.ndarray:
+                    creep_table: np.ndarray, traction_table: np.ndarray) -> np.ndarray:
     """The parameter vector ``p`` from values by name (every name of `PARAMETER_NAMES` but the
-    table offsets), followed by the encoded thrust-ratio and shift-speed tables (each empty
-    for its analytic law); ``thrust_table`` and ``creep_table`` hold their offsets."""
-    names = [k for k in PARAMETER_NAMES if k not in ("thrust_table", "creep_table")]
+    table offsets), followed by the encoded thrust-ratio, shift-speed and traction tables
+    (each empty for its analytic law); ``thrust_table``, ``creep_table`` and
+    ``traction_table`` hold their offsets."""
+    offsets = ("thrust_table", "creep_table", "traction_table")
+    names = [k for k in PARAMETER_NAMES if k not in offsets]
     missing = set(names) - set(values)
     if missing:
         raise KeyError(f"kernel parameters missing: {', '.join(sorted(missing))}")
-    p = np.zeros(NP + len(thrust_table) + len(creep_table))
+    tables = (thrust_table, creep_table, traction_table)
+    p = np.zeros(NP + sum(len(t) for t in tables))
     p[:NP] = [float(values.get(k, 0.0)) for k in PARAMETER_NAMES]
-    if len(thrust_table):
-        p[P_TAB] = NP
-        p[NP:NP + len(thrust_table)] = thrust_table
-    if len(creep_table):
-        p[P_CTAB] = NP + len(thrust_table)
-        p[NP + len(thrust_table):] = creep_table
+    at = NP
+    for index, table in zip((P_TAB, P_CTAB, P_MTAB), tables):
+        if len(table):
+            p[index] = at
+            p[at:at + len(table)] = table
+            at += len(table)
     return p
 
 
@@ -145,7 +152,10 @@ def _interp3(lr, l0, l1, l2, c0, c1, c2):
 
 @njit(cache=True)
 def traction_mu(nu, r_g, p):
-    """Magic-formula traction coefficient mu(nu, r_g) (scalar; real or complex)."""
+    """Traction coefficient mu(nu, r_g) (scalar; real or complex): the magic formula, or the
+    measured curves at ``p[P_MTAB]`` (`empact.variator._traction_table`)."""
+    if p[P_MTAB] != 0.0:
+        return table_mu(nu, r_g, p, int(p[P_MTAB]))
     lr = np.log(r_g)
     B = _interp3(lr, p[P_LLOW], p[P_LMED], p[P_LOD], p[P_B0], p[P_B1], p[P_B2])
     C = _interp3(lr, p[P_LLOW], p[P_LMED], p[P_LOD], p[P_C0], p[P_C1], p[P_C2])
@@ -336,7 +346,10 @@ def _eval(x, u, p, ix, dx, y):
     nu = 1.0 - ws / (r_g * wp)
     mu = traction_mu(nu, r_g, p)
     lr = np.log(r_g)
-    mu_max = _interp3(lr, p[P_LLOW], p[P_LMED], p[P_LOD], p[P_D0], p[P_D1], p[P_D2])
+    if p[P_MTAB] != 0.0:  # the measured curves' peak
+        mu_max = table_mu_max(r_g, p, int(p[P_MTAB]))
+    else:
+        mu_max = _interp3(lr, p[P_LLOW], p[P_LMED], p[P_LOD], p[P_D0], p[P_D1], p[P_D2])
     if ix[0] >= 0:  # belt locked: elastic chain element R_p theta_p - R_s theta_s
         F_b = p[P_KBD] * x[ix[0]]
         T_b = R_s * F_b
@@ -529,6 +542,8 @@ def _interp3_d(lr, l0, l1, l2, c0, c1, c2):
 @njit(cache=True)
 def _traction_mu_d(nu, r_g, p):
     """``(mu, dmu/dnu, dmu/d ln r_g)``: `traction_mu` at real arguments and its partials."""
+    if p[P_MTAB] != 0.0:
+        return table_mu_d(nu, r_g, p, int(p[P_MTAB]))
     lr = np.log(r_g)
     l0, l1, l2 = p[P_LLOW], p[P_LMED], p[P_LOD]
     B, B_l = _interp3_d(lr, l0, l1, l2, p[P_B0], p[P_B1], p[P_B2])
@@ -692,8 +707,11 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
     nu = 1.0 - ws / rw
     mu, mu_nu, mu_lr = _traction_mu_d(nu, r_g, p)
     lr = np.log(r_g)
-    mu_max, mm_lr = _interp3_d(lr, p[P_LLOW], p[P_LMED], p[P_LOD], p[P_D0], p[P_D1],
-                               p[P_D2])
+    if p[P_MTAB] != 0.0:  # the measured curves' peak and its slope
+        _, mu_max, mm_lr = table_peak(r_g, p, int(p[P_MTAB]))
+    else:
+        mu_max, mm_lr = _interp3_d(lr, p[P_LLOW], p[P_LMED], p[P_LOD], p[P_D0], p[P_D1],
+                                   p[P_D2])
     cosb = p[P_COSB]
     xb = 0.0
     F_b = 0.0
@@ -1297,9 +1315,13 @@ def traction_peak_many(r_g, g, p, nu_out, mu_out):
     """Golden-section search of the traction curve's peak on slip [0, 0.99] at each ratio
     ``r_g[k]`` (90 steps, ratio `g`): ``nu_out[k], mu_out[k]``.  Step for step the search of
     `empact.nonlinear.equilibrium.traction_peak` (the same operations in the same order,
-    each point's value reused where the search keeps it), so bitwise the same."""
+    each point's value reused where the search keeps it), so bitwise the same.  For measured
+    curves (``p[P_MTAB]``) the exact peak of the interpolant (`_traction_table.table_peak`)."""
     for k in range(r_g.shape[0]):
         r = r_g[k]
+        if p[P_MTAB] != 0.0:
+            nu_out[k], mu_out[k], _ = table_peak(r, p, int(p[P_MTAB]))
+            continue
         a, b = 0.0, 0.99
         c, d = b - g * (b - a), a + g * (b - a)
         fc, fd = traction_mu(c, r, p), traction_mu(d, r, p)
@@ -1321,8 +1343,12 @@ def traction_peak_many(r_g, g, p, nu_out, mu_out):
 
 @njit(cache=True)
 def mu_max_many(r_g, p, out):
-    """Peak traction coefficient D(r_g) (the magic formula's) for a 1-D array of ratios."""
+    """Peak traction coefficient mu_max(r_g) for a 1-D array of ratios: the magic formula's
+    D(r_g), or the measured curves' peak (`_traction_table.table_peak`)."""
     for k in range(r_g.shape[0]):
+        if p[P_MTAB] != 0.0:
+            out[k] = table_peak(r_g[k], p, int(p[P_MTAB]))[1]
+            continue
         out[k] = _interp3(np.log(r_g[k]), p[P_LLOW], p[P_LMED], p[P_LOD], p[P_D0], p[P_D1],
                           p[P_D2])
 

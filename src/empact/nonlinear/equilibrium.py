@@ -26,7 +26,6 @@ from .._results import Result
 from ..errors import ParameterError, TrimError
 from ..params import OperatingPoint
 from ..variator.geometry import check_ratio, radii, ratio_range, stretched_radii
-from ..variator.traction import traction_from_params
 from . import _kernel as K
 from .model import EmpactModel
 
@@ -290,7 +289,7 @@ def trim(model: EmpactModel, op: OperatingPoint | float, omega_p: float | None =
         raise ParameterError("trim: give an OperatingPoint alone")
     check_ratio(op.r_g, model.params.variator)
     if op.nu is not None:
-        lo, hi = traction_from_params(model.params).nu_range
+        lo, hi = model.traction_law.nu_range
         if not lo <= op.nu <= hi:
             raise ParameterError(f"nu = {op.nu:g}: outside the valid slip range [{lo:g}, "
                                  f"{hi:g}] of the traction curve")

@@ -118,6 +118,12 @@ from ..linear.actuation import actuation_model
 from ..params import DAMPING_LEVELS, Params
 from ..variator.shift_law import SHIFT_LAWS, CreepMap, g_beta, load_creep_map
 from ..variator.thrust_ratio import TabulatedThrustRatio, load_thrust_ratio
+from ..variator.traction import (
+    MagicFormulaTraction,
+    TabulatedTraction,
+    load_traction,
+    traction_from_params,
+)
 from . import _kernel as K
 
 control = lazy_module("control")
@@ -211,6 +217,11 @@ class ModelOptions:
     creep_map : CreepMap, optional
         A measured shift-speed map ``K_c(r_g, F_s)`` (`empact.variator.shift_law.
         load_creep_map`); default the analytic creep coefficient of ``[shift]``.
+    traction : TabulatedTraction, optional
+        Measured traction curves ``mu(nu, r_g)`` (`empact.variator.traction.load_traction`;
+        a path is loaded): the kernel evaluates their interpolant (PCHIP in slip, linear in
+        ``r_g``) and ``mu_max(r_g)`` is its peak (`TabulatedTraction.mu_max`); default the
+        analytic magic formula of ``[traction]``.
     reference_ratio : float, optional
         Ratio of the output ``nu_r = 1 - omega_s / (r_ref omega_p)`` (the slip of eq. 3 and
         Fig. 12, at a fixed operating ratio); default ``params.operating.r_g``.  The
@@ -234,6 +245,7 @@ class ModelOptions:
     thrust_ratio: TabulatedThrustRatio | None = None
     reference_ratio: float | None = None
     creep_map: CreepMap | None = None
+    traction: TabulatedTraction | None = None
     drive_bandwidth: InitVar[float | None] = None
     load_bandwidth: InitVar[float | None] = None
     ratio_bandwidth: InitVar[float | None] = None
@@ -258,6 +270,9 @@ class ModelOptions:
         if self.creep_map is not None and not isinstance(self.creep_map, CreepMap):
             raise ParameterError(f"creep_map = {self.creep_map!r}: must be a CreepMap "
                                  "(empact.variator.shift_law.load_creep_map)")
+        if self.traction is not None and not isinstance(self.traction, TabulatedTraction):
+            raise ParameterError(f"traction = {self.traction!r}: must be a TabulatedTraction "
+                                 "(empact.variator.traction.load_traction)")
         if self.reference_ratio is not None:
             object.__setattr__(self, "reference_ratio", check_number(
                 "reference_ratio", self.reference_ratio, 0.0, lo_open=True))
@@ -293,6 +308,8 @@ class ModelOptions:
             values["thrust_ratio"] = load_thrust_ratio(values["thrust_ratio"])
         if isinstance(values.get("creep_map"), (str, os.PathLike)):
             values["creep_map"] = load_creep_map(values["creep_map"])
+        if isinstance(values.get("traction"), (str, os.PathLike)):
+            values["traction"] = load_traction(values["traction"])
         return cls(**values)
 
 
@@ -506,6 +523,14 @@ class EmpactModel:
                         self.p, out)
         return out.reshape(nu.shape)
 
+    @property
+    def traction_law(self) -> MagicFormulaTraction | TabulatedTraction:
+        """The traction law the kernel evaluates: the option ``traction`` (measured curves) or
+        the magic formula of ``params.traction``."""
+        if self.options.traction is not None:
+            return self.options.traction
+        return traction_from_params(self.params)
+
     def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
         """Peak traction coefficient ``mu_max(r_g)`` of the kernel's curve [-] (the torque
         ratio is ``tau = mu / mu_max``).
@@ -655,6 +680,7 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
     t, sh, kr = params.traction, params.shift, params.thrust_ratio
     thrust_table = o.thrust_ratio.encode() if o.thrust_ratio is not None else np.zeros(0)
     creep_table = o.creep_map.encode() if o.creep_map is not None else np.zeros(0)
+    traction_table = o.traction.encode() if o.traction is not None else np.zeros(0)
     sig = sheave_sense(o.kinematics)
     k_w, k_c, k_belt, k_tp, k_ts = stiffnesses(params, o.kinematics)
     values = dict(
@@ -686,7 +712,7 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
         values.update(ratio_kp=J * w * w, ratio_kd=2 * 0.7 * w * J, ratio_ki=J * w**3 / 4)
     else:  # PI on the creep law's ratio rate per N m: crossover w (servo damping kept)
         values.update(ratio_kp=w, ratio_kd=2 * 0.7 * w * J, ratio_ki=w * w / 4)
-    return K.pack_parameters(values, thrust_table, creep_table)
+    return K.pack_parameters(values, thrust_table, creep_table, traction_table)
 
 
 def _index(names: tuple[str, ...], name: str, what: str) -> int:

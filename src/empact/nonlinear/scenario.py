@@ -330,6 +330,12 @@ class Scenario:
         return replace(self, duration=check_number("duration", duration, 0.0, 3600.0,
                                                    lo_open=True, unit="s"))
 
+    def with_options(self, **changes: Any) -> "Scenario":
+        """A copy whose model options have the `changes` (`ModelOptions` fields, e.g.
+        ``traction=load_traction("curves.csv")``), validated."""
+        values = {f.name: getattr(self.options, f.name) for f in fields(self.options)}
+        return replace(self, options=ModelOptions.from_mapping({**values, **changes}))
+
     def with_controller(self, file: str) -> "Scenario":
         """A copy whose controller is read from `file` (a path or ``"shipped:NAME"``).
 
@@ -404,7 +410,8 @@ def check_tables(data: Mapping[str, Any], schema: Mapping[str, Any], src: str) -
 def model_options(table: Mapping[str, Any], src: str,
                   defaults: Mapping[str, Any] | None = None) -> ModelOptions:
     """A scenario file's ``[model]`` table as `ModelOptions` (over `defaults`); a relative
-    ``thrust_ratio`` or ``creep_map`` path is read relative to the scenario file.
+    ``thrust_ratio``, ``creep_map`` or ``traction`` path is read relative to the scenario
+    file.
 
     Parameters
     ----------
@@ -426,7 +433,7 @@ def model_options(table: Mapping[str, Any], src: str,
         One line naming `src` and the bad option.
     """
     model = {**(defaults or {}), **dict(table)}
-    for key in ("thrust_ratio", "creep_map"):
+    for key in ("thrust_ratio", "creep_map", "traction"):
         path = model.get(key)
         if isinstance(path, str) and not Path(path).is_absolute() and Path(src).is_file():
             model[key] = str(Path(src).parent / path)

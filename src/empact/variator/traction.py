@@ -36,7 +36,10 @@ Two models are provided:
     PCHIP interpolation in ``nu`` (no overshoot between samples, monotone where the data are),
     the slope is the derivative of that interpolant; linear in ``r_g`` between the tabulated
     ratios, held constant outside.  A curve that starts at ``nu = 0`` with ``mu = 0`` is
-    extended oddly to negative slip (``mu(-nu) = -mu(nu)``).
+    extended oddly to negative slip (``mu(-nu) = -mu(nu)``).  ``mu_max(r_g)`` is the true
+    peak of the interpolated curve at that ratio (the torque ratio is ``tau = mu / mu_max``).
+    The nonlinear model evaluates the same law compiled (`TabulatedTraction.encode`, the
+    option ``traction`` of `empact.nonlinear.nonlinear_model`).
 
 `traction_from_params` builds the analytic model of a parameter set (section ``[traction]``).
 Compute only: plots are in `empact.plotting.slip`.
@@ -58,6 +61,8 @@ from ..errors import ParameterError
 from ._tables import check_curve, read_curves
 
 interpolate = lazy_module("scipy.interpolate")
+#: the compiled law (numba: loaded when a peak is first asked for)
+_compiled = lazy_module("empact.variator._traction_table")
 
 __all__ = ["TractionParams", "TractionModel", "MagicFormulaTraction", "TabulatedTraction",
            "TractionCurves", "traction_from_params", "load_traction", "traction_curves",
@@ -454,6 +459,46 @@ class TabulatedTraction:
             Geometric ratio [-] (broadcast against `nu`).
         """
         return self._evaluate(nu, r_g, self._slope)
+
+    def encode(self) -> NDArray[np.float64]:
+        """Flat encoding for the compiled model (layout in `empact.variator._traction_table`):
+        the ratios, and per curve the knots, values and the knot slopes of its
+        `~scipy.interpolate.PchipInterpolator`, and its segments by their larger knot value,
+        largest first."""
+        head = [float(len(self.ratios)), *self.ratios]
+        starts: list[float] = []
+        body: list[float] = []
+        for nu, mu, slope in zip(self.nu_data, self.mu_data, self._slope):
+            starts.append(float(3 + 2 * len(self.ratios) + len(body)))
+            order = np.argsort(-np.maximum(mu[:-1], mu[1:]), kind="stable")
+            body += [float(len(nu)), *nu, *mu, *np.asarray(slope(nu), float),
+                     *order.astype(float)]
+        return np.array(head + starts + list(self.nu_range) + body, dtype=float)
+
+    def peak(self, r_g: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Slip [-] and value [-] of the interpolated curve's peak at ratio(s) `r_g`, each
+        shaped like `r_g`.
+
+        The true largest value of ``mu(., r_g)`` over `nu_range` (the slips every curve
+        covers), found exactly on the piecewise-cubic interpolant by the compiled law the
+        nonlinear model uses (`empact.variator._traction_table.table_peak`)."""
+        r = np.asarray(r_g, float)
+        if np.any(~np.isfinite(r) | (r <= 0)):
+            bad = r[~np.isfinite(r) | (r <= 0)] if r.ndim else r
+            raise ParameterError(f"r_g = {float(np.ravel(bad)[0]):g}: must be a positive finite "
+                                 "ratio")
+        flat = np.ascontiguousarray(r.ravel())
+        n = flat.size
+        mu, dmu, nu_pk, mu_pk = (np.empty(n) for _ in range(4))
+        _compiled.table_many(np.full(n, float(self.nu_data[0][0])), flat, self.encode(), 0, mu,
+                             dmu, nu_pk, mu_pk)
+        return nu_pk.reshape(r.shape), mu_pk.reshape(r.shape)
+
+    def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
+        """Peak traction coefficient ``mu_max(r_g)`` [-] of the interpolated curve at each
+        ratio (`peak`), shaped like `r_g`: the torque ratio is ``tau = mu / mu_max``, as the
+        compiled model computes it."""
+        return self.peak(r_g)[1]
 
 
 def _validate_curve(r: float, nu: ArrayLike, mu: ArrayLike, source: str) \
