@@ -15,7 +15,6 @@ from ._common import (
     Failed,
     InputError,
     OutputFile,
-    check_references,
     emit_json,
     force_option,
     fraction_metrics,
@@ -393,14 +392,13 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, params_fil
         return
     if (scenario is None) == (example is None):
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
-    sc = load_scenario(control_example_path(example) if example else scenario)
+    params = get_params(params_file)
+    sc = load_scenario(control_example_path(example) if example else scenario, params)
     if not sc.closed_loop:
         raise InputError(f"{scenario}: no [controller] table (an open-loop scenario: run it "
                          "with 'empact simulate')")
     if controller:
         sc = sc.with_controller(controller)
-    params = get_params(params_file)
-    check_references(sc, params)
     run = run_closed_loop(sc, params, progress=not quiet)
     if out:
         write_csv(run.result, out)

@@ -3,6 +3,8 @@
 rig's records (Fig. 14)."""
 from __future__ import annotations
 
+from typing import Literal, cast
+
 import click
 import numpy as np
 
@@ -160,8 +162,10 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
     friction = check_number("--friction", friction, 0.0, 100.0, unit="N m")
     seed = check_int("--seed", seed, 0, 2**32 - 1)
     params = get_params(params_file)
-    op = operating_point(params, trim=True, ratio=r_g, slip=nu, clamp=F_s, speed=omega_p)
-    settings = RigSettings(r_g=op.r_g, nu=op.nu, F_s=op.F_s, omega_p=op.omega_p, excite=excite,
+    op = operating_point(params, trim=True, ratio=r_g, slip=nu, clamp=F_s,
+                         speed=omega_p).resolve(params)
+    settings = RigSettings(r_g=op.r_g, nu=op.nu, F_s=op.F_s, omega_p=op.omega_p,
+                           excite=cast(Literal["T_mp", "T_ms"], excite),
                            excitation=excitation, band_hz=(lo, hi), rms=rms, duration=duration,
                            sample_rate=fs, coulomb=(friction, friction), seed=seed,
                            period=min(2048, int(duration * fs)),

@@ -6,7 +6,6 @@ import click
 from ._common import (
     Failed,
     InputError,
-    check_references,
     emit_json,
     force_option,
     get_params,
@@ -84,11 +83,11 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
         from ..control.closed_loop import control_example_path, resolve_controller
         from ..nonlinear.scenario import load_scenario
 
-        sc = load_scenario(control_example_path(example) if example else scenario)
+        sc = load_scenario(control_example_path(example) if example else scenario, params)
         if not sc.closed_loop:
             raise InputError(f"--scenario {scenario}: no [controller] table (the closed-loop "
                              "analysis needs a closed-loop scenario)")
-        check_references(sc, params)
+        assert sc.controller is not None  # closed_loop
         ctrl = resolve_controller(controller or sc.controller.file)
     result = monte_carlo(params, spread, runs, analysis, seed=seed, scenario=sc,
                          controller=ctrl, sweep=sweep)

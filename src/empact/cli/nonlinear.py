@@ -1,6 +1,8 @@
 """``empact simulate``, ``empact linearize`` and ``empact nmp``: the nonlinear model."""
 from __future__ import annotations
 
+from typing import Any
+
 import click
 import numpy as np
 
@@ -11,7 +13,6 @@ from ._common import (
     Failed,
     InputError,
     OutputFile,
-    check_references,
     emit_json,
     force_option,
     formats_option,
@@ -68,7 +69,8 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     if (scenario is None) == (example is None):
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
     fmts = parse_choices("--formats", formats, PLOT_SUFFIXES)
-    sc = load_scenario(example_path(example) if example else scenario)
+    params = get_params(params_file)
+    sc = load_scenario(example_path(example) if example else str(scenario), params)
     if duration is not None:
         sc = sc.with_duration(check_number("--duration", duration, 0.0, 3600.0, lo_open=True,
                                            unit="s"))
@@ -77,9 +79,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
         raise InputError(f"duration x sample rate = {sc.duration:g} s x {sc.sample_rate:g} Hz "
                          f"= {n_samples:.3g} output samples; at most {MAX_SAMPLES}")
     dest = output_folder(out or f"sim-{sc.name}", "--out", force=force)
-    params = get_params(params_file)
     if sc.closed_loop:
-        check_references(sc, params)
         res = run_closed_loop(sc, params, progress=not quiet).result
     else:
         res = run_scenario(sc, params, progress=not quiet)
@@ -99,8 +99,8 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
 
 def _options(drive: str, load: str, damping: str, kinematics: str, shift_law: str,
              thrust_ratio: str | None, creep_map: str | None = None) -> dict:
-    opts = {"drive": drive, "load": load, "damping": damping, "kinematics": kinematics,
-            "shift_law": shift_law}
+    opts: dict[str, Any] = {"drive": drive, "load": load, "damping": damping,
+                            "kinematics": kinematics, "shift_law": shift_law}
     if thrust_ratio:
         from ..variator.thrust_ratio import load_thrust_ratio
 

@@ -28,11 +28,12 @@ no other module spells an index.
 """
 from __future__ import annotations
 
-from collections import namedtuple
 from typing import Mapping
 
 import numpy as np
 from numba import njit
+
+from ._constants import KernelConstants
 
 # -- parameter vector layout ---------------------------------------------------------------
 (P_A, P_TB, P_COSB, P_RMIN, P_RMAX, P_L0,
@@ -65,8 +66,8 @@ PARAMETER_NAMES = (
     "kappa_p0", "kappa_b0", "kappa_b1", "r_ref", "thrust_table", "creep_table")
 assert len(PARAMETER_NAMES) == NP
 
-#: the kernel's parameters read back by name (`constants`)
-KernelConstants = namedtuple("KernelConstants", PARAMETER_NAMES)
+#: the kernel's parameters read back by name (`constants`; written out in `._constants`)
+assert KernelConstants._fields == PARAMETER_NAMES
 
 #: the base states (actuation 12, driveline 6; see `empact.nonlinear.model`) and the optional
 #: ones, each appended when its option is on (``ix`` holds their positions)

@@ -54,7 +54,7 @@ def plot_family_poles(family: PlantFamily, f_max_hz: float = 60.0, title: str = 
         p = np.linalg.eigvals(family.A[idx])
         p = p[np.abs(p) < 2 * np.pi * f_max_hz] / (2 * np.pi)
         artists += axs[0, 0].plot(p.real, p.imag, "x", color=c, ms=4)
-        sys = family.plant(idx).system
+        sys = family.plant(k).system
         for inp, out, mk in (("T_mp", "r_g", "o"), ("T_ms", "nu", "s")):
             z = channel_zeros(sys, inp, out, max_abs=2 * np.pi * f_max_hz)
             z = z / (2 * np.pi)
