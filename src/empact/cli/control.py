@@ -3,6 +3,7 @@ closed loop on the nonlinear machine (beyond the paper)."""
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import click
 import numpy as np
@@ -88,7 +89,7 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
     from ..control.family import LOOP_FAMILY_OUTPUTS, plant_family
     from ..variator.geometry import check_ratio
 
-    values = {}
+    values: dict[str, Any] = {}
     for opt, text in raw.items():
         v = text if isinstance(text, np.ndarray) else parse_values(text, opt)
         if v is None:
@@ -326,16 +327,17 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, params
         bar.update(1)
         worst = float(dm["alpha"].min())
         gm, pm = disk_gain_phase(worst)
-        data = {"worst": {"disk_margin": worst, "gain_margin_db": float(gm),
-                          "phase_margin_deg": float(pm),
-                          "spectral_radius": float(rho.max()),
-                          "all_stable": bool(np.all(rho < 1)),
-                          "stable": int((rho < 1).sum()), "points": int(rho.size)},
-                "spectral_radius": rho, "disk_margin": dm["alpha"],
-                "input_disk_margin": dm["input"], "output_disk_margin": dm["output"],
-                "axes": {k: v for k, v in fam.axes.items()},
-                "loop": {"rate_hz": loop.spec.rate, "feedforward": loop.spec.feedforward,
-                         "sensors": loop.sensors is not None}}
+        data: dict[str, Any] = {
+            "worst": {"disk_margin": worst, "gain_margin_db": float(gm),
+                      "phase_margin_deg": float(pm),
+                      "spectral_radius": float(rho.max()),
+                      "all_stable": bool(np.all(rho < 1)),
+                      "stable": int((rho < 1).sum()), "points": int(rho.size)},
+            "spectral_radius": rho, "disk_margin": dm["alpha"],
+            "input_disk_margin": dm["input"], "output_disk_margin": dm["output"],
+            "axes": {k: v for k, v in fam.axes.items()},
+            "loop": {"rate_hz": loop.spec.rate, "feedforward": loop.spec.feedforward,
+                     "sensors": loop.sensors is not None}}
         if mu:
             data["mu"] = mu_upper_bound(fam, ctrl.at(
                 {k: float(np.median(v)) for k, v in fam.operating.items()})

@@ -58,12 +58,12 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
         run = res.runs[n]
         m = run.metrics
         pred = res.predictions.get(n)
-        for c in checks:
+        for chk in checks:
             lin = ""
-            if pred is not None and c.name == "peak_slip_error_pp":
+            if pred is not None and chk.name == "peak_slip_error_pp":
                 lin = f"{pred.peak_slip_error_pp:.3g}"
-            target_rows.append([n, c.name, c.describe().split("(")[1].split(")")[0],
-                                lin, _fmt(c.value), "met" if c.met else "MISSED",
+            target_rows.append([n, chk.name, chk.describe().split("(")[1].split(")")[0],
+                                lin, _fmt(chk.value), "met" if chk.met else "MISSED",
                                 f"{m['peak_T_mp']:.2f} / {m['T_mp_max']:g}",
                                 f"{m['peak_T_ms']:.2f} / {m['T_ms_max']:g}"])
     env = res.envelope
