@@ -99,6 +99,7 @@ from typing import Any, Mapping
 import numpy as np
 from numpy.typing import NDArray
 
+from .._lazy import lazy_module
 from .._validate import check_bool, check_choice, check_number, check_values
 from ..errors import ParameterError
 from ..hardware import SensorParams, ServoLimits
@@ -111,6 +112,8 @@ __all__ = ["Scenario", "ControllerSpec", "load_scenario", "scenario_from_dict", 
            "example_path", "input_names", "signal", "check_tables", "model_options",
            "check_references", "check_reference_names",
            "CLAMPING", "METHODS", "DEFAULT_METHOD"]
+
+optimize = lazy_module("scipy.optimize")
 
 #: clamping strategies of a closed-loop scenario: the slip loop, or a production CVT's
 #: open-loop safety factor
@@ -685,16 +688,14 @@ def check_references(scenario: Scenario, params: Params) -> None:
 def _peak_slip(traction: Any, r_g: float) -> float:
     """The slip [-] at the peak of `traction` at ratio `r_g` (a grid search refined by a
     bounded scalar search to 1e-12; the curve is unimodal in slip)."""
-    from scipy.optimize import minimize_scalar
-
     lo, hi = max(traction.nu_range[0], 0.0), traction.nu_range[1]
     nu = np.linspace(lo, hi, 4001)
     k = int(np.argmax(traction.mu(nu, r_g)))
     a, b = nu[max(k - 1, 0)], nu[min(k + 1, nu.size - 1)]
     if a == b:
         return float(a)
-    best = minimize_scalar(lambda x: -float(traction.mu(x, r_g)), bounds=(a, b),
-                           method="bounded", options={"xatol": 1e-12})
+    best = optimize.minimize_scalar(lambda x: -float(traction.mu(x, r_g)), bounds=(a, b),
+                                    method="bounded", options={"xatol": 1e-12})
     return float(best.x)
 
 
