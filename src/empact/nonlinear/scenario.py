@@ -617,9 +617,22 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario",
 
 
 def check_reference_names(references: Mapping[str, Any], where: str = "") -> None:
-    """The one rule on a controller's reference names: each one of `REFERENCES`, and one slip
-    set-point (``nu``, ``nu_r`` or ``tau``) at most.  One `ParameterError` line naming
-    `where` (the scenario file)."""
+    """The one rule on a controller's reference names (the scenario loader and
+    `empact.control.law.LoopLaw` call it): each one of `REFERENCES`, and one slip set-point
+    (``nu``, ``nu_r`` or ``tau``) at most.
+
+    Parameters
+    ----------
+    references : mapping
+        The references by name (their values are not looked at).
+    where : str
+        The scenario file, named in the message ('' for none).
+
+    Raises
+    ------
+    ParameterError
+        One line naming `where` and the reference.
+    """
     head = f"{where}: " if where else ""
     for key in references:
         if key not in REFERENCES:
