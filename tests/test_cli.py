@@ -514,7 +514,7 @@ BAD_INPUT = [
     (["plants", "--slip", "0.01", "--clamp", "1e4", "--load-torque", "50"],
      "give at most two of"),
     (["plants", "--load", "50"], "the load torque is --load-torque now"),
-    (["plants", "--slip", "0.01", "--tau", "0.9"], "give --slip or --tau, not both"),
+    (["plants", "--slip", "0.01", "--tau", "0.9"], "give the slip as --slip or as --tau, not both"),
     (["linearize", "--load-torque", "50"], "also give one of them"),
     (["plants", "--out", "x.txt"], "--out x.txt: file suffix '.txt' must be one of"),
     (["plants", "--clamp", "-3"], "--clamp = -3"),
@@ -760,7 +760,8 @@ BAD_INPUT = [
     # options added since issue 10: --tau, --load-torque, --drive, --load, --thrust-ratio, ...
     (["linearize", "--tau", "2"], "--tau = 2: allowed range is [-1, 1] (the torque ratio"),
     (["linearize", "--tau", "nan"], "--tau = nan: must be a finite number in [-1, 1]"),
-    (["linearize", "--tau", "0.9", "--slip", "0.01"], "give --slip or --tau, not both"),
+    (["linearize", "--tau", "0.9", "--slip", "0.01"],
+     "give the slip as --slip or as --tau, not both"),
     (["linearize", "--load-torque", "1e9", "--clamp", "1e4"],
      "--load-torque = 1e+09: allowed range is [-10000, 10000] [N m]"),
     (["linearize", "--tau", "0.9", "--load-torque", "60", "--clamp", "1e4"],

@@ -54,7 +54,7 @@ __all__ = [
     "OperatingPoint", "ResolvedPoint", "Params", "default_params",
     "load_params", "save_params", "dumps_params", "read_toml", "DAMPING_LEVELS",
     "OPERATING_VARIABLES", "ParameterInfo", "describe_parameters", "parameter_sources",
-    "check_clamping",
+    "check_clamping", "check_one_slip",
 ]
 
 DAMPING_LEVELS = ("none", "moderate", "large")
@@ -292,9 +292,7 @@ class OperatingPoint(Section):
         if self.omega_p is None:
             raise ParameterError("operating point: omega_p (primary speed [rad/s]) is missing")
         super().__post_init__()
-        if self.nu is not None and self.tau is not None:
-            raise ParameterError(f"operating point: give the slip as nu or as tau, not both "
-                                 f"(nu = {self.nu:g}, tau = {self.tau:g})")
+        check_one_slip(self.nu is not None, self.tau is not None, where="operating point: ")
         given = self.given
         if len(given) != 2:
             shown = ", ".join(f"{k} = {getattr(self, k):g}" for k in given) or "none"
@@ -429,6 +427,32 @@ class ResolvedPoint(OperatingPoint):
         given by ``nu`` and ``F_s``, else the `OperatingPoint` request (resolve it)."""
         out = self.request.replace(**changes)
         return out.resolve_given()
+
+
+def check_one_slip(nu: bool, tau: bool, *, names: tuple[str, str] = ("nu", "tau"),
+                   where: str = "", error: type[ParameterError] = ParameterError) -> None:
+    """The one rule on the slip's two spellings: a point gives its slip as ``nu`` or as the
+    torque ratio ``tau``, not both (`OperatingPoint`, `empact.nonlinear.equilibrium.trim_grid`,
+    `empact.control.family.plant_family` and the command line's ``--slip`` / ``--tau``).
+
+    Parameters
+    ----------
+    nu, tau : bool
+        Whether each is given.
+    names : (str, str)
+        How the user spells them (``("--slip", "--tau")`` at the command line).
+    where : str
+        A prefix for the message (``"operating point: "``).
+    error : type
+        The `ParameterError` subclass to raise (`~empact.errors.TrimError` for the trim).
+
+    Raises
+    ------
+    ParameterError
+        One line, when both are given.
+    """
+    if nu and tau:
+        raise error(f"{where}give the slip as {names[0]} or as {names[1]}, not both")
 
 
 def check_clamping(name: str, value: ArrayLike, *, where: str = "") -> NDArray[np.float64]:

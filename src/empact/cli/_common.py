@@ -28,7 +28,7 @@ from .._io import atomic_write_text
 from .._validate import check_choice, check_int, check_number, check_values
 from ..errors import ParameterError
 from ..export import jsonable as to_jsonable
-from ..params import OperatingPoint, Params, check_clamping, load_params
+from ..params import OperatingPoint, Params, check_clamping, check_one_slip, load_params
 from ..variator.geometry import check_ratio
 from ..variator.traction import traction_from_params
 
@@ -548,8 +548,7 @@ def operating_point(params: Params, *, trim: bool = False, **options: float | No
             params, opt.replace("_", "-"), v, trim=trim))
         for opt, v in options.items() if v is not None}
     given = [k for k in _PAIR if k in values]
-    if "nu" in given and "tau" in given:
-        raise InputError("give --slip or --tau, not both")
+    check_one_slip("nu" in given, "tau" in given, names=("--slip", "--tau"))
     base = params.operating
     if len(given) >= 3:
         raise InputError("give at most two of --slip (or --tau), --clamp, --load-torque")

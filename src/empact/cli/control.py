@@ -10,6 +10,7 @@ import numpy as np
 
 from .._progress import progress as progress_bar
 from .._validate import check_number
+from ..params import check_one_slip
 from ._common import (
     UNITS,
     ErrorGroup,
@@ -107,8 +108,7 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
     n = int(np.prod([np.size(v) for v in values.values()] or [1]))
     if n > MAX_FAMILY:
         raise InputError(f"{n} grid points; at most {MAX_FAMILY}")
-    if "nu" in values and "tau" in values:
-        raise InputError("give --slip or --tau, not both")
+    check_one_slip("nu" in values, "tau" in values, names=("--slip", "--tau"))
     if sum(k in values for k in ("nu", "tau", "F_s", "T_l")) > 2:
         raise InputError("give at most two of --slip (or --tau), --clamp, --load-torque (the "
                          "trim solves the third)")

@@ -58,7 +58,7 @@ from ..nonlinear.linearization import (
     linearize_many,
 )
 from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
-from ..params import OperatingPoint, Params
+from ..params import OperatingPoint, Params, check_one_slip
 from ..sweep import SweepOptions, plan_chunks, run_chunks
 
 interpolate = lazy_module("scipy.interpolate")
@@ -287,8 +287,7 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
     given = {"r_g": r_g, "nu": nu, "tau": tau, "F_s": F_s, "omega_p": omega_p, "T_l": T_l}
     base = params.operating if base is None else base
     pair = [k for k in ("nu", "tau", "F_s", "T_l") if given[k] is not None]
-    if "nu" in pair and "tau" in pair:
-        raise ParameterError("give the slip as nu or as tau, not both")
+    check_one_slip("nu" in pair, "tau" in pair)
     if len(pair) > 2:
         raise ParameterError("give at most two of nu (or tau), F_s, T_l (the trim solves the "
                              "third)")

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ParameterError, TrimError
-from ..params import OperatingPoint, ResolvedPoint, check_clamping
+from ..params import OperatingPoint, ResolvedPoint, check_clamping, check_one_slip
 from ..variator.geometry import check_ratio, radii, ratio_range, stretched_radii
 from ..variator.traction import traction_from_params
 from . import _kernel as K
@@ -425,8 +425,7 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
         ``belt="locked"``: `F_s`, optionally `T_l`, and no slip).
     """
     locked = model.options.belt == "locked"
-    if nu is not None and tau is not None:
-        raise TrimError("trim_grid: give the slip as nu or as tau, not both")
+    check_one_slip(nu is not None, tau is not None, where="trim_grid: ", error=TrimError)
     slip_given = nu is not None or tau is not None
     if locked:
         if F_s is None or slip_given:
