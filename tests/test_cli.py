@@ -437,6 +437,14 @@ def files(tmp_path, monkeypatch):
     w("ref_nu.toml", step.replace("tau = [[0.0, 0.9]]", "nu = [[0.0, 0.01], [1.0, 2.0]]"))
     w("ref_rg.toml", step.replace("tau = [[0.0, 0.9]]",
                                   "tau = [[0.0, 0.9]]\nr_g = [[0.0, 1.0], [1.0, 9.0]]"))
+    # issue 31 / 35: a scenario's references beyond the model's ranges, refused by the loader
+    w("ref_peak.toml", step.replace("tau = [[0.0, 0.9]]", "nu = [[0.0, 0.01], [1.0, 0.15]]"))
+    shift = resources.files("empact.data").joinpath("scenarios", "shift-and-load-step.toml") \
+        .read_text()
+    assert "[5.2, 2.2500]]" in shift and "F_s_ref = [[0.0, 30000.0]]" in shift
+    w("open_rg.toml", shift.replace("[5.2, 2.2500]]", "[5.2, 9.0]]"))
+    w("open_fs.toml", shift.replace("F_s_ref = [[0.0, 30000.0]]",
+                                    "F_s_ref = [[0.0, 30000.0], [1.0, -5000.0]]"))
     w("sp_out.toml", sp + 'distribution = "uniform"\nlower = -2\nupper = -1\n')
     w("sp_nu.toml", '[spread."operating.nu"]\ndistribution = "uniform"\nlower = 0.3\n'
                     'upper = 0.4\n')
@@ -507,7 +515,7 @@ BAD_INPUT = [
     (["plants", "--slip", "0.01", "--clamp", "1e4", "--load-torque", "50"],
      "give at most two of"),
     (["plants", "--load", "50"], "the load torque is --load-torque now"),
-    (["plants", "--slip", "0.01", "--tau", "0.9"], "give --slip or --tau, not both"),
+    (["plants", "--slip", "0.01", "--tau", "0.9"], "give the slip as --slip or as --tau, not both"),
     (["linearize", "--load-torque", "50"], "also give one of them"),
     (["plants", "--out", "x.txt"], "--out x.txt: file suffix '.txt' must be one of"),
     (["plants", "--clamp", "-3"], "--clamp = -3"),
@@ -713,6 +721,18 @@ BAD_INPUT = [
     (["simulate", "ref_nu.toml"], "ref_nu.toml: references.nu = 2: allowed range is"),
     (["montecarlo", "--spread", "sp_ok.toml", "--analysis", "closed-loop", "--scenario",
       "ref_nu.toml"], "ref_nu.toml: references.nu = 2: allowed range is [-0.2, 0.2]"),
+    # issue 35's "checked too late": a ratio reference of 9, a negative clamping reference and
+    # a slip reference beyond the traction peak (inside the curve's valid range), each refused
+    # by the scenario loader against the model's ranges, before any integration
+    (["simulate", "open_rg.toml"],
+     "open_rg.toml: inputs.r_g_ref = 9: outside the geometric ratio range"),
+    (["simulate", "open_fs.toml"],
+     "open_fs.toml: inputs.F_s_ref = -5000: allowed range is (0, inf) [N]"),
+    (["simulate", "ref_peak.toml"], "ref_peak.toml: references.nu = 0.15: allowed range is (0, "),
+    (["control", "simulate", "ref_peak.toml"],
+     "ref_peak.toml: references.nu = 0.15: allowed range is (0, "),
+    (["montecarlo", "--spread", "sp_ok.toml", "--analysis", "closed-loop", "--scenario",
+      "ref_peak.toml"], "ref_peak.toml: references.nu = 0.15: allowed range is (0, "),
     # a spread that no value of the parameter may take (every run would fail)
     (["montecarlo", "--spread", "sp_out.toml"],
      "spread.'actuation.k_w': uniform on [-2, -1] lies wholly outside the values "
@@ -741,7 +761,8 @@ BAD_INPUT = [
     # options added since issue 10: --tau, --load-torque, --drive, --load, --thrust-ratio, ...
     (["linearize", "--tau", "2"], "--tau = 2: allowed range is [-1, 1] (the torque ratio"),
     (["linearize", "--tau", "nan"], "--tau = nan: must be a finite number in [-1, 1]"),
-    (["linearize", "--tau", "0.9", "--slip", "0.01"], "give --slip or --tau, not both"),
+    (["linearize", "--tau", "0.9", "--slip", "0.01"],
+     "give the slip as --slip or as --tau, not both"),
     (["linearize", "--load-torque", "1e9", "--clamp", "1e4"],
      "--load-torque = 1e+09: allowed range is [-10000, 10000] [N m]"),
     (["linearize", "--tau", "0.9", "--load-torque", "60", "--clamp", "1e4"],

@@ -591,6 +591,43 @@ def test_a_slip_set_point_past_the_traction_peak_is_refused(params):
         "slip set-point 0 at r_g = 1: must lie")
 
 
+def test_the_loader_refuses_a_slip_reference_past_the_peak_before_any_run(params, tmp_path):
+    """Issue 31 item 4: `load_scenario(path, params)` checks the references against the
+    model's ranges once, at load: a slip past the traction peak at the reference ratio of its
+    time (the peak from the kernel's golden-section search, `traction_peak`, an independent
+    search; the message prints it with 6 significant digits, so it must agree to 1e-5
+    relative); the ratio and clamping-force checks are in test_cli's bad-input table.
+    Without `params` the loader checks only what needs no model (as before), and every
+    shipped scenario passes the check on the shipped machine."""
+    import re
+
+    from empact.nonlinear.equilibrium import traction_peak
+    from empact.nonlinear.scenario import check_references
+
+    model = nonlinear_model(params)
+    text = control_example_path("slip-load-step-r1").read_text()
+    assert "tau = [[0.0, 0.9]]" in text
+    path = tmp_path / "peak.toml"
+    path.write_text(text.replace("tau = [[0.0, 0.9]]", "nu = [[0.0, 0.03]]\n"
+                                 "r_g = [[0.0, 1.0], [1.0, 2.0]]"))
+    load_scenario(path)  # no model given: the references are not checked against one
+    with pytest.raises(ParameterError) as err:
+        load_scenario(path, params)
+    msg = str(err.value)
+    assert msg.startswith(f"{path}: references.nu = 0.03: allowed range is (0, ")
+    assert "\n" not in msg and "at r_g = 2)" in msg
+    hi = float(re.search(r"allowed range is \(0, ([0-9.e+-]+)\)", msg).group(1))
+    assert hi == pytest.approx(float(traction_peak(model, 2.0)[0]), rel=1e-5)
+    # every shipped scenario passes the check on the shipped machine
+    from empact.control.closed_loop import control_examples
+    from empact.nonlinear.scenario import example_path, list_examples
+
+    for name in control_examples():
+        check_references(load_scenario(control_example_path(name)), params)
+    for name in list_examples(closed_loop=False):
+        check_references(load_scenario(example_path(name)), params)
+
+
 def test_plant_response_in_chunks_is_the_one_stack_solve(params, monkeypatch):
     """`LoopModel.plant_response` solves a family a few points at a time (the whole stack
     of a 63-point family is 560 MB); any chunk size gives bitwise the one-stack solve

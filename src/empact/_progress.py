@@ -81,7 +81,8 @@ class _Off:
     """A disabled bar: iterates, counts and closes, and writes nothing."""
 
     def __init__(self, iterable: Iterable[Any] | None) -> None:
-        self.iterable, self.n, self.disable = iterable, 0, True
+        self.n: float = 0
+        self.iterable, self.disable = iterable, True
 
     def __iter__(self) -> Any:
         return iter(self.iterable if self.iterable is not None else ())

@@ -215,17 +215,20 @@ def transmission_zeros(A: ArrayLike, B: ArrayLike, C: ArrayLike, D: ArrayLike, *
     ndarray of complex
         The finite zeros [rad/s], shape (n_z,), sorted by magnitude.
     """
-    A, B, C, D = (np.atleast_2d(np.asarray(x, float)) for x in (A, B, C, D))
-    n, m, p = A.shape[0], B.shape[1], C.shape[0]
+    a = np.atleast_2d(np.asarray(A, float))
+    b = np.atleast_2d(np.asarray(B, float))
+    c = np.atleast_2d(np.asarray(C, float))
+    d = np.atleast_2d(np.asarray(D, float))
+    n, m, p = a.shape[0], b.shape[1], c.shape[0]
     if m != p:
         raise ValueError(f"transmission_zeros: {p} outputs and {m} inputs; need a square system")
     S = np.ones(n) if scale is None else np.asarray(scale, float)
-    A = A * S[None, :] / S[:, None]
-    B = B / S[:, None]
-    C = C * S[None, :]
-    bs = max(float(np.max(np.abs(B))), 1e-300)
-    cs = max(float(np.max(np.abs(C))), 1e-300)
-    L = np.block([[A, B / bs], [C / cs, D / (bs * cs)]])
+    a = a * S[None, :] / S[:, None]
+    b = b / S[:, None]
+    c = c * S[None, :]
+    bs = max(float(np.max(np.abs(b))), 1e-300)
+    cs = max(float(np.max(np.abs(c))), 1e-300)
+    L = np.block([[a, b / bs], [c / cs, d / (bs * cs)]])
     M = np.zeros((n + m, n + m))
     M[:n, :n] = np.eye(n)
     w, beta = generalized_eigvals(L, M, homogeneous_eigvals=True)

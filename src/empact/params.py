@@ -31,15 +31,16 @@ import os
 import tomllib
 from dataclasses import asdict, dataclass, fields, replace
 from importlib import resources
-from typing import Any, Mapping
+from typing import Any, Literal, Mapping, overload
 
 import numpy as np
 import tomli_w
+from numpy.typing import ArrayLike, NDArray
 
 from ._deprecate import warn_renamed
 from ._io import atomic_write_text
 from ._section import Section, param
-from ._validate import check_choice, check_number
+from ._validate import check_choice, check_number, check_values
 from .errors import ParameterError
 from .hardware import SensorParams, ServoLimits
 from .variator.geometry import VariatorParams, ratio_range, variator_state
@@ -50,9 +51,10 @@ from .variator.traction import TractionParams, traction_from_params
 __all__ = [
     "ParameterError", "VariatorParams", "ActuationParams", "DampingLevel", "DampingParams",
     "DrivelineParams", "TractionParams", "ShiftParams", "ThrustRatioParams", "Sec21Stiffness",
-    "OperatingPoint", "Params", "default_params",
+    "OperatingPoint", "ResolvedPoint", "Params", "default_params",
     "load_params", "save_params", "dumps_params", "read_toml", "DAMPING_LEVELS",
     "OPERATING_VARIABLES", "ParameterInfo", "describe_parameters", "parameter_sources",
+    "check_clamping", "check_one_slip",
 ]
 
 DAMPING_LEVELS = ("none", "moderate", "large")
@@ -296,9 +298,7 @@ class OperatingPoint(Section):
         if self.omega_p is None:
             raise ParameterError("operating point: omega_p (primary speed [rad/s]) is missing")
         super().__post_init__()
-        if self.nu is not None and self.tau is not None:
-            raise ParameterError(f"operating point: give the slip as nu or as tau, not both "
-                                 f"(nu = {self.nu:g}, tau = {self.tau:g})")
+        check_one_slip(self.nu is not None, self.tau is not None, where="operating point: ")
         given = self.given
         if len(given) != 2:
             shown = ", ".join(f"{k} = {getattr(self, k):g}" for k in given) or "none"
@@ -349,7 +349,7 @@ class OperatingPoint(Section):
         for a, b in (("nu", "tau"), ("tau", "nu")):
             if changes.get(a) is not None and b not in changes:
                 changes[b] = None
-        return replace(self, **changes)
+        return replace(self, **changes)  # type: ignore[arg-type]  # checked on construction
 
     def to_dict(self) -> dict[str, float]:
         """The given variables by name (SI): ``r_g``, two of ``nu, F_s, T_l, tau``, then
@@ -382,12 +382,19 @@ class OperatingPoint(Section):
         warn_renamed("OperatingPoint.as_dict", "to_dict")
         return self.to_dict()
 
-    def resolve(self, params: "Params", traction: Any = None) -> "OperatingPoint":
-        """The point with ``nu`` and ``F_s`` given (the slip model's variables), solved on the
-        variator's unstretched radii with the traction curve of `params` (or `traction`):
-        ``T_l = 2 mu(nu) F_s R_s / cos(beta)`` (eq. 1), the slip on the rising branch of the
-        curve where a torque ratio or a load fixes it.  A point given by ``nu`` and ``F_s``
-        is returned as it is.
+    def resolve_given(self) -> "OperatingPoint":
+        """The point as a `ResolvedPoint` when it is given by ``nu`` and ``F_s`` (no model
+        needed), else itself."""
+        if self.nu is None or self.F_s is None or isinstance(self, ResolvedPoint):
+            return self
+        return ResolvedPoint(r_g=self.r_g, nu=self.nu, F_s=self.F_s, omega_p=self.omega_p)
+
+    def resolve(self, params: "Params", traction: Any = None) -> "ResolvedPoint":
+        """The point with ``nu`` and ``F_s`` given (the slip model's variables, every one a
+        float: a `ResolvedPoint`), solved on the variator's unstretched radii with the
+        traction curve of `params` (or `traction`): ``T_l = 2 mu(nu) F_s R_s / cos(beta)``
+        (eq. 1), the slip on the rising branch of the curve where a torque ratio or a load
+        fixes it.  A point given by ``nu`` and ``F_s`` keeps its values.
 
         Parameters
         ----------
@@ -396,26 +403,117 @@ class OperatingPoint(Section):
         traction : TractionModel, optional
             The traction curve to solve on (default `traction_from_params(params)`).
         """
+        r_g, omega_p = self.r_g, self.omega_p
         if self.nu is not None and self.F_s is not None:
-            return self
+            return self if isinstance(self, ResolvedPoint) else \
+                ResolvedPoint(r_g=r_g, nu=self.nu, F_s=self.F_s, omega_p=omega_p)
         tr = traction_from_params(params) if traction is None else traction
-        R_s = float(variator_state(self.r_g, params.variator).R_s)
+        R_s = float(variator_state(r_g, params.variator).R_s)
         cosb = math.cos(params.variator.beta)
         nu = self.nu
         if nu is None and self.tau is not None:
-            nu = _slip_at(tr, self.r_g, self.tau * _mu_max(tr, self.r_g), "tau", self.tau)
+            nu = _slip_at(tr, r_g, self.tau * _mu_max(tr, r_g), "tau", self.tau)
         if nu is not None:
-            mu = float(tr.mu(nu, self.r_g))
+            mu = float(tr.mu(nu, r_g))
             if self.F_s is not None:
-                return OperatingPoint(r_g=self.r_g, nu=nu, F_s=self.F_s, omega_p=self.omega_p)
-            if mu * self.T_l <= 0:
+                return ResolvedPoint(r_g=r_g, nu=nu, F_s=self.F_s, omega_p=omega_p)
+            T_l = _given(self.T_l)
+            if mu * T_l <= 0:
                 raise ParameterError(f"operating point: mu(nu) = {mu:.4g} cannot carry T_l = "
-                                     f"{self.T_l:g} N m with a positive clamping force")
-            return OperatingPoint(r_g=self.r_g, nu=nu, F_s=self.T_l * cosb / (2 * mu * R_s),
-                                  omega_p=self.omega_p)
-        need = self.T_l * cosb / (2 * self.F_s * R_s) if self.F_s > 0 else math.inf
-        return OperatingPoint(r_g=self.r_g, nu=_slip_at(tr, self.r_g, need, "T_l", self.T_l),
-                              F_s=self.F_s, omega_p=self.omega_p)
+                                     f"{T_l:g} N m with a positive clamping force")
+            return ResolvedPoint(r_g=r_g, nu=nu, F_s=T_l * cosb / (2 * mu * R_s),
+                                 omega_p=omega_p)
+        T_l, F_s = _given(self.T_l), _given(self.F_s)
+        need = T_l * cosb / (2 * F_s * R_s) if F_s > 0 else math.inf
+        return ResolvedPoint(r_g=r_g, nu=_slip_at(tr, r_g, need, "T_l", T_l), F_s=F_s,
+                             omega_p=omega_p)
+
+
+@dataclass(frozen=True)
+class ResolvedPoint(OperatingPoint):
+    """An operating point given by its slip and clamping force, both known (what
+    `OperatingPoint.resolve` returns, and what the models use inward).
+
+    The same point as an `OperatingPoint` given by ``nu`` and ``F_s`` (it is one, validated
+    alike), typed so that its ``r_g``, ``nu``, ``F_s`` and ``omega_p`` are floats: code that
+    runs after `resolve` needs no None checks.  ``T_l`` and ``tau`` are not stored (None):
+    the unstretched-geometry load follows from eq. 1, the stretched one from the trim
+    (`empact.nonlinear.equilibrium.trim`).
+
+    Attributes
+    ----------
+    r_g : geometric ratio ``R_p / R_s`` [-]
+    nu : slip [-] (a fraction), in (-1, 1)
+    F_s : secondary clamping force [N], >= 0
+    omega_p : primary pulley speed [rad/s], > 0
+    """
+
+    nu: float = param("-", OPERATING_VARIABLES["nu"][1], -1.0, 1.0, hi_open=True)
+    F_s: float = param("N", OPERATING_VARIABLES["F_s"][1], lo_open=False)
+
+    @property
+    def request(self) -> OperatingPoint:
+        """The point as a plain `OperatingPoint` (given by ``nu`` and ``F_s``)."""
+        return OperatingPoint(r_g=self.r_g, nu=self.nu, F_s=self.F_s, omega_p=self.omega_p)
+
+    def replace(self, **changes: float | None) -> OperatingPoint:
+        """A copy with some variables changed (validated): a `ResolvedPoint` while it is
+        given by ``nu`` and ``F_s``, else the `OperatingPoint` request (resolve it)."""
+        out = self.request.replace(**changes)
+        return out.resolve_given()
+
+
+def check_one_slip(nu: bool, tau: bool, *, names: tuple[str, str] = ("nu", "tau"),
+                   where: str = "", error: type[ParameterError] = ParameterError) -> None:
+    """The one rule on the slip's two spellings: a point gives its slip as ``nu`` or as the
+    torque ratio ``tau``, not both (`OperatingPoint`, `empact.nonlinear.equilibrium.trim_grid`,
+    `empact.control.family.plant_family` and the command line's ``--slip`` / ``--tau``).
+
+    Parameters
+    ----------
+    nu, tau : bool
+        Whether each is given.
+    names : (str, str)
+        How the user spells them (``("--slip", "--tau")`` at the command line).
+    where : str
+        A prefix for the message (``"operating point: "``).
+    error : type
+        The `ParameterError` subclass to raise (`~empact.errors.TrimError` for the trim).
+
+    Raises
+    ------
+    ParameterError
+        One line, when both are given.
+    """
+    if nu and tau:
+        raise error(f"{where}give the slip as {names[0]} or as {names[1]}, not both")
+
+
+def check_clamping(name: str, value: ArrayLike, *, where: str = "") -> NDArray[np.float64]:
+    """The one rule on the clamping force of a point the nonlinear model is trimmed at or
+    driven to: > 0 [N] (a belt without clamping carries no torque).  The slip model's
+    `OperatingPoint` allows ``F_s = 0`` (no clamping, no belt damping); the trim, a
+    scenario's ``F_s_ref`` and a parameter file's ``[operating]`` point need it positive.
+
+    Parameters
+    ----------
+    name : the field or option as the user knows it (``"--clamp"``, ``"inputs.F_s_ref"``)
+    value : the clamping force(s) [N], any shape
+    where : the file or table it came from (prefixed to the message)
+
+    Returns
+    -------
+    ndarray
+        `value` as floats, its shape.
+    """
+    return check_values(name, value, 0.0, lo_open=True, unit="N", where=where,
+                        note="a belt without clamping carries no torque")
+
+
+def _given(value: float | None) -> float:
+    """A variable that `OperatingPoint` guarantees here (two of nu, F_s, T_l are given)."""
+    assert value is not None
+    return value
 
 
 def _mu_max(traction: Any, r_g: float) -> float:
@@ -562,6 +660,12 @@ class Params:
                 node = node.setdefault(part, {})
             node[last] = value
         return Params.from_dict(nested, base=self)
+
+    @overload
+    def get(self, dotted: str, *, unset_ok: Literal[False] = False) -> float: ...
+
+    @overload
+    def get(self, dotted: str, *, unset_ok: bool) -> float | None: ...
 
     def get(self, dotted: str, *, unset_ok: bool = False) -> float | None:
         """The value of a dotted name such as ``"actuation.k_w"`` (with `unset_ok`, None for
@@ -783,7 +887,8 @@ def describe_parameters(params: Params | None = None) -> list[ParameterInfo]:
         for key, unit, allowed, doc in rows:
             dotted = f"{prefix}.{key}"
             info = sources.get(dotted, {})
-            band = tuple(float(v) for v in info.get("band", (float("nan"), float("nan"))))
+            lo, hi = (float(v) for v in info.get("band", (float("nan"), float("nan"))))
+            band = (lo, hi)
             out.append(ParameterInfo(dotted, unit, allowed, doc, getattr(block, key),
                                      band, str(info.get("source", ""))))
     return out

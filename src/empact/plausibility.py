@@ -22,7 +22,7 @@ import numpy as np
 from .errors import ParameterError
 from .linear.actuation import actuation_model
 from .linear.driveline import driveline_model
-from .params import Params
+from .params import Params, check_clamping
 from .variator.geometry import ratio_range
 from .variator.traction import traction_from_params
 
@@ -34,8 +34,8 @@ EXPECTED_RIGID_MODES = {"actuation": 1, "driveline": 1}
 
 def _extremes(section, names: tuple[str, ...]) -> str:
     values = {n: getattr(section, n) for n in names}
-    hi = max(values, key=values.get)
-    lo = min(values, key=values.get)
+    hi = max(values, key=lambda n: values[n])
+    lo = min(values, key=lambda n: values[n])
     return (f"largest {section._name}.{hi} = {values[hi]:g}, smallest {section._name}.{lo} = "
             f"{values[lo]:g}")
 
@@ -64,7 +64,7 @@ def check_plausible(params: Params, source: str = "parameters") -> Params:
     where = f"{source}: "
     tr = traction_from_params(params)
     try:  # a point given by a torque ratio or a load: its slip and clamping force solved
-        op = params.operating.resolve(params, tr)
+        params.operating.resolve(params, tr)
     except ParameterError as exc:
         raise ParameterError(f"{where}[operating] {exc}") from None
     lo, hi = tr.nu_range
@@ -72,13 +72,8 @@ def check_plausible(params: Params, source: str = "parameters") -> Params:
     if op.nu is not None and not lo <= op.nu <= hi:
         raise ParameterError(f"{where}operating.nu = {op.nu:g}: outside the valid slip range "
                              f"[{lo:g}, {hi:g}] of the traction curve")
-    if op.F_s is not None and op.F_s <= 0:
-        raise ParameterError(f"{where}operating.F_s = {op.F_s:g}: allowed range is (0, inf) [N] "
-                             "(the operating point must transmit torque)")
-    try:
-        op = op.resolve(params)
-    except ParameterError as exc:
-        raise ParameterError(f"{where}[operating]: {exc}") from None
+    if op.F_s is not None:
+        check_clamping("operating.F_s", op.F_s, where=source)
     nu = np.linspace(lo, hi, 41)
     r_lo, r_hi = ratio_range(params.variator)
     ratios = sorted({r_lo, 1.0, r_hi} if r_lo <= 1.0 <= r_hi else {r_lo, r_hi})

@@ -28,7 +28,7 @@ from .._io import atomic_write_text
 from .._validate import check_choice, check_int, check_number, check_values
 from ..errors import ParameterError
 from ..export import jsonable as to_jsonable
-from ..params import OperatingPoint, Params, load_params
+from ..params import OperatingPoint, Params, check_clamping, check_one_slip, load_params
 from ..variator.geometry import check_ratio
 from ..variator.traction import traction_from_params
 
@@ -37,7 +37,7 @@ __all__ = ["sweep_options", "sweep_from_options",
            "params_option", "json_options", "force_option", "get_params", "operating_point",
            "operating_values", "PLOT_SUFFIXES", "LINEAR_OPTIONS",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
-           "OutputFile", "check_outputs", "check_references", "quiet_option", "Interrupted",
+           "OutputFile", "check_outputs", "quiet_option", "Interrupted",
            "EXIT_INTERRUPTED", "parse_list", "formats_option", "parse_choices", "schema_version",
            "traction_option",
            "announce_compilation", "COMPILING"]
@@ -455,28 +455,6 @@ def parse_list(text: str, option: str, *, most: int, example: str = "0.5,1,2") -
     return values
 
 
-def check_references(scenario: Any, params: Params) -> None:
-    """A closed-loop scenario's ``[references]`` within what the machine can follow, checked
-    before the run (not found out when the simulation stops): a slip (``nu``, ``nu_r``, a
-    fraction) within the traction curve's valid range (the scenario's measured curves, or
-    the analytic curve of `params`), a ratio within the variator's."""
-    options = getattr(scenario, "options", None)
-    table = getattr(options, "traction", None)
-    lo, hi = (table if table is not None else traction_from_params(params)).nu_range
-    src = getattr(scenario, "source", "") or getattr(scenario, "name", "scenario")
-    for name, points in scenario.references.items():
-        values = np.asarray(points, float)[:, 1]
-        key = f"references.{name}"
-        if name in ("nu", "nu_r"):
-            check_values(key, values, lo, hi, where=src,
-                         note="a slip fraction: 0.01 is 1 %; the traction curve's valid range")
-        elif name == "r_g":
-            try:
-                check_ratio(values, params.variator, key)
-            except ParameterError as exc:
-                raise InputError(f"{src}: {exc}") from None
-
-
 def get_params(path: str | None) -> Params:
     """Load parameters and check their physical plausibility (`empact.plausibility`, imported
     here: it builds the linear models, which ``empact --help`` should not load)."""
@@ -560,7 +538,8 @@ def operating_values(params: Params, option: str, values: Any, *, trim: bool = F
         return check_values(name, values, lo, hi,
                             note="a fraction: 0.01 is 1 %; the traction curve's valid range")
     if option == "clamp":
-        return check_values(name, values, 0.0, lo_open=trim, unit="N")
+        return check_clamping(name, values) if trim else check_values(name, values, 0.0,
+                                                                      unit="N")
     if option == "speed":
         return check_values(name, values, 0.0, lo_open=True, unit="rad/s",
                             note="the slip of eq. 2 is undefined at standstill")
@@ -585,12 +564,12 @@ def operating_point(params: Params, *, trim: bool = False, traction: Any = None,
     Two of ``--slip`` (or ``--tau``), ``--clamp``, ``--load-torque`` state the point; one of
     them changes that variable of the file's point (``--slip`` and ``--tau`` replace each
     other); one that the file's point does not give is an error naming the choice."""
-    values = {OPTION_VARIABLE[opt.replace("_", "-")]: float(operating_values(
-        params, opt.replace("_", "-"), v, trim=trim, traction=traction))
+    values: dict[str, float | None] = {
+        OPTION_VARIABLE[opt.replace("_", "-")]: float(operating_values(
+            params, opt.replace("_", "-"), v, trim=trim, traction=traction))
         for opt, v in options.items() if v is not None}
     given = [k for k in _PAIR if k in values]
-    if "nu" in given and "tau" in given:
-        raise InputError("give --slip or --tau, not both")
+    check_one_slip("nu" in given, "tau" in given, names=("--slip", "--tau"))
     base = params.operating
     if len(given) >= 3:
         raise InputError("give at most two of --slip (or --tau), --clamp, --load-torque")

@@ -3,6 +3,7 @@ closed loop on the nonlinear machine (beyond the paper)."""
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import click
 import numpy as np
@@ -10,13 +11,13 @@ import numpy as np
 from .._progress import progress as progress_bar
 from .._validate import check_number
 from ..control.designs import CONTROLLER_TYPES
+from ..params import check_one_slip
 from ._common import (
     UNITS,
     ErrorGroup,
     Failed,
     InputError,
     OutputFile,
-    check_references,
     emit_json,
     force_option,
     get_params,
@@ -91,7 +92,7 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
     from ..control.family import LOOP_FAMILY_OUTPUTS, plant_family
     from ..variator.geometry import check_ratio
 
-    values = {}
+    values: dict[str, Any] = {}
     for opt, text in raw.items():
         v = text if isinstance(text, np.ndarray) else parse_values(text, opt)
         if v is None:
@@ -110,8 +111,7 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
     n = int(np.prod([np.size(v) for v in values.values()] or [1]))
     if n > MAX_FAMILY:
         raise InputError(f"{n} grid points; at most {MAX_FAMILY}")
-    if "nu" in values and "tau" in values:
-        raise InputError("give --slip or --tau, not both")
+    check_one_slip("nu" in values, "tau" in values, names=("--slip", "--tau"))
     if sum(k in values for k in ("nu", "tau", "F_s", "T_l")) > 2:
         raise InputError("give at most two of --slip (or --tau), --clamp, --load-torque (the "
                          "trim solves the third)")
@@ -348,16 +348,17 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
         bar.update(1)
         worst = float(dm["alpha"].min())
         gm, pm = disk_gain_phase(worst)
-        data = {"worst": {"disk_margin": worst, "gain_margin_db": float(gm),
-                          "phase_margin_deg": float(pm),
-                          "spectral_radius": float(rho.max()),
-                          "all_stable": bool(np.all(rho < 1)),
-                          "stable": int((rho < 1).sum()), "points": int(rho.size)},
-                "spectral_radius": rho, "disk_margin": dm["alpha"],
-                "input_disk_margin": dm["input"], "output_disk_margin": dm["output"],
-                "axes": {k: v for k, v in fam.axes.items()},
-                "loop": {"rate_hz": loop.spec.rate, "feedforward": loop.spec.feedforward,
-                         "sensors": loop.sensors is not None}}
+        data: dict[str, Any] = {
+            "worst": {"disk_margin": worst, "gain_margin_db": float(gm),
+                      "phase_margin_deg": float(pm),
+                      "spectral_radius": float(rho.max()),
+                      "all_stable": bool(np.all(rho < 1)),
+                      "stable": int((rho < 1).sum()), "points": int(rho.size)},
+            "spectral_radius": rho, "disk_margin": dm["alpha"],
+            "input_disk_margin": dm["input"], "output_disk_margin": dm["output"],
+            "axes": {k: v for k, v in fam.axes.items()},
+            "loop": {"rate_hz": loop.spec.rate, "feedforward": loop.spec.feedforward,
+                     "sensors": loop.sensors is not None}}
         if mu:
             data["mu"] = mu_upper_bound(fam, ctrl.at(
                 {k: float(np.median(v)) for k, v in fam.operating.items()})
@@ -407,7 +408,7 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
         run_closed_loop,
         shown_metric,
     )
-    from ..nonlinear.scenario import load_scenario
+    from ..nonlinear.scenario import check_references, load_scenario
     from ..nonlinear.simulation import write_csv
 
     if list_ex:
@@ -416,16 +417,17 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
         return
     if (scenario is None) == (example is None):
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
-    sc = load_scenario(control_example_path(example) if example else scenario)
+    params = get_params(params_file)
+    sc = load_scenario(control_example_path(example) if example else scenario,
+                       params if traction_table is None else None)
     if not sc.closed_loop:
         raise InputError(f"{scenario}: no [controller] table (an open-loop scenario: run it "
                          "with 'empact simulate')")
     if controller:
         sc = sc.with_controller(controller)
-    if traction_table is not None:
+    if traction_table is not None:  # the references against the curve the run uses
         sc = sc.with_options(traction=traction_table)
-    params = get_params(params_file)
-    check_references(sc, params)
+        check_references(sc, params)
     run = run_closed_loop(sc, params, progress=not quiet)
     if out:
         write_csv(run.result, out)

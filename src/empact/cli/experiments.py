@@ -3,7 +3,7 @@
 rig's records (Fig. 14)."""
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal, cast
 
 import click
 import numpy as np
@@ -173,8 +173,9 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
     seed = check_int("--seed", seed, 0, 2**32 - 1)
     params = get_params(params_file)
     op = operating_point(params, trim=True, traction=traction_table, ratio=r_g, slip=nu,
-                         clamp=F_s, speed=omega_p)
-    settings = RigSettings(r_g=op.r_g, nu=op.nu, F_s=op.F_s, omega_p=op.omega_p, excite=excite,
+                         clamp=F_s, speed=omega_p).resolve(params, traction_table)
+    settings = RigSettings(r_g=op.r_g, nu=op.nu, F_s=op.F_s, omega_p=op.omega_p,
+                           excite=cast(Literal["T_mp", "T_ms"], excite),
                            excitation=excitation, band_hz=(lo, hi), rms=rms, duration=duration,
                            sample_rate=fs, coulomb=(friction, friction), seed=seed,
                            period=min(2048, int(duration * fs)),

@@ -56,6 +56,7 @@ def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], f
         nperseg = check_int("--nperseg", nperseg, 8, n)
     if time_col:
         fs = sample_rate(rec[time_col], time_col)
+    assert fs is not None  # --fs or --time, checked above
     est = estimate_frf(np.column_stack([rec[c] for c in inputs]),
                        np.column_stack([rec[c] for c in outputs]), fs, method=method,
                        nperseg=nperseg, inputs=inputs, outputs=outputs)

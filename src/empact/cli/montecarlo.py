@@ -6,7 +6,6 @@ import click
 from ._common import (
     Failed,
     InputError,
-    check_references,
     emit_json,
     force_option,
     get_params,
@@ -88,15 +87,17 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
     sc = ctrl = None
     if closed:
         from ..control.closed_loop import control_example_path, resolve_controller
-        from ..nonlinear.scenario import load_scenario
+        from ..nonlinear.scenario import check_references, load_scenario
 
-        sc = load_scenario(control_example_path(example) if example else scenario)
+        sc = load_scenario(control_example_path(example) if example else scenario,
+                           params if traction_table is None else None)
         if not sc.closed_loop:
             raise InputError(f"--scenario {scenario}: no [controller] table (the closed-loop "
                              "analysis needs a closed-loop scenario)")
-        if traction_table is not None:
+        if traction_table is not None:  # the references against the curve the run uses
             sc = sc.with_options(traction=traction_table)
-        check_references(sc, params)
+            check_references(sc, params)
+        assert sc.controller is not None  # closed_loop
         ctrl = resolve_controller(controller or sc.controller.file)
     result = monte_carlo(params, spread, runs, analysis, seed=seed, scenario=sc,
                          controller=ctrl, sweep=sweep, traction=traction_table)

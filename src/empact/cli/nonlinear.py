@@ -13,7 +13,6 @@ from ._common import (
     Failed,
     InputError,
     OutputFile,
-    check_references,
     emit_json,
     force_option,
     formats_option,
@@ -62,7 +61,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     from .._io import atomic_folder
     from .._progress import progress as progress_bar
     from ..control.closed_loop import run_closed_loop
-    from ..nonlinear.scenario import example_path, list_examples, load_scenario
+    from ..nonlinear.scenario import check_references, example_path, list_examples, load_scenario
     from ..nonlinear.simulation import csv_text, run_scenario
     from ..plotting import plot_simulation, save_figure
 
@@ -73,9 +72,12 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     if (scenario is None) == (example is None):
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
     fmts = parse_choices("--formats", formats, PLOT_SUFFIXES)
-    sc = load_scenario(example_path(example) if example else scenario)
-    if traction_table is not None:
+    params = get_params(params_file)
+    sc = load_scenario(example_path(example) if example else str(scenario),
+                       params if traction_table is None else None)
+    if traction_table is not None:  # the references against the curve the run uses
         sc = sc.with_options(traction=traction_table)
+        check_references(sc, params)
     if duration is not None:
         sc = sc.with_duration(check_number("--duration", duration, 0.0, 3600.0, lo_open=True,
                                            unit="s"))
@@ -84,9 +86,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
         raise InputError(f"duration x sample rate = {sc.duration:g} s x {sc.sample_rate:g} Hz "
                          f"= {n_samples:.3g} output samples; at most {MAX_SAMPLES}")
     dest = output_folder(out or f"sim-{sc.name}", "--out", force=force)
-    params = get_params(params_file)
     if sc.closed_loop:
-        check_references(sc, params)
         res = run_closed_loop(sc, params, progress=not quiet).result
     else:
         res = run_scenario(sc, params, progress=not quiet)
@@ -107,8 +107,8 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
 def _options(drive: str, load: str, damping: str, kinematics: str, shift_law: str,
              thrust_ratio: str | None, creep_map: str | None = None,
              traction_table: Any = None) -> dict:
-    opts = {"drive": drive, "load": load, "damping": damping, "kinematics": kinematics,
-            "shift_law": shift_law}
+    opts: dict[str, Any] = {"drive": drive, "load": load, "damping": damping,
+                            "kinematics": kinematics, "shift_law": shift_law}
     if traction_table is not None:
         opts["traction"] = traction_table
     if thrust_ratio:

@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 from numpy.typing import NDArray
@@ -477,7 +477,7 @@ class TargetCheck(Result):
         return f"{self.name} = {shown} ({want}): {'met' if self.met else 'MISSED'}"
 
 
-def check_targets(metrics: dict[str, Any], targets: dict[str, Any]) -> list[TargetCheck]:
+def check_targets(metrics: Mapping[str, Any], targets: Mapping[str, Any]) -> list[TargetCheck]:
     """Each of a scenario's ``[targets]`` against a run's metrics (`metrics`); a run that
     did not complete misses every target.
 

@@ -60,7 +60,7 @@ from ..nonlinear.linearization import (
     linearize_many,
 )
 from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
-from ..params import OperatingPoint, Params
+from ..params import OperatingPoint, Params, check_one_slip
 from ..sweep import SweepOptions, plan_chunks, run_chunks
 
 interpolate = lazy_module("scipy.interpolate")
@@ -81,8 +81,9 @@ MAX_POINTS = 1_000_000
 #: ratio (7, geometric 0.5-2) x torque ratio (0.8-0.95: set-points with a 5-20 % torque
 #: reserve on the traction curve) x clamping force (8-32 kN: the shipped scenarios' range,
 #: up to the secondary servo's limit) at ``params.operating``'s speed
-DESIGN_GRID = {"r_g": np.geomspace(0.5, 2.0, 7), "tau": np.array([0.8, 0.9, 0.95]),
-               "F_s": np.array([8e3, 16e3, 32e3])}
+DESIGN_GRID: dict[str, Any] = {"r_g": np.geomspace(0.5, 2.0, 7),
+                               "tau": np.array([0.8, 0.9, 0.95]),
+                               "F_s": np.array([8e3, 16e3, 32e3])}
 
 #: the outputs a family needs for the loop model (`empact.control.loop.family_loops`): the
 #: plant's, what the loop law measures (`empact.control.law.RAW_SIGNALS`) and what the loop
@@ -147,8 +148,8 @@ class PlantFamily:
         return int(self.ok.size)
 
     def _index(self, index: tuple[int, ...] | int) -> tuple[int, ...]:
-        idx = np.unravel_index(index, self.shape) if isinstance(index, (int, np.integer)) \
-            else tuple(index)
+        idx = tuple(int(i) for i in np.unravel_index(index, self.shape)) \
+            if isinstance(index, (int, np.integer)) else tuple(index)
         if not self.ok[idx]:
             raise ParameterError(f"grid point {idx}: not trimmed ({self.reason[idx]})")
         return idx
@@ -383,12 +384,12 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
     given = {"r_g": r_g, "nu": nu, "tau": tau, "F_s": F_s, "omega_p": omega_p, "T_l": T_l}
     base = params.operating if base is None else base
     pair = [k for k in ("nu", "tau", "F_s", "T_l") if given[k] is not None]
-    if "nu" in pair and "tau" in pair:
-        raise ParameterError("give the slip as nu or as tau, not both")
+    check_one_slip("nu" in pair, "tau" in pair)
     if len(pair) > 2:
         raise ParameterError("give at most two of nu (or tau), F_s, T_l (the trim solves the "
                              "third)")
-    first = {k: float(np.ravel(np.asarray(given[k], float))[0]) for k in pair}
+    first: dict[str, float | None] = {k: float(np.ravel(np.asarray(given[k], float))[0])
+                                      for k in pair}
     if len(pair) == 2:
         first.update({k: None for k in ("nu", "tau", "F_s", "T_l") if k not in pair})
     elif len(pair) == 1 and pair[0] in ("F_s", "T_l") and getattr(base, pair[0]) is None:
@@ -471,7 +472,7 @@ def design_family(params: Params, **options) -> "PlantFamily":
 SECONDS_PER_POINT = 4e-5
 
 
-def _linearise_points(task) -> dict[str, NDArray]:
+def _linearise_points(task) -> dict[str, Any]:
     """Trim and linearise the points of one chunk (`run_chunks` task: model, the trim pair,
     flat arrays of the operating variables).  Each point's result depends on that point only
     (per-point convergence in `trim_grid`; one compiled loop here), so chunking does not

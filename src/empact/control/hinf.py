@@ -78,6 +78,8 @@ def residualize(A, B, C, D, f_keep_hz: float | None = None, *,
     if f_keep is not None:
         warn_renamed("residualize(f_keep=)", "f_keep_hz [Hz]")
         f_keep_hz = f_keep
+    if f_keep_hz is None:
+        raise ParameterError("residualize: give f_keep_hz [Hz], the fastest mode kept")
     A, B, C, D = (np.asarray(M, float) for M in (A, B, C, D))
     w = 2 * np.pi * f_keep_hz
     # balanced first (a diagonal similarity by powers of 2, exact): the machine's rows span
@@ -113,8 +115,8 @@ def _zeros_tall(A, B, C, D) -> NDArray[np.complex128]:
     n = A.shape[0]
     if Ct.shape[0] == 0:
         return np.linalg.eigvals(At)
-    tol = 1e-10 * max(np.linalg.norm(At, 2), np.linalg.norm(Ct, 2), 1.0)
-    N = sla.null_space(Ct, rcond=tol / max(np.linalg.norm(Ct, 2), 1e-300))
+    tol = 1e-10 * max(float(np.linalg.norm(At, 2)), float(np.linalg.norm(Ct, 2)), 1.0)
+    N = sla.null_space(Ct, rcond=tol / max(float(np.linalg.norm(Ct, 2)), 1e-300))
     for _ in range(n + 1):  # largest At-invariant subspace inside ker Ct
         if N.shape[1] == 0:
             return np.zeros(0, complex)
@@ -173,7 +175,7 @@ def check_wellposed(P, nmeas: int, ncon: int, axis_tol: float = 1e-6) -> None:
                 M = np.hstack([A - lam * np.eye(n), X]) if side == "right" \
                     else np.vstack([A - lam * np.eye(n), X])
                 s = np.linalg.svd(M, compute_uv=False)[-1]
-                if s <= 1e-9 * max(1.0, np.linalg.norm(A, 2)):
+                if s <= 1e-9 * max(1.0, float(np.linalg.norm(A, 2))):
                     what = "stabilisable from the controls" if side == "right" \
                         else "detectable from the measurements"
                     raise ParameterError(f"H-infinity ill-posed (A1): the mode at "

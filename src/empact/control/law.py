@@ -81,7 +81,7 @@ from ..nonlinear.equilibrium import (
     trim_grid,
 )
 from ..nonlinear.model import EmpactModel
-from ..nonlinear.scenario import REFERENCES, ControllerSpec, Scenario
+from ..nonlinear.scenario import ControllerSpec, Scenario, check_reference_names
 from ..params import Params
 from ..variator.geometry import ratio_range, secondary_radius, variator_state
 from ..variator.shift_law import g_beta
@@ -307,11 +307,7 @@ class LoopLaw:
         self.u0 = np.asarray(u0, float)[:2].copy()
         # references on the sample grid
         references = dict(references or {})
-        for key in references:
-            if key not in REFERENCES:
-                raise ParameterError(f"reference {key!r}: choose from {', '.join(REFERENCES)}")
-        if sum(k in references for k in ("nu", "nu_r", "tau")) > 1:
-            raise ParameterError("give one slip set-point: references.nu, nu_r or tau")
+        check_reference_names(references)
         self.n_k = max(int(round(duration / dt)), 0) + 2
         self.t_k = np.arange(self.n_k) * dt
         self.references = references

@@ -324,9 +324,10 @@ class LoopModel(Result):
         c = self.controller
         z = np.exp(1j * np.asarray(omega, float) * self.dt)
         if c.n == 0:
-            return np.broadcast_to(c.D, z.shape + c.D.shape).astype(complex)
+            return np.broadcast_to(c.D, z.shape + c.D.shape).astype(np.complex128)
         M = z[:, None, None] * np.eye(c.n) - c.A
-        return c.C @ np.linalg.solve(M, np.broadcast_to(c.B, z.shape + c.B.shape)) + c.D
+        K = c.C @ np.linalg.solve(M, np.broadcast_to(c.B, z.shape + c.B.shape)) + c.D
+        return np.asarray(K, dtype=np.complex128)
 
     def disk_margins(self, omega: NDArray | None = None) -> dict[str, NDArray[np.float64]]:
         """Multiloop balanced disk margins at the servo torques (``input``: ``L = K G``) and
@@ -630,7 +631,8 @@ def predict_scenario(scenario: Scenario, params: Params,
     r[:, 2] = refs.mu[:n_k] - refs.mu[0]
     r[:, 3] = refs.rdot[:n_k]
     y = lm.predict(w, r) + lm.y0
-    return LoopPrediction(t=t, signals={n: y[:, i] for i, n in enumerate(lm.outputs)})
+    return LoopPrediction(t=np.asarray(t, dtype=np.float64),
+                          signals={n: y[:, i] for i, n in enumerate(lm.outputs)})
 
 
 def family_loops(family: PlantFamily, controller: Controller, config: LoopConfig,
@@ -696,6 +698,7 @@ def family_loops(family: PlantFamily, controller: Controller, config: LoopConfig
         for k, v in p.items():
             pre.setdefault(k, np.empty(shape + v.shape))[idx] = v
         ctrl, mask = law.controller, law.output_mask
+    assert ctrl is not None and mask is not None  # a family has one point at least
     mats = _assemble(Phi, Gam[..., :2], Gam[..., 2:], C[..., ro, :],
                      D[..., ro, :][..., :, jj], C[..., po, :], D[..., po, :][..., :, ii],
                      D[..., po, :][..., :, jj], pre)

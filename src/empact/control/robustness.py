@@ -18,6 +18,7 @@ the output (``L = G K``); the smaller is reported.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -59,7 +60,7 @@ def frequency_responses(A, B, C, D, omega) -> NDArray[np.complex128]:
     return C[..., None, :, :] @ X + D[..., None, :, :]
 
 
-def _mu_2x2(M: NDArray[np.complex128], iters: int = 60) -> NDArray[np.float64]:
+def _mu_2x2(M: NDArray[np.complexfloating[Any, Any]], iters: int = 60) -> NDArray[np.float64]:
     """``inf_d sbar(diag(d, 1) M diag(1/d, 1))`` for a stack (..., 2, 2)."""
     M = np.asarray(M)
 

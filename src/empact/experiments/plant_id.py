@@ -24,11 +24,11 @@ from .._results import Result
 from .._validate import check_number
 from ..errors import ParameterError
 from ..identification.realization import RealizationResult, realize_steps
-from ..nonlinear.equilibrium import trim
+from ..nonlinear.equilibrium import TrimResult, trim
 from ..nonlinear.linearization import plant
 from ..nonlinear.model import nonlinear_model
 from ..nonlinear.simulation import simulate
-from ..params import OperatingPoint
+from ..params import OperatingPoint, Params
 
 __all__ = ["StepExperiment", "PlantIdentification", "step_experiment", "identify_plant"]
 
@@ -52,7 +52,7 @@ class StepExperiment(Result):
     t: np.ndarray
     steps: np.ndarray
     amplitudes: np.ndarray
-    op: object
+    op: TrimResult
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,7 +72,7 @@ class PlantIdentification(Result):
 
     experiment: StepExperiment
     realization: RealizationResult
-    params: object
+    params: Params
     point: OperatingPoint
 
     @cached_property

@@ -28,7 +28,7 @@ from .._validate import check_choice, check_int, check_number
 from ..errors import ParameterError
 from ..identification.frf_estimation import FRFEstimate, estimate_frf
 from ..identification.records import header_cell
-from ..nonlinear.equilibrium import trim
+from ..nonlinear.equilibrium import TrimResult, trim
 from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, nonlinear_model
 from ..nonlinear.simulation import METHODS, simulate
 from ..params import OperatingPoint
@@ -183,7 +183,7 @@ class RigRecord(TableResult):
     t: np.ndarray
     signals: dict[str, np.ndarray]
     settings: RigSettings
-    op: object
+    op: TrimResult
     complete: bool
     message: str
 

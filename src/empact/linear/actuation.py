@@ -152,6 +152,8 @@ def actuation_model(params: Params, r_g: float, damping: str = "none",
         C[5, 5] += level.c_shafai / (float(r_g) * w_p)
     else:
         F = params.operating.F_s if F_s is None else F_s
+        if F is None:  # a point given by its slip and load: its clamping force solved
+            F = params.operating.resolve(params).F_s
         C[4:, 4:] += creep_damping(params, r_g, w_p, F, kinematics).matrix
     eye = np.eye(6)
     label = "" if kinematics == "equal-translation" else ", paper-sec2.1"

@@ -264,12 +264,13 @@ def model_frequencies(params: Params, targets: Sequence[Target]) -> np.ndarray:
     ParameterError
         When a target's mode number exceeds its model's number of modes.
     """
-    cache: dict[tuple[str, float], np.ndarray] = {}
+    cache: dict[tuple[str, float, str], np.ndarray] = {}
     out = np.empty(len(targets))
     for i, t in enumerate(targets):
         if t.uncoupled:
             out[i] = uncoupled_frequencies(params)[t.uncoupled]
             continue
+        assert t.ratio is not None and t.mode is not None  # a mode target (FrequencyTarget)
         key = (t.model, float(t.ratio), t.kinematics)
         if key not in cache:
             lm = actuation_model(params, t.ratio, kinematics=t.kinematics) \

@@ -31,7 +31,7 @@ from ..control.closed_loop import run_closed_loop
 from ..errors import ParameterError
 from ..lti import channel_zeros, oscillatory
 from ..nonlinear.linearization import plant
-from ..params import OperatingPoint, Params
+from ..params import Params
 from ..slip.coupling import linearize_belt
 from ..slip.stability import stability_map
 
@@ -128,6 +128,7 @@ def _plant(params: Params, context: AnalysisContext) -> dict[str, float]:
     tables = {} if context.traction is None else {"traction": context.traction}
     pl = plant(params, params.operating, disturbance=False, **tables)
     sys, op = pl.system, pl.trim
+    assert op is not None  # `plant` trims
     poles = np.linalg.eigvals(sys.A)
     f, zeta = oscillatory(poles)
     resonant = zeta < ZETA_RESONANT
@@ -144,7 +145,7 @@ def _plant(params: Params, context: AnalysisContext) -> dict[str, float]:
 
 
 def _slip(params: Params, context: AnalysisContext) -> dict[str, float]:
-    op: OperatingPoint = params.operating.resolve(params)  # (a point given by tau or T_l)
+    op = params.operating.resolve(params)  # (a point given by tau or T_l)
     sm = stability_map(params, "nu", [op.nu], "r_g", [op.r_g], base=op, workers=1)
     belt = linearize_belt(params, op)
     return {"max_real": float(sm.max_real[0, 0]), "min_damping": float(sm.min_damping[0, 0]),

@@ -183,7 +183,11 @@ def _distribution(name: str, table: Any, params: Params, src: str) -> Distributi
             raise ParameterError(f"{where}: a uniform distribution needs lower and upper")
         loc, scale = lower, upper
     elif kind == "normal":
-        loc = v.get("mean", nominal)
+        mean = v.get("mean", nominal)
+        if mean is None:
+            raise ParameterError(f"{where}: a normal distribution of {name} needs its mean (the "
+                                 "parameter set does not give the variable)")
+        loc = mean
         if ("std" in v) == ("rel_std" in v):
             raise ParameterError(f"{where}: give one of std or rel_std")
         scale = v["std"] if "std" in v else v["rel_std"] * abs(loc)

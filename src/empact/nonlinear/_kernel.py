@@ -29,13 +29,13 @@ no other module spells an index.
 """
 from __future__ import annotations
 
-from collections import namedtuple
 from typing import Mapping
 
 import numpy as np
 from numba import njit
 
 from ..variator._traction_table import table_mu, table_mu_d, table_mu_max, table_peak
+from ._constants import KernelConstants
 
 # -- parameter vector layout ---------------------------------------------------------------
 (P_A, P_TB, P_COSB, P_RMIN, P_RMAX, P_L0,
@@ -69,8 +69,8 @@ PARAMETER_NAMES = (
     "traction_table")
 assert len(PARAMETER_NAMES) == NP
 
-#: the kernel's parameters read back by name (`constants`)
-KernelConstants = namedtuple("KernelConstants", PARAMETER_NAMES)
+#: the kernel's parameters read back by name (`constants`; written out in `._constants`)
+assert KernelConstants._fields == PARAMETER_NAMES
 
 #: the base states (actuation 12, driveline 6; see `empact.nonlinear.model`) and the optional
 #: ones, each appended when its option is on (``ix`` holds their positions)

@@ -17,6 +17,7 @@ checked: the normalised residual of ``dx/dt`` must be below ``1e-8``, else it is
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -24,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._deprecate import warn_renamed
 from .._results import Result
 from ..errors import ParameterError, TrimError
-from ..params import OperatingPoint
+from ..params import OperatingPoint, ResolvedPoint, check_clamping, check_one_slip
 from ..variator.geometry import check_ratio, radii, ratio_range, stretched_radii
 from . import _kernel as K
 from .model import EmpactModel
@@ -95,9 +96,9 @@ class TrimResult:
         return self.to_dict()
 
     @property
-    def point(self) -> OperatingPoint:
-        """The trimmed point as an `OperatingPoint` given by slip and clamping force."""
-        return OperatingPoint(r_g=self.r_g, nu=self.nu, F_s=self.F_s, omega_p=self.omega_p)
+    def point(self) -> ResolvedPoint:
+        """The trimmed point given by slip and clamping force (its fields are floats)."""
+        return ResolvedPoint(r_g=self.r_g, nu=self.nu, F_s=self.F_s, omega_p=self.omega_p)
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,7 +141,7 @@ class TrimGrid(Result):
     y: NDArray[np.float64] | None = None
 
 
-def traction_peak(model: EmpactModel, r_g: ArrayLike) -> tuple[NDArray, NDArray]:
+def traction_peak(model: EmpactModel, r_g: ArrayLike) -> tuple[Any, Any]:
     """Slip at the peak of the kernel's traction curve and the peak value ``(nu_peak,
     mu_peak)`` at ratio(s) `r_g` (golden-section search on [0, 0.99], to rounding; the
     curve is unimodal in slip; compiled: `_kernel.traction_peak_many`, bitwise the
@@ -227,7 +228,7 @@ def smallest_slip_reserve(model: EmpactModel, r_g: ArrayLike, nu: ArrayLike,
     return float(exact[j]), int(pick[j])
 
 
-def _traction_peak_numpy(model: EmpactModel, r_g: ArrayLike) -> tuple[NDArray, NDArray]:
+def _traction_peak_numpy(model: EmpactModel, r_g: ArrayLike) -> tuple[Any, Any]:
     """`traction_peak` as a vectorised NumPy search (the reference its compiled search is
     checked against)."""
     r = np.atleast_1d(np.asarray(r_g, float))
@@ -284,6 +285,8 @@ def trim(model: EmpactModel, op: OperatingPoint | float, omega_p: float | None =
     if not isinstance(op, OperatingPoint):
         warn_renamed("trim(model, r_g, omega_p, nu=, F_s=, T_l=)", "trim(model, op) with an "
                      "OperatingPoint")
+        if omega_p is None:
+            raise ParameterError("operating point: omega_p (primary speed [rad/s]) is missing")
         op = OperatingPoint(r_g=op, omega_p=omega_p, nu=nu, F_s=F_s, T_l=T_l)
     elif omega_p is not None or nu is not None or F_s is not None or T_l is not None:
         raise ParameterError("trim: give an OperatingPoint alone")
@@ -293,14 +296,14 @@ def trim(model: EmpactModel, op: OperatingPoint | float, omega_p: float | None =
         if not lo <= op.nu <= hi:
             raise ParameterError(f"nu = {op.nu:g}: outside the valid slip range [{lo:g}, "
                                  f"{hi:g}] of the traction curve")
-    if op.F_s is not None and not op.F_s > 0:
-        raise ParameterError(f"F_s = {op.F_s:g}: allowed range is (0, inf) [N] (a trimmed "
-                             "point carries a clamping force)")
+    if op.F_s is not None:
+        check_clamping("F_s", op.F_s)
     request = "trim request (" + ", ".join(f"{k} = {v:g}" for k, v in op.to_dict().items()) \
         + ")"
     grid = trim_grid(model, op.r_g, op.omega_p, nu=op.nu, F_s=op.F_s, T_l=op.T_l, tau=op.tau)
     if not grid.ok[0]:
         raise TrimError(f"{request}: {grid.reason[0]}")
+    assert grid.y is not None and grid.residual is not None  # trim_grid fills both
     y = dict(zip(model.outputs, grid.y[0]))
     return TrimResult(model=model, x=grid.x[0], u=grid.u[0], r_g=y["r_g"], nu=y["nu"],
                       F_s=y["F_s"], F_p=y["F_p"], omega_p=float(grid.omega_p[0]),
@@ -423,8 +426,7 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
         ``belt="locked"``: `F_s`, optionally `T_l`, and no slip).
     """
     locked = model.options.belt == "locked"
-    if nu is not None and tau is not None:
-        raise TrimError("trim_grid: give the slip as nu or as tau, not both")
+    check_one_slip(nu is not None, tau is not None, where="trim_grid: ", error=TrimError)
     slip_given = nu is not None or tau is not None
     if locked:
         if F_s is None or slip_given:
@@ -501,7 +503,6 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
         tau_kernel = lambda R_s, F_el: mu / mu_max  # noqa: E731
     reason[good & ~np.isfinite(R_s)] = "no belt geometry carries the clamping force (belt " \
         "stretch too large for k_belt)"
-    reason[good & ~(Fs > 0)] = "clamping force must be > 0"
     good = reason == ""
     x, u, F_p_act = _assemble(model, r, w, nu_, Tl, R_p, R_s, phi, e, tau_kernel)
     # the check: every derivative zero, normalised by the forces on each body

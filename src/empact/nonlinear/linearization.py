@@ -42,7 +42,7 @@ PLANT_OUTPUTS = ("r_g", "nu", "nu_r")
 
 #: model options of a plant by default: the test bench of the paper's Secs. 3 and 4
 #: (speed-controlled drive motor, torque-controlled load motor)
-BENCH_OPTIONS = {"drive": "speed", "load": "torque"}
+BENCH_OPTIONS: dict[str, Any] = {"drive": "speed", "load": "torque"}
 
 
 def disturbance_input(model: EmpactModel) -> str:

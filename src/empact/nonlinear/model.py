@@ -572,7 +572,8 @@ class EmpactModel:
             return (np.zeros(shape),
                     ((np.pi + 2 * phi_) / (np.pi - 2 * phi_)).reshape(shape))
         lam, keq = np.empty(args[0].size), np.empty(args[0].size)
-        K.creep_many(*args, self.p, lam, keq)
+        r, R_p_, R_s_, phi_, F_el_, tau_ = args
+        K.creep_many(r, R_p_, R_s_, phi_, F_el_, tau_, self.p, lam, keq)
         return lam.reshape(shape), keq.reshape(shape)
 
     def static_creep_point(self, r_g: float, R_p: float, R_s: float, phi: float,

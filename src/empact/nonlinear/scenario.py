@@ -100,15 +100,21 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._deprecate import REMOVAL, warn_renamed
-from .._validate import check_bool, check_choice, check_number
+from .._lazy import lazy_module
+from .._validate import check_bool, check_choice, check_number, check_values
 from ..errors import ParameterError
 from ..hardware import SensorParams, ServoLimits
-from ..params import OPERATING_VARIABLES, OperatingPoint, read_toml
+from ..params import OPERATING_VARIABLES, OperatingPoint, Params, check_clamping, read_toml
+from ..variator.geometry import check_ratio
+from ..variator.traction import traction_from_params
 from .model import ModelOptions
 
 __all__ = ["Scenario", "ControllerSpec", "load_scenario", "scenario_from_dict", "list_examples",
            "example_path", "input_names", "signal", "check_tables", "model_options",
+           "check_references", "check_reference_names",
            "CLAMPING", "METHODS", "DEFAULT_METHOD"]
+
+optimize = lazy_module("scipy.optimize")
 
 #: clamping strategies of a closed-loop scenario: the slip loop, or a production CVT's
 #: open-loop safety factor
@@ -349,13 +355,16 @@ class Scenario:
         return replace(self, controller=replace(self.controller, file=str(file)))
 
 
-def load_scenario(path: str | os.PathLike[str]) -> Scenario:
+def load_scenario(path: str | os.PathLike[str], params: Params | None = None) -> Scenario:
     """Read and validate a scenario file.
 
     Parameters
     ----------
     path : str or path-like
         A scenario TOML file (open loop, or closed loop with a ``[controller]`` table).
+    params : Params, optional
+        The machine the scenario will run on: its references are then checked against the
+        model's ranges (`check_references`) here, before any integration.
 
     Returns
     -------
@@ -370,7 +379,7 @@ def load_scenario(path: str | os.PathLike[str]) -> Scenario:
     """
     src = str(path)
     data = read_toml(path, "scenario")
-    return scenario_from_dict(data, src)
+    return scenario_from_dict(data, src, params)
 
 
 def check_tables(data: Mapping[str, Any], schema: Mapping[str, Any], src: str) -> None:
@@ -524,7 +533,8 @@ def _overrides(table: Mapping[str, Any], kind: type, name: str, src: str) -> dic
     return {k: float(v) for k, v in table.items()}
 
 
-def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenario:
+def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario",
+                       params: Params | None = None) -> Scenario:
     """Validate a scenario given as a nested mapping (the parsed TOML).
 
     Parameters
@@ -534,6 +544,9 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
     src : str
         Where it came from: named in every message; relative file names of the ``[model]``
         and ``[controller]`` tables are taken from its folder when it is a file.
+    params : Params, optional
+        The machine the scenario will run on: its references are then checked against the
+        model's ranges (`check_references`).
 
     Returns
     -------
@@ -586,10 +599,7 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
     for table in ("references", "sensors", "limits"):
         if table in data and controller is None:
             raise ParameterError(f"{src}: [{table}] needs a [controller] table")
-    slips = [k for k in ("nu", "nu_r", "tau") if k in references]
-    if len(slips) > 1:
-        raise ParameterError(f"{src}: give one slip set-point (references.nu, nu_r or tau), "
-                             f"not {' and '.join(slips)}")
+    check_reference_names(references, src)
     if "tau" in references:
         tau = references["tau"][:, 1]
         if np.any(~((tau > 0) & (tau < 1))):
@@ -632,16 +642,116 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario") -> Scenar
                                  1e9, lo_open=True, where=src))
     method = check_choice("solver.method", solver.get("method", DEFAULT_METHOD), METHODS,
                           where=src)
-    return Scenario(name=str(head.get("name", Path(src).stem)),
-                    description=str(head.get("description", "")), duration=duration,
-                    sample_rate=rate, options=options, initial=initial, inputs=inputs,
-                    offsets=offsets, controller=controller, references=references,
-                    sensors=sensors, limits=limits, targets=targets,
-                    load_step_time=None if t_step is None else check_number(
-                        "scenario.load_step_time", t_step, 0.0, duration, unit="s", where=src),
-                    load_step=load_step,
-                    shift_window=window, rtol=rtol, max_step=max_step, omega_min=omega_min,
-                    max_steps=max_steps, method=method, source=src)
+    sc = Scenario(name=str(head.get("name", Path(src).stem)),
+                  description=str(head.get("description", "")), duration=duration,
+                  sample_rate=rate, options=options, initial=initial, inputs=inputs,
+                  offsets=offsets, controller=controller, references=references,
+                  sensors=sensors, limits=limits, targets=targets,
+                  load_step_time=None if t_step is None else check_number(
+                      "scenario.load_step_time", t_step, 0.0, duration, unit="s", where=src),
+                  load_step=load_step,
+                  shift_window=window, rtol=rtol, max_step=max_step, omega_min=omega_min,
+                  max_steps=max_steps, method=method, source=src)
+    if params is not None:
+        check_references(sc, params)
+    return sc
+
+
+def check_reference_names(references: Mapping[str, Any], where: str = "") -> None:
+    """The one rule on a controller's reference names (the scenario loader and
+    `empact.control.law.LoopLaw` call it): each one of `REFERENCES`, and one slip set-point
+    (``nu``, ``nu_r`` or ``tau``) at most.
+
+    Parameters
+    ----------
+    references : mapping
+        The references by name (their values are not looked at).
+    where : str
+        The scenario file, named in the message ('' for none).
+
+    Raises
+    ------
+    ParameterError
+        One line naming `where` and the reference.
+    """
+    head = f"{where}: " if where else ""
+    for key in references:
+        if key not in REFERENCES:
+            raise ParameterError(f"{head}reference {key!r}: choose from {', '.join(REFERENCES)}")
+    slips = [k for k in ("nu", "nu_r", "tau") if k in references]
+    if len(slips) > 1:
+        raise ParameterError(f"{head}give one slip set-point (references.nu, nu_r or tau), "
+                             f"not {' and '.join(slips)}")
+
+
+def check_references(scenario: Scenario, params: Params) -> None:
+    """A scenario's references within what the machine of `params` can follow, checked once,
+    when the scenario is loaded (not found out when the simulation stops).
+
+    A ratio (``references.r_g``, ``inputs.r_g_ref``) within the variator's geometric range
+    (`empact.variator.geometry.check_ratio`); a clamping force (``inputs.F_s_ref``) > 0
+    (`empact.params.check_clamping`); a slip (``references.nu``, ``nu_r``, a fraction)
+    within the traction curve's valid range and on its rising branch (0 up to the peak at
+    the reference ratio of that time).  A torque ratio ``references.tau`` is in (0, 1) by
+    `scenario_from_dict`.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    params : Params
+        The machine (its variator geometry and traction curve).
+
+    Raises
+    ------
+    ParameterError
+        One line naming the scenario file, the field, the value and the allowed range.
+    """
+    src = scenario.source or scenario.name
+    tables = (("references", scenario.references), ("inputs", scenario.inputs))
+    for group, signals in tables:
+        for name in ("r_g", "r_g_ref"):
+            if name in signals:
+                key = f"{group}.{name}"
+                try:
+                    check_ratio(signals[name][:, 1], params.variator, key)
+                except ParameterError as exc:
+                    raise ParameterError(f"{src}: {exc}") from None
+    if "F_s_ref" in scenario.inputs:
+        check_clamping("inputs.F_s_ref", scenario.inputs["F_s_ref"][:, 1], where=src)
+    slip = next((k for k in ("nu", "nu_r") if k in scenario.references), None)
+    if slip is None:
+        return
+    tr = scenario.options.traction if scenario.options.traction is not None \
+        else traction_from_params(params)
+    lo, hi = tr.nu_range
+    key = f"references.{slip}"
+    table = scenario.references[slip]
+    check_values(key, table[:, 1], lo, hi, where=src,
+                 note="a slip fraction: 0.01 is 1 %; the traction curve's valid range")
+    ratio = scenario.references.get("r_g")
+    if ratio is None:  # the ratio the run holds: the initial point's
+        ratio = np.array([[0.0, scenario.initial.r_g]])
+    # the (slip, ratio) pairs at every corner of either signal (both are piecewise linear)
+    pairs = [(nu, float(np.interp(t, ratio[:, 0], ratio[:, 1]))) for t, nu in table] + \
+        [(float(np.interp(t, table[:, 0], table[:, 1])), r) for t, r in ratio]
+    for nu, r in pairs:
+        nu_pk = min(_peak_slip(tr, r), hi)
+        check_number(key, nu, 0.0, nu_pk, lo_open=True, hi_open=True, where=src,
+                     note=f"a slip on the rising branch of the traction curve at r_g = {r:g}")
+
+
+def _peak_slip(traction: Any, r_g: float) -> float:
+    """The slip [-] at the peak of `traction` at ratio `r_g` (a grid search refined by a
+    bounded scalar search to 1e-12; the curve is unimodal in slip)."""
+    lo, hi = max(traction.nu_range[0], 0.0), traction.nu_range[1]
+    nu = np.linspace(lo, hi, 4001)
+    k = int(np.argmax(traction.mu(nu, r_g)))
+    a, b = nu[max(k - 1, 0)], nu[min(k + 1, nu.size - 1)]
+    if a == b:
+        return float(a)
+    best = optimize.minimize_scalar(lambda x: -float(traction.mu(x, r_g)), bounds=(a, b),
+                                    method="bounded", options={"xatol": 1e-12})
+    return float(best.x)
 
 
 def input_names(options: ModelOptions) -> tuple[str, ...]:

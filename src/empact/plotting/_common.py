@@ -29,10 +29,11 @@ __all__ = ["Plot", "STYLE", "STYLES", "new_axes", "save_figure", "save_plot", "s
 STYLES = ("-", "-.", "--", ":", (0, (5, 1, 1, 1)))
 
 #: The one figure style (matplotlib rcParams), applied to every plotting function.
-STYLE = {"font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9, "xtick.labelsize": 8,
-         "ytick.labelsize": 8, "legend.fontsize": 7, "figure.titlesize": 10,
-         "axes.grid": True, "grid.linewidth": 0.3, "lines.linewidth": 1.2,
-         "svg.fonttype": "none", "legend.framealpha": 0.85}
+STYLE: dict[Any, Any] = {
+    "font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9, "xtick.labelsize": 8,
+    "ytick.labelsize": 8, "legend.fontsize": 7, "figure.titlesize": 10, "axes.grid": True,
+    "grid.linewidth": 0.3, "lines.linewidth": 1.2, "svg.fonttype": "none",
+    "legend.framealpha": 0.85}
 
 #: File formats `save_figure` writes.
 FORMATS = ("png", "svg", "pdf")

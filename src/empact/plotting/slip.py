@@ -11,6 +11,7 @@ from typing import Any, Sequence
 
 import matplotlib as mpl
 import numpy as np
+from numpy.typing import NDArray
 
 from ..lti import FrequencyResponse
 from ..slip import BeltRootLocus, PoleSweep, StabilityMap, ZeroLocus
@@ -36,7 +37,8 @@ def _value(name: str, value: float) -> str:
     return f"{sym} = {scale * value:g}" + ("" if unit == "-" else f" {unit}")
 
 
-def _hz_circles(ax, freqs_hz: Sequence[float], style: str, label: str) -> None:
+def _hz_circles(ax, freqs_hz: Sequence[float] | NDArray[np.float64], style: str,
+                label: str) -> None:
     """Quarter circles |s| = 2 pi f in the second quadrant, to read natural frequencies."""
     th = np.linspace(np.pi / 2, np.pi, 60)
     for k, f in enumerate(freqs_hz):
@@ -306,7 +308,7 @@ def plot_zero_locus(zl: ZeroLocus, title: str = "",
     ax2.set_yscale("log")
     ax2.grid(True, which="both")
     handles, labels = ax2.get_legend_handles_labels()
-    seen = {}
+    seen: dict[str, Any] = {}
     for h, lab in zip(handles, labels):
         seen.setdefault(lab, h)
     ax2.legend(seen.values(), seen.keys(), loc="best")

@@ -81,7 +81,8 @@ def csv_slip_columns(header: Sequence[str], rows: Sequence[Sequence[object]]
         their numeric slip cells divided by 100 (other cells, and booleans, as given).
     """
     slip = [bool(_SLIP_PERCENT.match(str(h))) for h in header]
-    head = [re.sub(r" \[(%|pp)\]$", " [-]", str(h)) if s else h for h, s in zip(header, slip)]
+    head: list[object] = [re.sub(r" \[(%|pp)\]$", " [-]", str(h)) if s else h
+                          for h, s in zip(header, slip)]
     return [head] + [[c / 100 if s and isinstance(c, (int, float, np.number))
                       and not isinstance(c, bool) else c for c, s in zip(row, slip)]
                      for row in rows]

@@ -60,14 +60,14 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
         run = res.runs[n]
         m = run.metrics
         pred = res.predictions.get(n)
-        for c in checks:
+        for chk in checks:
             lin = ""
-            if pred is not None and c.name == "peak_slip_error":
+            if pred is not None and chk.name == "peak_slip_error":
                 lin = f"{100 * pred.peak_slip_error:.3g} pp"
-            value, unit = shown_metric(c.name, c.value)
-            target_rows.append([n, c.name, c.describe().split("(")[1].split(")")[0],
+            value, unit = shown_metric(chk.name, chk.value)
+            target_rows.append([n, chk.name, chk.describe().split("(")[1].split(")")[0],
                                 lin, _fmt(value) + (f" {unit}" if unit else ""),
-                                "met" if c.met else "MISSED",
+                                "met" if chk.met else "MISSED",
                                 f"{m['peak_T_mp']:.2f} / {m['T_mp_max']:g}",
                                 f"{m['peak_T_ms']:.2f} / {m['T_ms_max']:g}"])
     env = res.envelope

@@ -4,6 +4,7 @@ with the Sec. 4 remarks.  Compute only: `empact.report` renders."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -83,7 +84,7 @@ GAINS = (0.3, 1.0, 3.0, 10.0, 30.0)
 def creep_gain_sweep(params: Params, gains=GAINS) -> list[list[float]]:
     """Actuation modes of the machine at r_g = 1 with the creep law linearised at
     ``params.operating`` as pulley damping (moderate damping), for each ``shift.gain``."""
-    op = params.operating
+    op = params.operating.resolve(params)
     f = np.logspace(-2, 1.5, 400)
     rows = []
     for g in gains:
@@ -161,8 +162,8 @@ def fig2(params: Params) -> Fig2:
         pole48 = _nearest(ex_p48, 47.9)
         cells = []
         for out in ("r_g", "nu"):
-            z = channel_zeros(res.exact, "T_mp", out, max_abs=1e7)
-            z = _nearest(z[z.imag > 0], abs(pole48) / 2 / np.pi)
+            zs = channel_zeros(res.exact, "T_mp", out, max_abs=1e7)
+            z = _nearest(zs[zs.imag > 0], abs(pole48) / 2 / np.pi)
             zeros_above.append(bool(abs(z) > abs(pole48)))
             z48.append(abs(z) / 2 / np.pi)
             cells.append(f"{out}: {z.real / 2 / np.pi:+.2f}{z.imag / 2 / np.pi:+.2f}j")
@@ -313,8 +314,9 @@ def fig14(params: Params) -> Fig14:
         The rig runs, the features measured on them and the claims.
     """
     runs, slopes = [], {}
-    for excite, pairs in (("T_mp", [("theta_mp", "T_mp")]),
-                          ("T_ms", [("theta_ms", "T_ms"), ("nu", "T_ms")])):
+    excitations: tuple[tuple[Literal["T_mp", "T_ms"], list[tuple[str, str]]], ...] = (
+        ("T_mp", [("theta_mp", "T_mp")]), ("T_ms", [("theta_ms", "T_ms"), ("nu", "T_ms")]))
+    for excite, pairs in excitations:
         rec = run_rig(params, RigSettings(excite=excite))
         est = rig_frf(rec)
         lin = linearize(rec.op, ["T_mp", "T_ms"], ["theta_mp", "theta_ms", "nu"])

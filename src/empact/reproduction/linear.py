@@ -320,7 +320,7 @@ def fig6(params: Params) -> Fig6:
     resps = tuple(actuation_model(params, 1.0, lvl, kinematics=SEC21).frequency_response(
         w, *pairs, label="undamped" if lvl == "none" else f"{lvl} damping")
         for lvl in DAMPING_LEVELS)
-    op = params.operating
+    op = params.operating.resolve(params)
     fm = np.logspace(-2, 3.5, 600)  # the creep law's integrator reaches below 0.1 Hz
     wm = 2 * np.pi * fm
     machine = (

@@ -293,14 +293,15 @@ def exact_plant(params: Params) -> PlantSection:
     resps, rows, dc_rows = [], [], []
     for r in RATIOS:
         pl = plant(params, params.operating.replace(r_g=r))
-        sys, op = pl.system, pl.trim
+        sys, trimmed = pl.system, pl.trim
+        assert trimmed is not None  # `plant` trims
         resps.append(system_response(sys, 2 * np.pi * f, label=f"r_g = {r:g}"))
         ev = np.linalg.eigvals(sys.A)
-        rows.append([r, op.T_l, op.T_mp, op.T_ms, float(ev.real.max())])
+        rows.append([r, trimmed.T_l, trimmed.T_mp, trimmed.T_ms, float(ev.real.max())])
         dc_rows.append([r, *load_to_ratio(params, r)])
     gains = [row[2] for row in dc_rows]
     agree = all(abs(a - b) <= 0.01 * abs(b) for _, _, a, b, _ in dc_rows)
-    op = params.operating
+    op = params.operating.resolve(params)
     claim = Claim(key="load.moves_ratio", source="Sec. 3",
                   claim="a change of the load moves the ratio unless the servos counteract "
                         "it (checked: non-zero static load -> ratio gain with the servo "

@@ -8,7 +8,7 @@ import numpy as np
 
 from .. import paper
 from ..lti import FrequencyResponse, oscillatory
-from ..params import OperatingPoint, Params
+from ..params import Params, ResolvedPoint
 from ..slip import (
     BeltRootLocus,
     PoleSweep,
@@ -36,7 +36,7 @@ OMEGA = 2 * np.pi * np.logspace(np.log10(0.5), np.log10(200.0), 1500)
 FIG12B_SLIP = 0.03
 
 
-def fig11_point(nu: float = 0.03) -> OperatingPoint:
+def fig11_point(nu: float = 0.03) -> ResolvedPoint:
     """The Fig. 11 operating point (r_g = 1, F_s0 = 10 kN, omega_p0 = 300 rad/s) at slip `nu`.
 
     Parameters
@@ -46,12 +46,12 @@ def fig11_point(nu: float = 0.03) -> OperatingPoint:
 
     Returns
     -------
-    OperatingPoint
+    ResolvedPoint
         Ratio [-], slip [-], clamping force [N] and primary speed [rad/s] of the point
         (`empact.paper.FIG11_POINT`).
     """
     f = paper.FIG11_POINT
-    return OperatingPoint(r_g=f["r_g"], nu=nu, F_s=f["F_s"], omega_p=f["omega_p"])
+    return ResolvedPoint(r_g=f["r_g"], nu=nu, F_s=f["F_s"], omega_p=f["omega_p"])
 
 
 def _rel(a: float, b: float) -> float:
@@ -307,14 +307,14 @@ class Fig12:
     responses : list of FrequencyResponse
         The ``F_s -> nu`` responses [1/N] at `OMEGA`, one per operating point, labelled by the
         slip or the ratio that varies.
-    base : OperatingPoint
+    base : ResolvedPoint
         The point the others vary from (`fig11_point`).
     claims : tuple of Claim
         The checks of the paper's statements (``fig12a.1`` ... or ``fig12b.1`` ...).
     """
 
     responses: list[FrequencyResponse]
-    base: OperatingPoint
+    base: ResolvedPoint
     claims: tuple[Claim, ...]
 
 

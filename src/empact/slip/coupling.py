@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._deprecate import warn_renamed
 from .._results import Result
 from .._validate import check_values
-from ..params import OPERATING_VARIABLES, OperatingPoint, Params
+from ..params import OPERATING_VARIABLES, OperatingPoint, Params, ResolvedPoint
 from ..variator.geometry import variator_state
 from ..variator.traction import TractionModel, traction_from_params
 
@@ -185,7 +185,7 @@ class BeltLinearisation(Result):
     rho : kinematic ratio ``omega_s0 / omega_p0 = r_g (1 - nu0)`` [-]
     """
 
-    op: OperatingPoint
+    op: ResolvedPoint
     R_p: float
     R_s: float
     mu: float

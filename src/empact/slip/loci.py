@@ -11,7 +11,7 @@ Compute only; figures are drawn by `empact.plotting.slip`.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, Sequence
+from typing import Any, Literal, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -29,7 +29,7 @@ from ..lti import (
     root_locus,
     track_branches,
 )
-from ..params import OperatingPoint, Params
+from ..params import OperatingPoint, Params, ResolvedPoint
 from ..variator.geometry import variator_state
 from ..variator.traction import TractionModel
 from .coupling import VARIABLES, check_slip, linearisation_terms
@@ -147,7 +147,7 @@ def belt_root_locus(params: Params, r_g: float = 1.0, nu0: float = 0.0, *,
         return assemble_A(J, K, r, rho, np.array([c_b / r_g]))[0]
 
     loc = root_locus(A_of, lo, hi, spacing="log", max_move=max_move, name="c_b [N m s/rad]")
-    start = np.sort_complex(np.linalg.eigvals(A_of(0.0)))
+    start = np.sort_complex(np.linalg.eigvals(A_of(0.0)).astype(np.complex128))
     stop = coupled_limit(params, r_g, nu0)
     return BeltRootLocus(r_g=float(r_g), nu0=nu0, locus=loc, start=start, stop=stop,
                          uncoupled_hz=_oscillatory_hz(start), coupled_hz=_oscillatory_hz(stop))
@@ -199,7 +199,7 @@ class PoleSweep(Result):
 
     name: str
     values: NDArray[np.float64]
-    base: OperatingPoint
+    base: ResolvedPoint
     poles: NDArray[np.complex128]
     c_b: NDArray[np.float64]
     dmu: NDArray[np.float64]
@@ -258,7 +258,7 @@ def pole_sweep(params: Params, name: Variable, values: ArrayLike,
     """
     v = grid_values(name, values)
     base = (params.operating if base is None else base).resolve(params, traction)
-    op = base.to_dict()
+    op: dict[str, Any] = dict(base.to_dict())
     op[name] = v
     terms = linearisation_terms(params, op["r_g"], op["nu"], op["F_s"], op["omega_p"], traction)
     t = {k: np.broadcast_to(a, v.shape) for k, a in terms.items()}
@@ -312,7 +312,8 @@ def slip_frequency_responses(params: Params, ops: Sequence[OperatingPoint],
     if labels is not None and len(labels) != len(ops):
         raise ValueError(f"{len(labels)} labels for {len(ops)} operating points")
     out = []
-    for k, op in enumerate(ops):
+    for k, point in enumerate(ops):
+        op = point.resolve(params, traction)
         label = labels[k] if labels is not None else \
             f"r_g = {op.r_g:g}, nu = {100 * op.nu:g} %"
         out.append(slip_model(params, op, traction).frequency_response(omega, [input], [output],
@@ -338,7 +339,7 @@ class ZeroLocus(Result):
     """
 
     r_g: NDArray[np.float64]
-    base: OperatingPoint
+    base: ResolvedPoint
     zeros: NDArray[np.complex128]
     n_origin: NDArray[np.int64]
     coupled: NDArray[np.complex128]

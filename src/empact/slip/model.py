@@ -312,7 +312,7 @@ class SlipModel:
 
     def poles(self) -> NDArray[np.complex128]:
         """All eight eigenvalues of A [rad/s] (three structural zeros included), shape (8,)."""
-        return np.sort_complex(np.linalg.eigvals(self.A))
+        return np.sort_complex(np.linalg.eigvals(self.A).astype(np.complex128))
 
     def frequency_response(self, omega: ArrayLike, inputs: Sequence[str] | None = None,
                            outputs: Sequence[str] | None = None, label: str = "") \

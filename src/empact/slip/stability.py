@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -23,7 +23,7 @@ from .._results import Result
 from .._validate import check_choice, check_int
 from ..errors import ParameterError
 from ..lti import damping_ratio
-from ..params import OperatingPoint, Params
+from ..params import OperatingPoint, Params, ResolvedPoint
 from ..sweep import SweepOptions, plan_chunks, run_chunks
 from ..variator.traction import TractionModel, traction_from_params
 from .coupling import VARIABLES, linearisation_terms
@@ -93,7 +93,7 @@ class StabilityMap(Result):
     y_name: str
     x: NDArray[np.float64]
     y: NDArray[np.float64]
-    base: OperatingPoint
+    base: ResolvedPoint
     max_real: NDArray[np.float64]
     min_damping: NDArray[np.float64]
     tol: float
@@ -156,7 +156,7 @@ def stability_map(params: Params, x_name: Variable, x: ArrayLike, y_name: Variab
     chunk_size = check_int("chunk_size", chunk_size, 1)
     workers = check_int("workers", (os.cpu_count() or 1) if workers is None else workers, 1)
     base = (params.operating if base is None else base).resolve(params, traction)
-    fixed = base.to_dict()
+    fixed: dict[str, Any] = dict(base.to_dict())
     # Every variable is valid or not on its own: checking the two axes checks the whole grid,
     # so a bad value is reported at once, before any chunk is computed.
     for name, values in ((x_name, xv), (y_name, yv)):
@@ -214,7 +214,7 @@ def _map_points(task, start: int, stop: int) -> tuple[NDArray, NDArray]:
     r, rho, c_s = (np.broadcast_to(t[k], idx.shape) for k in ("r_g", "rho", "c_s"))
     if method == "full":
         return stability_measures(np.linalg.eigvals(assemble_A(J, K, r, rho, c_s)))
-    return _measures(np.linalg.eigvals(assemble_reduced(J, K, r, rho, c_s)))
+    return _measures(np.linalg.eigvals(assemble_reduced(J, K, r, rho, c_s)).astype(np.complex128))
 
 
 def _map_chunk(arg) -> tuple[NDArray, NDArray]:

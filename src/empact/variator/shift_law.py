@@ -307,8 +307,8 @@ def shift_rate(params: _HasShift, r_g: ArrayLike, omega_p: ArrayLike, kappa: Arr
     """
     check_choice("law", law, SHIFT_LAWS[:2])
     w_eff = np.sqrt(np.asarray(omega_p, float) ** 2 + params.shift.omega_0 ** 2)
-    err = np.log(np.asarray(kappa) / kappa_eq) if law == "carbone" \
-        else np.asarray(kappa) / kappa_eq - 1
+    ratio = np.asarray(kappa, float) / np.asarray(kappa_eq, float)
+    err = np.log(ratio) if law == "carbone" else ratio - 1
     return w_eff * creep_coefficient(params, r_g, F_s) * err
 
 

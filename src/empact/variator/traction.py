@@ -50,7 +50,7 @@ import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping, Protocol, Sequence, runtime_checkable
+from typing import Any, Mapping, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -140,7 +140,8 @@ class TractionModel(Protocol):
         for a slip outside it.
     """
 
-    nu_range: tuple[float, float]
+    @property
+    def nu_range(self) -> tuple[float, float]: ...
 
     def mu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
         """Traction coefficient [-].
@@ -350,10 +351,9 @@ class TabulatedTraction:
     nu_data: tuple[NDArray[np.float64], ...]
     mu_data: tuple[NDArray[np.float64], ...]
     source: str = "traction table"
-    _interp: tuple[interpolate.PchipInterpolator, ...] = field(init=False, repr=False,
-                                                               compare=False)
-    _slope: tuple[interpolate.PchipInterpolator, ...] = field(init=False, repr=False,
-                                                              compare=False)
+    # scipy.interpolate.PchipInterpolator per curve (scipy is untyped here)
+    _interp: tuple[Any, ...] = field(init=False, repr=False, compare=False)
+    _slope: tuple[Any, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         ratios = tuple(float(r) for r in self.ratios)
@@ -425,7 +425,7 @@ class TabulatedTraction:
         return w
 
     def _evaluate(self, nu: ArrayLike, r_g: ArrayLike,
-                  funcs: Sequence[interpolate.PchipInterpolator]) -> NDArray[np.float64]:
+                  funcs: Sequence[Any]) -> NDArray[np.float64]:
         nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, self.source)
         w = self._weights(r_a)
         out = np.zeros(nu_a.shape)
