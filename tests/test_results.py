@@ -180,6 +180,7 @@ BUILDERS = {
 NOT_RESULTS = {
     "empact.control.controller.Controller": "a controller (its file: to_dict/save)",
     "empact.control.controller.Schedule": "a controller's gain schedule",
+    "empact.control.designs.ControllerType": "a registry entry (a design function by name)",
     "empact.control.law.LoopConfig": "settings of the loop law",
     "empact.experiments.rig.RigSettings": "settings of a rig experiment",
     "empact.hardware.SensorParams": "a parameter section",
