@@ -78,10 +78,10 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
     base = operating_point(params, trim=True, traction=traction_table, slip=nu, clamp=F_s,
                            speed=omega_p)
     check_ratio(r_list, params.variator, "--ratios")
-    machine = {} if traction_table is None else {
-        "model": nonlinear_model(params, traction=traction_table)}
+    machine = None if traction_table is None else nonlinear_model(params,
+                                                                  traction=traction_table)
     results = [identify_plant(params, base.replace(r_g=r), order=order, amplitudes=(step, step),
-                              **machine)
+                              model=machine)
                for r in progress_bar(r_list, desc="identify", unit="ratio", enabled=not quiet)]
     models = [{"r_g": res.r_g, "operating_point": res.experiment.op.to_dict(),
                "order": res.realization.order, "fit_percent": res.realization.fit,

@@ -256,7 +256,7 @@ class PlantFamily:
             r_g.append(float(self.operating["r_g"][idx]))
             p = np.linalg.eigvals(self.A[idx])
             poles.append(p[np.abs(p) < w_max])
-            plant = self.plant(idx)
+            plant = self.plant(tuple(int(i) for i in idx))
             for c in FamilyRoots.CHANNELS:
                 inp, out = c.split("->")
                 zeros[c].append(channel_zeros(plant, inp, out, max_abs=w_max))
