@@ -69,7 +69,23 @@ CONTROLLER_TYPES: dict[str, ControllerType] = {
 
 
 def controller_type(name: str) -> ControllerType:
-    """The registered type `name`; `ParameterError` naming the choices otherwise."""
+    """The registered controller type called `name`.
+
+    Parameters
+    ----------
+    name : str
+        A key of `CONTROLLER_TYPES` (``"pi"``, ``"hinf"``).
+
+    Returns
+    -------
+    ControllerType
+        Its design function and the options it takes.
+
+    Raises
+    ------
+    ParameterError
+        If `name` is not registered (the message names the choices).
+    """
     try:
         return CONTROLLER_TYPES[name]
     except KeyError:
