@@ -35,7 +35,8 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     ``_rosenbrock.py`` inline the right-hand side and Jacobian of ``_kernel.py`` and keep the
     version they were compiled with after ``_kernel.py`` changes (numba issue 6845); so does
     the compiled closed loop (``empact/control/_loop_core.py``) with the kernel, the
-    integrators and the law's sample (``_law_core.py``), whose cache is dropped likewise.  The
+    integrators and the law's sample (``_law_core.py``), and the law's sample with the
+    kernel's traction peak and creep law: their caches are dropped likewise.  The
     test session calls this first, so that an edited kernel is never tested through stale
     integrators; the price is one compile (about 20 s) after a source changed.
 
@@ -55,10 +56,12 @@ def drop_stale_cache(folder: Path | None = None) -> int:
         return _drop_stale(Path(folder) / "__pycache__", "*", list(Path(folder).glob("*.py")))
     here = Path(__file__).resolve().parent
     nonlinear = list((here / "nonlinear").glob("*.py"))
-    # the compiled closed loop calls the kernel, the integrator and the law's sample
+    # the compiled closed loop calls the kernel, the integrator and the law's sample, which
+    # calls the kernel
     loop_sources = nonlinear + [here / "control" / "_law_core.py",
                                 here / "control" / "_loop_core.py"]
     return (_drop_stale(here / "nonlinear" / "__pycache__", "*", nonlinear)
+            + _drop_stale(here / "control" / "__pycache__", "_law_core.*", loop_sources)
             + _drop_stale(here / "control" / "__pycache__", "_loop_core.*", loop_sources))
 
 
@@ -101,7 +104,7 @@ def compile_all() -> float:
     run_closed_loop(sc.with_duration(0.002), params)
     law = build_law(sc, params)
     law.step(0.0, law.raw0)
-    law._limit(np.zeros(2), (0.0, 0.0))  # the servo limits as `update` calls them
+    law.update(law.z0, law.raw0, 0, ideal=True)
     law.preprocess(law.z0[:law.n_pre], law.raw0, 0, np.array([law.point["r_g"], 0.01, 0.05,
                                                                  0.0]), ideal=True)
     law.sense(law.z0[:law.n_pre - 2].reshape(len(law.raw0), -1))
