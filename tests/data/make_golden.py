@@ -9,15 +9,17 @@ scenario: the signals the law reads (`empact.control.law.RAW_SIGNALS`), the slip
 clamping force ``F_s`` and the servo torques ``T_mp``, ``T_ms`` as applied, every
 `DECIMATE`-th output sample (full float64: the test compares them bitwise), the whole state at
 the last sample, the run's length, its integrator statistics and its scalar metrics; the
-Monte Carlo's drawn parameters and metric table.  About 1 MB compressed.
+Monte Carlo's drawn parameters and metric table; the law's pre-processing linearised
+(`empact.control.loop.linear_preprocess`, ideal law) on a load step and a shift.  About 1 MB
+compressed.
 
 How: from a checkout of the commit whose law is the reference (the file's ``commit`` entry
-records it; the shipped file was made from ``9bddc97``, the law before its one compiled
-sample, issue 31 item 2)::
+records it; the shipped file was made from main at ``89f6a97``, the law before its one
+compiled sample, issue 31 item 2; its runs and Monte Carlo are bitwise those of ``9bddc97``)::
 
     PYTHONPATH=<that checkout>/src python tests/data/make_golden.py tests/data/golden_loop.npz
 
-It takes about a minute after compilation.  Regenerate only for an intended change of the
+It takes about 10 s after compilation.  Regenerate only for an intended change of the
 law's numbers, and say why in the commit.
 """
 from __future__ import annotations
@@ -30,9 +32,10 @@ from pathlib import Path
 import numpy as np
 
 import empact
-from empact.control.closed_loop import (control_example_path, control_examples,
+from empact.control.closed_loop import (build_law, control_example_path, control_examples,
                                         resolve_controller, run_closed_loop)
 from empact.control.law import RAW_SIGNALS
+from empact.control.loop import linear_preprocess
 from empact.montecarlo import load_spread, monte_carlo
 from empact.nonlinear.scenario import load_scenario
 
@@ -72,12 +75,25 @@ def monte_carlo_runs(params) -> dict[str, np.ndarray]:
             "montecarlo/ok": res.ok, "montecarlo/outputs": np.array(res.outputs)}
 
 
+#: the scenarios whose law's linearisation is kept
+LINEARISED = ("slip-load-step-r1", "shift-low-od")
+
+
+def linearised(params) -> dict[str, np.ndarray]:
+    """`linear_preprocess` of the ideal law of each of `LINEARISED`."""
+    out = {}
+    for name in LINEARISED:
+        law = build_law(load_scenario(control_example_path(name)), params, ideal=True)
+        out |= {f"linear/{name}/{k}": v for k, v in linear_preprocess(law).items()}
+    return out
+
+
 def main(path: str) -> None:
     src = Path(empact.__file__).resolve().parents[2]
     commit = subprocess.run(["git", "-C", str(src), "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
     params = empact.load_params()
-    out = scenario_runs(params) | monte_carlo_runs(params)
+    out = scenario_runs(params) | monte_carlo_runs(params) | linearised(params)
     out["commit"] = np.array(commit)
     out["decimate"] = np.asarray(DECIMATE)
     out["signals"] = np.array(SIGNALS)
