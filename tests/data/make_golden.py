@@ -32,8 +32,13 @@ from pathlib import Path
 import numpy as np
 
 import empact
-from empact.control.closed_loop import (build_law, control_example_path, control_examples,
-                                        resolve_controller, run_closed_loop)
+from empact.control.closed_loop import (
+    build_law,
+    control_example_path,
+    control_examples,
+    resolve_controller,
+    run_closed_loop,
+)
 from empact.control.law import RAW_SIGNALS
 from empact.control.loop import linear_preprocess
 from empact.montecarlo import load_spread, monte_carlo

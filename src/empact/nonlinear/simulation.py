@@ -231,10 +231,11 @@ class CompiledSampledController(SampledController, Protocol):
 
     Methods
     -------
-    run_compiled(k0, k1, loop, t, h, filled, n_steps, n_rej) -> (status, t, h, filled, n_steps, n_rej, k)
+    run_compiled(k0, k1, loop, t, h, filled, n_steps, n_rej) -> tuple
         Samples `k0` to ``k1 - 1`` (`SampledLoop` `loop`; from time `t` [s], step `h` [s],
         `filled` output samples, `n_steps` and `n_rej` steps taken and rejected): the
-        integrator's status after sample `k`, the last one run.
+        tuple ``(status, t, h, filled, n_steps, n_rej, k)``: the integrator's status after
+        sample `k`, the last one run.
     """
 
     compiled: bool
