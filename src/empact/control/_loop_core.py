@@ -27,15 +27,14 @@ __all__ = ["run_samples"]
 
 
 @njit(cache=True)
-def run_samples(k0, k1, c, tb, wk, z, z_next, k_law, s, t, h, filled, n_steps, n_rej):
-    """Samples ``k0 .. k1 - 1`` of the sampled loop: the law (`c`, `tb`, `wk` its
-    `LawConstants`, `LawTables`, `LawWork`; `z`, `z_next` its state and the spare, `k_law`
-    its sample count) and the simulator's `SampledLoop` `s`, from time `t`, step `h`, with
-    `filled` output samples and `n_steps`, `n_rej` steps so far.  Returns ``(status, t, h,
-    filled, n_steps, n_rej, k, done, law_error)``: the integrator's status after sample `k`
-    (the last one run), the samples the law took (its state is in `z` after an even number,
-    in `z_next` after an odd one), and 1 when the law found no belt geometry at sample `k`
-    (before taking it)."""
+def run_samples(k0, k1, law, z, z_next, k_law, s, t, h, filled, n_steps, n_rej):
+    """Samples ``k0 .. k1 - 1`` of the sampled loop: the law (`law` its `_law_core.Law`;
+    `z`, `z_next` its state and the spare, `k_law` its sample count) and the simulator's
+    `SampledLoop` `s`, from time `t`, step `h`, with `filled` output samples and `n_steps`,
+    `n_rej` steps so far.  Returns ``(status, t, h, filled, n_steps, n_rej, k, done,
+    law_error)``: the integrator's status after sample `k` (the last one run), the samples
+    the law took (its state is in `z` after an even number, in `z_next` after an odd one),
+    and 1 when the law found no belt geometry at sample `k` (before taking it)."""
     tA, tC, tc, td, tH, gam, q = s.tableau
     x, u, y, meas = s.x, s.u, s.y, s.meas
     status = 0
@@ -49,12 +48,12 @@ def run_samples(k0, k1, c, tb, wk, z, z_next, k_law, s, t, h, filled, n_steps, n
             s.Y[0, :] = y
         for i in range(s.out_idx.shape[0]):
             meas[i] = y[s.out_idx[i]]
-        if sample(c, tb, wk, z, z_next, meas, k_law + done, False):
+        if sample(law, z, z_next, meas, k_law + done, False):
             return status, t, h, filled, n_steps, n_rej, k, done, 1
         z, z_next = z_next, z
         done += 1
         for i in range(s.cmd_idx.shape[0]):
-            cmd = wk.u[i]
+            cmd = law.wk.u[i]
             s.commands[k, i] = cmd
             u[s.cmd_idx[i]] = cmd
             s.sig_v[s.cmd_idx[i], 0] = cmd

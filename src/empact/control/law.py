@@ -95,7 +95,7 @@ _run_samples: Any = _loop_core.run_samples
 def _entry(dispatcher: Any, *args: Any) -> Any:
     """The compiled overload of `dispatcher` for the types of `args` (compiled or loaded from
     numba's cache once), called without numba's per-call type dispatch: the law's named
-    structures cost about 8 us a call to type, more than a whole sample (`bench/RESULTS.md`).
+    `_law_core.Law` costs about 2 us a call to type, two thirds of a sample.
     The caller passes arguments of exactly these types."""
     return dispatcher.compile(tuple(typeof(a) for a in args))
 
@@ -335,10 +335,11 @@ class LoopLaw:
             self._T_ms_start = float(core.safety_torque(self.raw0[3], self.raw0[0], self._c,
                                                         self._tb, self._wk))
             self._c = self._c._replace(T_ms_start=self._T_ms_start)
+        self._law = core.law(self._c, self._tb, self._wk)
         self.z0 = self.initial_state()
         self.reset()
-        self._sample = _entry(core.sample, self._c, self._tb, self._wk, self._z,
-                              self._z_spare, self.raw0, 0, False)
+        self._sample = _entry(core.sample, self._law, self._z, self._z_spare, self.raw0, 0,
+                              False)
 
     def _pack(self) -> None:
         """The law's constants, per-sample tables and work arrays as the compiled sample
@@ -383,23 +384,23 @@ class LoopLaw:
             C=c.C, D=c.D, L=self._L_aw, p=self.model.p)
         self._wk = core.work(len(RAW_SIGNALS))
 
-    def _tables_at(self, ref: NDArray, k: int) -> Any:
-        """One row of tables: sample `k`'s noise, the references `ref` (``r_g, slip, mu,
-        dr_g/dt``) and what the law computes of them (`preprocess` and `update` with a
-        `ref`, the linear model's)."""
+    def _law_at(self, ref: NDArray, k: int) -> Any:
+        """The law on one row of tables: sample `k`'s noise, the references `ref` (``r_g,
+        slip, mu, dr_g/dt``) and what the law computes of them (`preprocess` and `update`
+        with a `ref`, the linear model's)."""
         r_ref, slip, mu, rdot = (float(x) for x in ref)
         rr = np.array([r_ref])
         one = [np.full(1, np.nan) for _ in range(4)]
         if self.config.spec.shift_feedforward and rdot != 0.0:
             one = list(self._shift_geometry(rr))
         kk = min(int(k), self.n_k - 1)
-        return core.tables(
+        return core.law(self._c, core.tables(
             r_g=rr, slip=[slip], mu=[mu], rdot=[rdot], decoupling=[self._decoupling0],
             mu_max=(self.model.mu_max(rr) if self.controller.schedule is not None
                     else np.zeros(1)),
             R_p=one[0], R_s=one[1], phi=one[2], kappa_geo=one[3],
             noise=self._tb.noise[kk:kk + 1], schedule=self._tb.schedule, A=self._tb.A,
-            B=self._tb.B, C=self._tb.C, D=self._tb.D, L=self._tb.L, p=self._tb.p)
+            B=self._tb.B, C=self._tb.C, D=self._tb.D, L=self._tb.L, p=self._tb.p), self._wk)
 
     # -- set-up ----------------------------------------------------------------------------
     def _references(self, references: Mapping[str, NDArray]) -> _Refs:
@@ -521,8 +522,8 @@ class LoopLaw:
         `k`; `ideal` drops noise and quantisation."""
         s = np.ascontiguousarray(s, dtype=float)
         s_next = np.empty(self.n_pre)
-        tb, kk = (self._tb, int(k)) if ref is None else (self._tables_at(ref, k), 0)
-        status, e0, e1, u0, u1 = _pre(self._c, tb, self._wk, s, s_next,
+        law, kk = (self._law, int(k)) if ref is None else (self._law_at(ref, k), 0)
+        status, e0, e1, u0, u1 = _pre(law, s, s_next,
                                       np.ascontiguousarray(raw, dtype=float), kk, bool(ideal))
         if status:
             raise _no_geometry(self._wk.meas[0])
@@ -550,8 +551,8 @@ class LoopLaw:
         if z.shape != (self.n_state,):
             raise ValueError(f"z has shape {z.shape}: expected ({self.n_state},)")
         z_next = np.empty(self.n_state)
-        tb, kk = (self._tb, int(k)) if ref is None else (self._tables_at(ref, k), 0)
-        if self._sample(self._c, tb, self._wk, z, z_next, self._raw(raw), kk, bool(ideal)):
+        law, kk = (self._law, int(k)) if ref is None else (self._law_at(ref, k), 0)
+        if self._sample(law, z, z_next, self._raw(raw), kk, bool(ideal)):
             raise _no_geometry(self._wk.meas[0])
         return z_next, self._wk.u.copy()
 
@@ -606,8 +607,8 @@ class LoopLaw:
             does).
         """
         status, t, h, filled, n_steps, n_rej, k, done, err = _run_samples(
-            k0, k1, self._c, self._tb, self._wk, self._z, self._z_spare, self._k, loop, t, h,
-            filled, n_steps, n_rej)
+            k0, k1, self._law, self._z, self._z_spare, self._k, loop, t, h, filled, n_steps,
+            n_rej)
         self._k += done
         if done % 2:
             self._z, self._z_spare = self._z_spare, self._z
@@ -619,8 +620,8 @@ class LoopLaw:
         """Servo torques ``[T_mp, T_ms]`` [N m] over ``[t, t + dt)``: the compiled sample
         (`update`) of the law's state."""
         z_next = self._z_spare
-        if self._sample(self._c, self._tb, self._wk, self._z, z_next,
-                        np.ascontiguousarray(measured, dtype=float), self._k, False):
+        if self._sample(self._law, self._z, z_next, np.ascontiguousarray(measured, dtype=float),
+                        self._k, False):
             raise _no_geometry(self._wk.meas[0])
         self._z_spare, self._z = self._z, z_next
         self._k += 1
