@@ -94,9 +94,9 @@ _run_samples: Any = _loop_core.run_samples
 
 def _entry(dispatcher: Any, *args: Any) -> Any:
     """The compiled overload of `dispatcher` for the types of `args` (compiled or loaded from
-    numba's cache once), called without numba's per-call type dispatch: the law's named
-    `_law_core.Law` costs about 2 us a call to type, two thirds of a sample.
-    The caller passes arguments of exactly these types."""
+    numba's cache once), to be called without numba's per-call type dispatch (typing a
+    `_law_core.Law` costs about 2 us a call, two thirds of a sample).  It does not check its
+    arguments: the caller passes arrays of exactly these types and shapes (`LoopLaw._raw`)."""
     return dispatcher.compile(tuple(typeof(a) for a in args))
 
 
@@ -620,8 +620,7 @@ class LoopLaw:
         """Servo torques ``[T_mp, T_ms]`` [N m] over ``[t, t + dt)``: the compiled sample
         (`update`) of the law's state."""
         z_next = self._z_spare
-        if self._sample(self._law, self._z, z_next, np.ascontiguousarray(measured, dtype=float),
-                        self._k, False):
+        if self._sample(self._law, self._z, z_next, self._raw(measured), self._k, False):
             raise _no_geometry(self._wk.meas[0])
         self._z_spare, self._z = self._z, z_next
         self._k += 1
