@@ -129,7 +129,7 @@ def constants(**values: object) -> LawConstants:
 
 def tables(**arrays: object) -> LawTables:
     """`LawTables` from `arrays` (every field by name), each as a C-ordered float64 array."""
-    return LawTables(**{k: np.ascontiguousarray(v, dtype=np.float64)  # type: ignore
+    return LawTables(**{k: np.ascontiguousarray(v, dtype=np.float64)
                         for k, v in arrays.items()})
 
 

@@ -260,6 +260,9 @@ class LoopLaw:
     """
 
     commands = ("T_mp", "T_ms")
+    _c: core.LawConstants
+    _tb: core.LawTables
+    _wk: core.LawWork
 
     def __init__(self, controller: Controller, model: EmpactModel, point: Mapping[str, float],
                  u0: NDArray, config: LoopConfig,
@@ -478,8 +481,8 @@ class LoopLaw:
 
     def reset(self) -> None:
         """Back to the first sample at rest."""
-        self._z = self.z0.copy()
-        self._z_spare = np.empty_like(self._z)
+        self._z: NDArray[np.float64] = self.z0.copy()
+        self._z_spare: NDArray[np.float64] = np.empty_like(self._z)
         self._k = 0
 
     @property
