@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .control import _law_core
 from .control.closed_loop import build_law, control_example_path, run_closed_loop
 from .nonlinear.equilibrium import trim
 from .nonlinear.linearization import linearize_many, plant
@@ -108,6 +109,8 @@ def compile_all() -> float:
     law.preprocess(law.z0[:law.n_pre], law.raw0, 0, np.array([law.point["r_g"], 0.01, 0.05,
                                                                  0.0]), ideal=True)
     law.sense(law.z0[:law.n_pre - 2].reshape(len(law.raw0), -1))
+    # the safety-factor clamping's torque at rest (a safety-factor law's set-up)
+    _law_core.safety_torque(law.raw0[3], law.raw0[0], law._c, law._tb, law._wk)
     if law.controller.schedule is not None:
         law.controller.schedule.gains_at([1.0] * len(law.controller.schedule.axes))
     return time.perf_counter() - t0
