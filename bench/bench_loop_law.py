@@ -1,45 +1,43 @@
-"""Benchmark: the sampled loop law on floats (issue 23, item 4) against the law before it.
+"""Benchmark: the sampled loop law's cost per sample, this tree against another (paired).
 
 Workload: every shipped closed-loop scenario, run by the one simulator (`run_scenario`,
-Rodas4) with today's `empact.control.law.LoopLaw` and with the law as it was before
-(`_loop_law_baseline.py`, frozen), each built from the same controller, model, point and
-configuration; then the 200-run closed-loop Monte Carlo of the shipped example spread
-(slip-load-step-r1, serial, in process), once with each law.  Per scenario: the law's own
-cost per 1 ms sample (the time inside ``step``), the whole run's wall time, and whether the
-two runs' states, outputs and inputs are bitwise equal (else their largest difference over
-each signal's largest magnitude: the compiled sample, `LoopLaw.compiled`, rounds the last bit
-differently).  Warm timings: median of REPEATS
-after a warm-up, one process, the two laws alternated.
+Rodas4) with the scenario's `empact.control.law.LoopLaw`; per scenario the law's own cost per
+1 ms sample (the time inside ``step``, the law wrapped so that the simulator's Python loop
+calls it) and the whole run's wall time with the law itself in the loop (compiled with the
+integrator where the law offers `run_compiled`); then, unless ``--no-montecarlo``, the
+200-run closed-loop Monte Carlo of the shipped example spread (slip-load-step-r1, serial, in
+process; `_montecarlo_workload.py`).
 
-Run: ``.venv/bin/python bench/bench_loop_law.py [--no-montecarlo]``
+Paired: each tree (this one, and the one given by ``--against SRC``, e.g. today's main's
+``src``) runs in its own process (``PYTHONPATH=SRC``), the two alternated REPEATS times;
+each number is the median over the repeats of each process's median.  Warm: every process
+runs each scenario once before timing.  The runs' outputs are checked against the golden
+runs (`tests/data/golden_loop.npz`) by the tests, not here.
+
+Run: ``.venv/bin/python bench/bench_loop_law.py [--against /path/to/other/src]
+[--no-montecarlo]``
 """
 from __future__ import annotations
 
+import json
 import os
 import statistics
+import subprocess
 import sys
 import time
+from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-import numpy as np  # noqa: E402
-
-import _loop_law_baseline as frozen  # noqa: E402
-from _montecarlo_workload import shipped_monte_carlo  # noqa: E402
-from empact.control.closed_loop import (build_law, control_example_path,  # noqa: E402
-                                        control_examples)
-from empact.control.law import LoopLaw  # noqa: E402
-from empact.nonlinear.scenario import load_scenario  # noqa: E402
-from empact.nonlinear.simulation import run_scenario, scenario_model  # noqa: E402
-from empact.params import default_params  # noqa: E402
-
-REPEATS = 5
+REPEATS = 3
+HERE = Path(__file__).resolve().parent
+OWN_SRC = HERE.parent / "src"
 
 
 class _Timed:
-    """A law whose ``step`` adds its time to ``spent``."""
+    """A law whose ``step`` adds its time to ``spent`` (the simulator's Python loop calls
+    it: it offers only the `SampledController` protocol)."""
 
     def __init__(self, law):
         self.law, self.spent, self.calls = law, 0.0, 0
@@ -53,52 +51,80 @@ class _Timed:
         return u
 
 
-def main() -> None:
+def worker(montecarlo: bool) -> None:
+    """One process's numbers, as JSON on stdout: per scenario the law's median cost per
+    sample [s] and the median run [s]; the Monte Carlo's time [s]."""
+    sys.path.insert(0, str(HERE))
+    from empact.control.closed_loop import build_law, control_example_path, control_examples
+    from empact.nonlinear.scenario import load_scenario
+    from empact.nonlinear.simulation import run_scenario, scenario_model
+    from empact.params import default_params
+
     params = default_params()
-    print(f"load average {os.getloadavg()[0]:.2f}")
-    print(f"{'scenario':22s} {'frozen law [us/sample]':>23s} {'law [us/sample]':>16s} "
-          f"{'ratio':>6s}  {'frozen run [s]':>14s} {'run [s]':>8s} {'ratio':>6s}  bitwise")
-    for name in control_examples():
+    out: dict = {}
+    for name in sorted(control_examples()):
         sc = load_scenario(control_example_path(name))
         model, op = scenario_model(sc, params)
-
-        def laws():
+        run_scenario(sc, params, controller=build_law(sc, params, None, model, op))  # warm
+        per, wall = [], []
+        for _ in range(3):
+            timed = _Timed(build_law(sc, params, None, model, op))
+            run_scenario(sc, params, controller=timed)
+            per.append(timed.spent / timed.calls)
             law = build_law(sc, params, None, model, op)
-            return law, frozen.LoopLaw(law.controller, law.model, law.point, law.u0,
-                                       law.config, sc.references, sc.duration)
+            t0 = time.perf_counter()
+            run_scenario(sc, params, controller=law)
+            wall.append(time.perf_counter() - t0)
+        out[name] = (statistics.median(per), statistics.median(wall))
+    if montecarlo:
+        from _montecarlo_workload import shipped_monte_carlo
 
-        new, old = laws()
-        a, b = run_scenario(sc, params, controller=new), run_scenario(sc, params, controller=old)
-        equal = all(np.array_equal(getattr(a, k), getattr(b, k), equal_nan=True)
-                    for k in ("x", "y", "u"))
-        dev = max(float(np.nanmax(np.abs(getattr(a, k) - getattr(b, k)) / np.maximum(
-            np.nanmax(np.abs(getattr(b, k)), axis=0), 1e-300))) for k in ("x", "y", "u"))
-        per = {"new": [], "old": []}
-        wall = {"new": [], "old": []}
-        for _ in range(REPEATS):
-            pair = laws()
-            for key, law in zip(("new", "old"), pair):
-                timed = _Timed(law)
-                t0 = time.perf_counter()
-                run_scenario(sc, params, controller=timed)
-                wall[key].append(time.perf_counter() - t0)
-                per[key].append(timed.spent / timed.calls)
-        pn, po = statistics.median(per["new"]), statistics.median(per["old"])
-        wn, wo = statistics.median(wall["new"]), statistics.median(wall["old"])
-        print(f"{name:22s} {1e6 * po:23.1f} {1e6 * pn:16.1f} {po / pn:6.2f}  {wo:14.3f} "
-              f"{wn:8.3f} {wo / wn:6.2f}  {equal} ({dev:.1e}; compiled: {new.compiled})",
-              flush=True)
-    if "--no-montecarlo" in sys.argv:
+        out["montecarlo"] = shipped_monte_carlo(params)[0]
+    print(json.dumps(out))
+
+
+def _run(src: Path, montecarlo: bool) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(src))
+    cmd = [sys.executable, __file__, "--worker"] + ([] if montecarlo else ["--no-montecarlo"])
+    res = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    if res.returncode:
+        sys.exit(f"the worker on {src} failed:\n{res.stderr}")
+    return json.loads(res.stdout.splitlines()[-1])
+
+
+def main() -> None:
+    montecarlo = "--no-montecarlo" not in sys.argv
+    if "--worker" in sys.argv:
+        worker(montecarlo)
         return
-    out = {key: shipped_monte_carlo(params, cls)
-           for key, cls in (("frozen", frozen.LoopLaw), ("law", LoopLaw))}
-    (to, ro), (tn, rn) = out["frozen"], out["law"]
-    same = np.array_equal(ro.values, rn.values, equal_nan=True)
-    rel = float(np.nanmax(np.abs(ro.values - rn.values) / np.maximum(np.abs(ro.values),
-                                                                      1e-300)))
-    print(f"Monte Carlo, 200 closed-loop runs of slip-load-step-r1, serial: frozen law "
-          f"{to:.1f} s, law {tn:.1f} s, ratio {to / tn:.2f} ({rn.failures} failed; metrics "
-          f"bitwise equal: {same}, largest relative difference {rel:.1e}); load average {os.getloadavg()[0]:.2f}")
+    trees = {"this": OWN_SRC}
+    if "--against" in sys.argv:
+        trees["against"] = Path(sys.argv[sys.argv.index("--against") + 1]).resolve()
+    print(f"load average {os.getloadavg()[0]:.2f}; trees: "
+          + ", ".join(f"{k} = {v}" for k, v in trees.items()), flush=True)
+    got: dict[str, list[dict]] = {k: [] for k in trees}
+    for _ in range(REPEATS):
+        for key, src in trees.items():
+            got[key].append(_run(src, montecarlo))
+    med = {key: {name: [statistics.median(r[name][i] for r in runs) for i in (0, 1)]
+                 for name in runs[0] if name != "montecarlo"} for key, runs in got.items()}
+    other = "against" if "against" in trees else "this"
+    print(f"{'scenario':22s} {'law [us/sample]':>16s} {'against':>8s} {'ratio':>6s}  "
+          f"{'run [s]':>8s} {'against':>8s} {'ratio':>6s}")
+    for name in med["this"]:
+        (pn, wn), (po, wo) = med["this"][name], med[other][name]
+        print(f"{name:22s} {1e6 * pn:16.2f} {1e6 * po:8.2f} {pn / po:6.3f}  {wn:8.3f} "
+              f"{wo:8.3f} {wn / wo:6.3f}")
+    load = [v[0] for k, v in med["this"].items() if k.startswith("slip-load-step")]
+    shift = [v[0] for k, v in med["this"].items() if k.startswith("shift")]
+    print(f"a shift's sample over a load step's: {max(shift) / statistics.median(load):.2f} "
+          f"(largest shift over the load steps' median)")
+    if montecarlo:
+        mc = {k: statistics.median(r["montecarlo"] for r in runs) for k, runs in got.items()}
+        print(f"Monte Carlo, 200 closed-loop runs of slip-load-step-r1, serial: this "
+              f"{mc['this']:.1f} s, against {mc[other]:.1f} s, ratio "
+              f"{mc['this'] / mc[other]:.3f}")
+    print(f"load average {os.getloadavg()[0]:.2f}")
 
 
 if __name__ == "__main__":

@@ -2,8 +2,6 @@
 orders, dense output, agreement with a tight reference, stops and status codes, the
 ``method`` choice."""
 import hashlib
-import importlib.util
-import sys
 import types
 from dataclasses import replace
 from pathlib import Path
@@ -178,35 +176,32 @@ def test_dense_output_is_continuous_and_ends_on_the_steps(linear_stepper, method
 
 
 # -- the model -------------------------------------------------------------------------------
-def _odeint_baseline():
-    path = Path(__file__).resolve().parents[1] / "bench" / "_odeint_baseline.py"
-    if not path.is_file():
-        pytest.skip("bench/_odeint_baseline.py (the reference route) is not in this checkout")
-    if "_odeint_baseline" not in sys.modules:  # numba's cache re-imports it by name
-        spec = importlib.util.spec_from_file_location("_odeint_baseline", path)
-        sys.modules["_odeint_baseline"] = mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-    return sys.modules["_odeint_baseline"].simulate_odeint
+#: servo-torque-steps by LSODA at rtol 1e-11 with the simulator's compiled right-hand side:
+#: r_g, nu and F_s at the output samples (`bench/make_odeint_reference.py` made it, from the
+#: commit its ``commit`` entry names)
+ODEINT_REFERENCE = Path(__file__).resolve().parent / "data" / "odeint_servo_torque_steps.npz"
 
 
 def _error(Y, ref):
-    """Largest deviation of r_g, nu and F_s at the samples, each over its signal's range."""
-    return max(float(np.max(np.abs(Y[:, k] - ref[:, k])) / np.ptp(ref[:, k]))
-               for k in (K.Y_RG, K.Y_NU, K.Y_FS))
+    """Largest deviation of r_g, nu and F_s (`ref`'s columns) at the samples, each over its
+    signal's range."""
+    return max(float(np.max(np.abs(Y[:, k] - ref[:, j])) / np.ptp(ref[:, j]))
+               for j, k in enumerate((K.Y_RG, K.Y_NU, K.Y_FS)))
 
 
 def test_agrees_with_tight_reference_on_a_shipped_scenario(params):
     """servo-torque-steps against odeint (LSODA) at rtol 1e-11 with the same compiled
-    right-hand side (`bench/_odeint_baseline.py`): the largest error of r_g, nu, F_s (each over
+    right-hand side (`ODEINT_REFERENCE`): the largest error of r_g, nu, F_s (each over
     its range) at the 1001 samples.  Measured: Rodas5P 1.1e-4 / 3.6e-6, Rodas4 8.6e-5 / 1.0e-6
     at rtol 1e-4 / 1e-6, ros2 2.4e-3 at 1e-4.  Tolerances: 5e-4 at rtol 1e-4, 2e-5 at 1e-6
     (ros2: 1e-2 at 1e-4)."""
-    simulate_odeint = _odeint_baseline()
+    with np.load(ODEINT_REFERENCE) as f:
+        assert tuple(f["signals"]) == ("r_g", "nu", "F_s")
+        ref = f["y"]
     sc = load_scenario(example_path("servo-torque-steps"))
     model, op = scenario_model(sc, params)
     sig = scenario_signals(sc, model, op)
     kw = dict(u0=op.u, sample_rate=sc.sample_rate, max_step=sc.max_step)
-    ref, _ = simulate_odeint(model, op.x, sig, sc.duration, rtol=1e-11, atol_rtol=1e-9, **kw)
     for method, rtol, tol in [("rodas5p", 1e-4, 5e-4), ("rodas5p", 1e-6, 2e-5),
                               ("rodas4", 1e-4, 5e-4), ("rodas4", 1e-6, 2e-5),
                               ("ros2", 1e-4, 1e-2)]:

@@ -177,8 +177,9 @@ def test_no_type_checking_imports():
 
 
 def test_the_kernel_stays_inside_nonlinear():
-    """Only `empact.nonlinear` imports the compiled kernel and its integrators, and the
-    compiled closed loop (`empact.control._loop_core`: the law's compiled sample and the
+    """Only `empact.nonlinear` imports the compiled kernel and its integrators, the loop
+    law's compiled sample (`empact.control._law_core`: the kernel's traction peak and creep
+    law) and the compiled closed loop (`empact.control._loop_core`: the law's sample and the
     integrator in one loop; the model must not import the control layer), which nothing
     but the loop law imports."""
     graph = _graph()
@@ -186,6 +187,6 @@ def test_the_kernel_stays_inside_nonlinear():
                 "empact.nonlinear._rodas"}
     users = sorted(k for k, deps in graph.items()
                    if deps & compiled and not k.startswith("empact.nonlinear"))
-    assert users == ["empact.control._loop_core"]
+    assert users == ["empact.control._law_core", "empact.control._loop_core"]
     assert sorted(k for k, deps in graph.items() if "empact.control._loop_core" in deps) == \
         ["empact.control.law"]

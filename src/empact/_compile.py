@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .control import _law_core
 from .control.closed_loop import build_law, control_example_path, run_closed_loop
 from .nonlinear.equilibrium import trim
 from .nonlinear.linearization import linearize_many, plant
@@ -36,7 +37,8 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     ``_rosenbrock.py`` inline the right-hand side and Jacobian of ``_kernel.py`` and keep the
     version they were compiled with after ``_kernel.py`` changes (numba issue 6845); so does
     the compiled closed loop (``empact/control/_loop_core.py``) with the kernel, the
-    integrators and the law's sample (``_law_core.py``), whose cache is dropped likewise.  The
+    integrators and the law's sample (``_law_core.py``), and the law's sample with the
+    kernel's traction peak and creep law: their caches are dropped likewise.  The
     test session calls this first, so that an edited kernel is never tested through stale
     integrators; the price is one compile (about 20 s) after a source changed.
 
@@ -58,10 +60,12 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     # the kernel compiles in the tabulated traction law of `empact.variator`
     nonlinear = list((here / "nonlinear").glob("*.py")) + [here / "variator" /
                                                            "_traction_table.py"]
-    # the compiled closed loop calls the kernel, the integrator and the law's sample
+    # the compiled closed loop calls the kernel, the integrator and the law's sample, which
+    # calls the kernel
     loop_sources = nonlinear + [here / "control" / "_law_core.py",
                                 here / "control" / "_loop_core.py"]
     return (_drop_stale(here / "nonlinear" / "__pycache__", "*", nonlinear)
+            + _drop_stale(here / "control" / "__pycache__", "_law_core.*", loop_sources)
             + _drop_stale(here / "control" / "__pycache__", "_loop_core.*", loop_sources))
 
 
@@ -106,10 +110,12 @@ def compile_all() -> float:
     run_closed_loop(sc.with_duration(0.002), params)
     law = build_law(sc, params)
     law.step(0.0, law.raw0)
-    law._limit(np.zeros(2), (0.0, 0.0))  # the servo limits as `update` calls them
+    law.update(law.z0, law.raw0, 0, ideal=True)
     law.preprocess(law.z0[:law.n_pre], law.raw0, 0, np.array([law.point["r_g"], 0.01, 0.05,
                                                                  0.0]), ideal=True)
     law.sense(law.z0[:law.n_pre - 2].reshape(len(law.raw0), -1))
+    # the safety-factor clamping's torque at rest (a safety-factor law's set-up)
+    _law_core.safety_torque(law.raw0[3], law.raw0[0], law._c, law._tb, law._wk)
     if law.controller.schedule is not None:
         law.controller.schedule.gains_at([1.0] * len(law.controller.schedule.axes))
     return time.perf_counter() - t0

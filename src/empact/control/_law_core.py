@@ -1,41 +1,164 @@
-"""The sampled loop law's arithmetic, compiled (private; `empact.control.law`).
+"""The sampled loop law's sample, compiled (private; `empact.control.law`).
 
-`pre_core` is the part of `LoopLaw.preprocess` that is arithmetic on floats: the sensor
-buffers, the counting encoders' means and quantisation, the slip and the tracking errors, the
-gain schedule's interpolation (in ``ln |gain|``; the ``exp`` is numpy's, in the caller), the
-clamping feedforward and its filter.  Every operation is the one the law's array form had, in
-the same order, with the same library functions (``log``, ``asin``, ``cos`` of the C
-library; numba contracts no products into fused multiply-adds without ``fastmath``), so the
-results are the same to the last bit.  What needs numpy's own vectorised ``exp``, ``tanh``,
-``expm1`` or its BLAS (the schedule's gains, the shift feedforward, the controller's matrix
-products) stays with the caller.
+`sample` is one whole sample of `empact.control.law.LoopLaw` (`update` and `step` wrap it):
+the sensor buffers, the counting encoders' means and quantisation, the slip and the tracking
+errors, the gain schedule, the clamping feedforward and its filter or the safety-factor
+clamping, the decoupler and the shift feedforward with their low-pass, the controller, the
+servo limits and the anti-windup; `pre` is the same up to the controller (`preprocess`, what
+`empact.control.loop` linearises).  The model's laws come from the compiled kernel
+(`empact.nonlinear._kernel`: the traction peak ``mu_max_many``, ``creep_coefficient`` and
+the creep law ``creep_force``), the secondary radius from `secondary_radius`.
 
-Packing (`LoopLaw._pack`): ``P`` the law's constants (the ``_P_*`` indices), ``T`` one row per
-sample (the references ``r_g, slip, mu, dr_g/dt``, the decoupler's ratio, the traction peak
-at the reference ratio, then the noise of each raw signal), ``S`` the schedule
-(`pack_schedule`), ``cache`` the last ratio and its secondary radius.
+The law is handed over in three named structures (`LawConstants`, `LawTables`, `LawWork`,
+built by `LoopLaw`) behind one reference (`Law`): its constants, its per-sample tables
+(references, noise, the shift feedforward's geometry) with the controller's matrices and the
+model's parameter vector, and its work arrays (the last secondary radius, the measurements,
+the servo torques).  Every
+operation is the one the law's float form had, in the same order, with the C library's
+``log``, ``asin``, ``cos``, ``exp`` (numba contracts no products into fused multiply-adds
+without ``fastmath``); the controller's products are summed in index order, and the shift
+feedforward's ``tanh`` is the C library's where the Python form had numpy's (which rounds the
+last bit differently in about a third of the arguments).
 """
 from __future__ import annotations
 
 import math
+from typing import NamedTuple, get_type_hints
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.experimental import structref
 
-# P: the law's constants
-(_P_NB, _P_NBUF, _P_DELAY, _P_WINDOW, _P_QUANTISE, _P_SPEED_Q, _P_RATIO_Q, _P_SLIP_NU,
- _P_R_REF0, _P_LOG_R, _P_LOG_S, _P_SCHED, _P_FEEDFORWARD, _P_F_S0, _P_BIAS0, _P_BIAS1,
- _P_SAFETY, _P_FF_T_DS, _P_SHIFT_FF, _P_J_S, _P_ALPHA_FF, _P_TPF, _P_FF_GAIN, _P_FF_DEN,
- _P_COSB, _P_L_BELT, _P_A, _P_N_LAST) = range(28)
-N_P = 28
-# T: the columns of a sample's row
-T_R, T_SLIP, T_MU, T_RDOT, T_DEC, T_MU_MAX, T_NOISE = range(7)
-# the result vector: errors, log-gains, servo torques (without the controller's share and
-# the primary's low-passed share), the feedforward force, the secondary radius at the
-# measured ratio, the measurements
-(R_E0, R_E1, R_L0, R_L1, R_U0, R_U1, R_F, R_RS) = range(8)
-R_M = 8
-N_RES = R_M + 7
+from ..nonlinear._kernel import creep_coefficient, creep_force, mu_max_many
+
+
+class LawConstants(NamedTuple):
+    """The loop law's constants (`empact.control.law.LoopLaw`; SI units)."""
+
+    n_pre: int  #: size of the sensor, feedforward and decoupler state
+    n_buf: int  #: samples buffered per raw signal (delay + counting window)
+    delay: int  #: sensor delay [samples]
+    window: int  #: the counting encoders' window [samples]
+    quantise: bool  #: quantise the measurements
+    speed_quantum: float  #: [rad/s]
+    ratio_quantum: float  #: [-]
+    slip_nu: bool  #: the slip signal is ``nu`` (else ``nu_r``, on `r_ref0`)
+    r_ref0: float  #: the reference ratio of ``nu_r`` [-]
+    log_r: bool  #: the ratio error is of logarithms
+    log_s: bool  #: the slip error is of logarithms
+    scheduled: bool  #: the controller has a gain schedule
+    sign0: float  #: the schedule's gain signs
+    sign1: float
+    feedforward: bool  #: the clamping feedforward
+    ff_t_ds: bool  #: the feedforward's torque is T_ds (else T_l_act)
+    F_s0: float  #: the starting clamping force [N]
+    bias0: float  #: the servo torques without the controller's and feedforwards' [N m]
+    bias1: float
+    safety: bool  #: the safety-factor clamping (the slip loop off)
+    safety_factor: float  #: [-]
+    mu_design: float  #: the safety-factor clamping's traction; NaN: the peak at the ratio
+    shift_ff: bool  #: the shift feedforward
+    J_s: float  #: secondary inertia [kg m^2]
+    alpha_ff: float  #: the feedforward filter's pole [-]
+    tpf: float  #: secondary servo torque per N of clamping force [N m / N]
+    ff_gain: float  #: [-]
+    ff_den: float  #: 2 traction_error [-]
+    cosb: float  #: cos(beta) [-]
+    L_belt: float  #: belt length [m]
+    a: float  #: centre distance [m]
+    alpha_dec: float  #: the decoupler's low-pass pole [-]
+    T_ms_start: float  #: the decoupler's zero [N m]
+    shift_gain: float  #: primary servo torque per N of primary thrust [N m / N]
+    omega_0: float  #: the creep law's speed floor [rad/s]
+    xi_sat: float  #: the creep law's saturation [-]
+    creep: bool  #: the creep law (else Shafai's: the geometric thrust ratio)
+    tau_ref: float  #: the set-point's torque ratio [-]
+    mask1: float  #: 0 where the safety-factor clamping replaces the controller's T_ms
+    limited: bool  #: servo limits
+    T_max: float  #: [N m]
+    w_max: float  #: [rad/s]
+    S_max: float  #: [N m]
+    v_max: float  #: [rad/s]
+    band: float  #: the speed limiter's band [-]
+    anti_windup: bool
+
+
+class LawTables(NamedTuple):
+    """Per sample (rows ``0 .. n_k - 1``, the last held) the references and noise, the shift
+    feedforward's geometry at the reference ratio (where it moves), and the law's matrices
+    and the model's parameter vector."""
+
+    r_g: np.ndarray  #: ratio reference [-]
+    slip: np.ndarray  #: slip set-point [-]
+    mu: np.ndarray  #: its traction coefficient [-]
+    rdot: np.ndarray  #: the ratio reference's rate [1/s]
+    decoupling: np.ndarray  #: the decoupler's torque ratio [-]
+    mu_max: np.ndarray  #: the traction peak at the reference ratio [-] (scheduled laws)
+    R_p: np.ndarray  #: primary radius at the reference ratio [m] (where rdot != 0)
+    R_s: np.ndarray  #: secondary radius [m]
+    phi: np.ndarray  #: wrap angle offset [rad]
+    kappa_geo: np.ndarray  #: the geometric thrust ratio [-]
+    noise: np.ndarray  #: (n_k, n_raw) noise of each raw signal
+    schedule: np.ndarray  #: the packed schedule (`pack_schedule`)
+    A: np.ndarray  #: the discrete controller (n_c, n_c), (n_c, 2), (2, n_c), (2, 2)
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    L: np.ndarray  #: the anti-windup gain (n_c, 2)
+    p: np.ndarray  #: the model's parameter vector (`EmpactModel.p`)
+
+
+class LawWork(NamedTuple):
+    """The law's work arrays: written by every sample."""
+
+    radius: np.ndarray  #: (2,) the last measured ratio and its secondary radius
+    meas: np.ndarray  #: (n_raw,) the measurements the controller saw
+    u: np.ndarray  #: (2,) the servo torques [N m]
+    one: np.ndarray  #: (2,) the traction peak's argument and value
+
+
+#: each constant's type
+_KINDS = get_type_hints(LawConstants)
+
+
+def constants(**values: object) -> LawConstants:
+    """`LawConstants` from `values` (every field by name), each converted to its field's type
+    (so that numba compiles the sample once for every law)."""
+    return LawConstants(**{k: _KINDS[k](v) for k, v in values.items()})
+
+
+def tables(**arrays: object) -> LawTables:
+    """`LawTables` from `arrays` (every field by name), each as a C-ordered float64 array."""
+    return LawTables(**{k: np.ascontiguousarray(v, dtype=np.float64)
+                        for k, v in arrays.items()})
+
+
+def work(n_raw: int) -> LawWork:
+    """Fresh work arrays for a law reading `n_raw` signals."""
+    return LawWork(np.full(2, np.nan), np.zeros(n_raw), np.zeros(2), np.zeros(2))
+
+
+@structref.register
+class LawType(types.StructRef):
+    """numba's type of `Law`."""
+
+    def preprocess_fields(self, fields):
+        return tuple((name, types.unliteral(t)) for name, t in fields)
+
+
+class Law(structref.StructRefProxy):
+    """The law as the compiled sample takes it: its `LawConstants` ``c``, `LawTables` ``tb``
+    and `LawWork` ``wk`` behind one reference (a call hands numba one pointer, where the
+    three structures' 70 fields cost about 4 us a call to convert, more than a sample)."""
+
+
+structref.define_proxy(Law, LawType, ["c", "tb", "wk"])
+
+
+@njit(cache=True)
+def law(c, tb, wk):
+    """The `Law` of `c`, `tb`, `wk` (compiled once, cached)."""
+    return Law(c, tb, wk)
 
 
 def pack_schedule(qs: list[list[float]], log_axis: list[bool], strides: list[int],
@@ -137,12 +260,12 @@ def secondary_radius(r_g, L_belt, a):
 
 
 @njit(cache=True)
-def _radius(r_g, P, cache):
-    """`LoopLaw._R_s`: the secondary radius at the measured ratio, the last one reused."""
+def _radius(r_g, L_belt, a, cache):
+    """The secondary radius at the measured ratio, the last one reused."""
     r = _lo_hi(r_g, 1e-3, 1e3)
     if r != cache[0]:
         cache[0] = r
-        cache[1] = secondary_radius(r, P[_P_L_BELT], P[_P_A])
+        cache[1] = secondary_radius(r, L_belt, a)
     return cache[1]
 
 
@@ -183,103 +306,152 @@ def _round(x):
 
 
 @njit(cache=True)
-def sense(buf, n_raw, P, ideal, m):
+def sense(buf, n_raw, c, ideal, m):
     """`LoopLaw.sense`: the measurements into ``m[:n_raw]`` from the buffers ``buf`` (row
     after row, newest first): each signal `delay` samples late, the shaft speeds the mean
     over the counting window (numpy's sum), quantised unless `ideal`."""
-    nbuf = int(P[_P_NBUF])
-    d = int(P[_P_DELAY])
-    W = int(P[_P_WINDOW])
+    nbuf = c.n_buf
+    d = c.delay
+    W = c.window
     for i in range(n_raw):
         m[i] = buf[i * nbuf + d]
     if W > 1:
         m[1] = _pairwise_sum(buf, nbuf + d, W) / W
         m[2] = _pairwise_sum(buf, 2 * nbuf + d, W) / W
-    if P[_P_QUANTISE] != 0.0 and not ideal:
-        q = P[_P_SPEED_Q]
+    if c.quantise and not ideal:
+        q = c.speed_quantum
         m[1] = _round(m[1] / q) * q
         m[2] = _round(m[2] / q) * q
-        rq = P[_P_RATIO_Q]
+        rq = c.ratio_quantum
         if rq != 0.0:
             m[0] = _round(m[0] / rq) * rq
 
 
 @njit(cache=True)
-def pre_core(s, out, raw, k, ideal, ref, P, T, S, cache, res):
-    """`LoopLaw.preprocess` up to the schedule's ``exp``, the safety-factor clamping and the
-    primary servo's low-passed share: the next buffers and feedforward force into
-    ``out[:n_pre - 1]``, the results (``R_*``) into `res`.  `ref` (4) replaces the sample's
-    references when its first entry is not NaN; `ideal` drops noise and quantisation."""
-    nb = int(P[_P_NB])
-    nbuf = int(P[_P_NBUF])
-    n_last = int(P[_P_N_LAST])
+def safety_torque(T, r_m, c, tb, wk):
+    """The safety-factor clamping's secondary servo torque [N m] for the torque `T` [N m] a
+    production controller knows (here the driveshaft torque) at the measured ratio `r_m`:
+    ``SF |T| cos(beta) / (2 mu_design R_s)`` (``mu_design`` the peak at `r_m` when NaN)."""
+    mu_d = c.mu_design
+    if mu_d != mu_d:
+        wk.one[0] = r_m
+        mu_max_many(wk.one[:1], tb.p, wk.one[1:])
+        mu_d = wk.one[1]
+    return c.tpf * c.safety_factor * abs(T) * c.cosb / (
+        2 * mu_d * _radius(r_m, c.L_belt, c.a, wk.radius))
+
+
+@njit(cache=True)
+def shift_torque(c, tb, kk, w_p, F_s):
+    """Primary servo torque [N m] over its holding value against the creep law's resistance
+    at sample `kk`'s reference ratio and rate (speed `w_p`, clamping force `F_s`): the thrust
+    ratio ``kappa* exp(xi)``, ``xi = xi_sat tanh(rdot / (omega K_c) / xi_sat)``
+    (`empact.variator.shift_law`) needs the primary thrust ``kappa* (exp(xi) - 1) F_s``
+    more, ``T_mp = -(i_e s / i_w)`` times it."""
+    rdot = tb.rdot[kk]
+    if rdot == 0.0:
+        return 0.0
+    r_ref, R_p = tb.r_g[kk], tb.R_p[kk]
+    w_eff = math.hypot(w_p, c.omega_0)
+    K_c = creep_coefficient(r_ref, R_p, F_s, tb.p)
+    if c.creep:
+        keq = creep_force(r_ref, R_p, tb.R_s[kk], tb.phi[kk], F_s, c.tau_ref, 0.0, 1.0,
+                          tb.p)[2]
+    else:
+        keq = tb.kappa_geo[kk]
+    xi = c.xi_sat * math.tanh(rdot / (w_eff * K_c) / c.xi_sat)
+    return c.shift_gain * keq * math.expm1(xi) * F_s
+
+
+@njit(cache=True)
+def pre(law, s, out, raw, k, ideal):
+    """`LoopLaw.preprocess` of the `Law` `law`: from the sensor and feedforward state `s`
+    (``n_pre``), the raw measurements `raw` and the sample index `k` (its row of the tables,
+    the last held), the next state into ``out[:n_pre]`` and the measurements into
+    ``wk.meas``; returns ``(status, e0, e1, u0, u1)``: 1 when the clamping finds no belt
+    geometry at the measured ratio (``wk.meas[0]``), the controller's errors (times the
+    schedule's gains) and the servo torques without the controller's share.  `ideal` drops
+    noise and quantisation."""
+    c, tb, wk = law.c, law.tb, law.wk
+    nb = c.n_pre - 2
+    nbuf = c.n_buf
+    n_last = tb.r_g.shape[0] - 1
     kk = k if k < n_last else n_last
     n_raw = raw.shape[0]
+    m = wk.meas
     # the buffers, newest first: every row moves on by one, the new samples in front
     for j in range(nb - 1, 0, -1):
         out[j] = s[j - 1]
     for i in range(n_raw):
-        out[i * nbuf] = raw[i] if ideal else raw[i] + T[kk, T_NOISE + i]
-    sense(out, n_raw, P, ideal, res[R_M:])
-    if np.isnan(ref[0]):
-        r_ref, slip_ref, mu_ref, rdot = T[kk, T_R], T[kk, T_SLIP], T[kk, T_MU], T[kk, T_RDOT]
-    else:
-        r_ref, slip_ref, mu_ref, rdot = ref[0], ref[1], ref[2], ref[3]
-    r_m, w_p, w_s, T_ds = res[R_M], res[R_M + 1], res[R_M + 2], res[R_M + 3]
-    base = r_m if P[_P_SLIP_NU] != 0.0 else P[_P_R_REF0]
+        out[i * nbuf] = raw[i] if ideal else raw[i] + tb.noise[kk, i]
+    sense(out, n_raw, c, ideal, m)
+    r_ref, slip_ref, mu_ref, rdot = tb.r_g[kk], tb.slip[kk], tb.mu[kk], tb.rdot[kk]
+    r_m, w_p, w_s, T_ds = m[0], m[1], m[2], m[3]
+    base = r_m if c.slip_nu else c.r_ref0
     y = 1.0 - w_s / (base * w_p)
-    if P[_P_LOG_R] != 0.0:
-        res[R_E0] = math.log(1e-9 if 1e-9 > r_ref else r_ref) - \
-            math.log(1e-9 if 1e-9 > r_m else r_m)
+    if c.log_r:
+        e0 = math.log(1e-9 if 1e-9 > r_ref else r_ref) - math.log(1e-9 if 1e-9 > r_m else r_m)
     else:
-        res[R_E0] = r_ref - r_m
-    if P[_P_LOG_S] != 0.0:
-        res[R_E1] = math.log(1e-9 if 1e-9 > slip_ref else slip_ref) - \
+        e0 = r_ref - r_m
+    if c.log_s:
+        e1 = math.log(1e-9 if 1e-9 > slip_ref else slip_ref) - \
             math.log(1e-9 if 1e-9 > y else y)
     else:
-        res[R_E1] = slip_ref - y
+        e1 = slip_ref - y
     f = s[nb]
-    if P[_P_SCHED] != 0.0:
-        mu_max = T[kk, T_MU_MAX] if np.isnan(ref[0]) else ref[4]
+    if c.scheduled:
         at = np.empty(3)
         at[0] = r_m
-        at[1] = mu_ref / mu_max
-        at[2] = f if P[_P_FEEDFORWARD] != 0.0 else P[_P_F_S0]
-        schedule_log_gains(S, at, True, res[R_L0:R_L1 + 1])
-    u1 = P[_P_BIAS1]
-    if P[_P_SAFETY] != 0.0:
-        res[R_E1] = 0.0  # the slip loop is replaced by the open-loop clamping strategy
-        f = 0.0  # (the clamping: the caller's)
-    elif P[_P_FEEDFORWARD] != 0.0:
-        T_b = T_ds if P[_P_FF_T_DS] != 0.0 else res[R_M + 6]
-        if P[_P_SHIFT_FF] != 0.0:  # the secondary pulley's acceleration torque
-            T_b = T_b + P[_P_J_S] * w_p * rdot
-        a = P[_P_ALPHA_FF]
-        R_s = _radius(r_m, P, cache)
-        res[R_RS] = R_s
-        ff = P[_P_FF_GAIN] * T_b * P[_P_COSB] / (P[_P_FF_DEN] * mu_ref * R_s)
+        at[1] = mu_ref / tb.mu_max[kk]
+        at[2] = f if c.feedforward else c.F_s0
+        lg = np.empty(2)
+        schedule_log_gains(tb.schedule, at, True, lg)
+        e0 = e0 * (c.sign0 * math.exp(lg[0]))
+        e1 = e1 * (c.sign1 * math.exp(lg[1]))
+    u1 = c.bias1
+    if c.safety:
+        e1 = 0.0  # the slip loop is replaced by the open-loop clamping strategy
+        f = 0.0
+        u1 = safety_torque(T_ds, r_m, c, tb, wk)
+        if wk.radius[1] != wk.radius[1]:
+            return 1, e0, e1, c.bias0, u1
+    elif c.feedforward:
+        T_b = T_ds if c.ff_t_ds else m[6]
+        if c.shift_ff:  # the secondary pulley's acceleration torque
+            T_b = T_b + c.J_s * w_p * rdot
+        a = c.alpha_ff
+        R_s = _radius(r_m, c.L_belt, c.a, wk.radius)
+        if R_s != R_s:
+            return 1, e0, e1, c.bias0, u1
+        ff = c.ff_gain * T_b * c.cosb / (c.ff_den * mu_ref * R_s)
         f = a * f + (1 - a) * ff
-        u1 += P[_P_TPF] * f
+        u1 += c.tpf * f
     else:
         f = 0.0
-    res[R_U0] = P[_P_BIAS0]
-    res[R_U1] = u1
-    res[R_F] = f
     out[nb] = f
-
-
-# Q: the constants of a whole sample (`step_core`)
-(_Q_N_PRE, _Q_SCHED, _Q_SIGN0, _Q_SIGN1, _Q_ALPHA_DEC, _Q_T_MS_START, _Q_SHIFT_FF,
- _Q_LIMITED, _Q_T_MAX, _Q_W_MAX, _Q_S_MAX, _Q_V_MAX, _Q_BAND, _Q_ANTI_WINDUP) = range(14)
-N_Q = 14
+    # the primary servo's feedforward share, low-passed: the decoupler (it follows the
+    # feedforward's clamping) and the shift feedforward
+    dec = tb.decoupling[kk]
+    u0 = c.bias0
+    t_mp = dec * (u1 - c.T_ms_start)
+    if c.shift_ff:
+        t_mp += shift_torque(c, tb, kk, w_p, f if c.feedforward else c.F_s0)
+    g = s[nb + 1]
+    if dec != 0.0 or c.shift_ff:
+        a = c.alpha_dec
+        g = a * g + (1 - a) * t_mp
+        u0 += g
+    else:
+        g = 0.0
+    out[nb + 1] = g
+    return 0, e0, e1, u0, u1
 
 
 @njit(cache=True)
 def servo_limited(T, w, T_max, w_max, band):
     """The torque servo `T` [N m] delivers at speed `w`: within +-T_max, and the torque that
     would drive it faster falls to zero over the last `band` of its speed limit `w_max`
-    (``min(max(x, 0), 1)`` as Python evaluates it, NaN passing; `LoopLaw._limit_f` calls
-    this too)."""
+    (``min(max(x, 0), 1)`` as Python evaluates it, NaN passing)."""
     T = -T_max if -T_max > T else T
     T = T_max if T_max < T else T
     if T * w > 0:
@@ -291,38 +463,18 @@ def servo_limited(T, w, T_max, w_max, band):
 
 
 @njit(cache=True)
-def step_core(z, z_next, raw, k, no_ref, P, T, S, cache, res, Q, A, B, C, D, L, u):
-    """`LoopLaw.update` at sample `k` (its references, noise and limits, not ideal) for a law
-    whose samples need no model call (no safety-factor clamping, so every controller output
-    reaches its servo; a shift feedforward only where the reference ratio stands still, so
-    that its torque is zero): the next state into
-    `z_next`, the servo torques into ``u[:2]``; returns 1 when the clamping feedforward finds
-    no belt geometry at the measured ratio (``res[R_M]``), else 0.
-
-    The same operations as `LoopLaw.update` in the same order, but the schedule's ``exp``
-    (the C library's here, numpy's SIMD loop there) and the controller's products (summed
-    here in index order, by BLAS there) may round differently in the last bit."""
-    n = int(Q[_Q_N_PRE])
-    nb = n - 2
-    pre_core(z, z_next, raw, k, False, no_ref, P, T, S, cache, res)
-    e0, e1, u0, u1 = res[R_E0], res[R_E1], res[R_U0], res[R_U1]
-    if Q[_Q_SCHED] != 0.0:
-        e0 = e0 * (Q[_Q_SIGN0] * math.exp(res[R_L0]))
-        e1 = e1 * (Q[_Q_SIGN1] * math.exp(res[R_L1]))
-    if P[_P_FEEDFORWARD] != 0.0 and res[R_RS] != res[R_RS]:
-        return 1
-    n_last = int(P[_P_N_LAST])
-    kk = k if k < n_last else n_last
-    dec = T[kk, T_DEC]
-    t_mp = dec * (u1 - Q[_Q_T_MS_START])
-    g = z[nb + 1]
-    if dec != 0.0 or Q[_Q_SHIFT_FF] != 0.0:
-        a = Q[_Q_ALPHA_DEC]
-        g = a * g + (1 - a) * t_mp
-        u0 += g
-    else:
-        g = 0.0
-    z_next[nb + 1] = g
+def sample(law, z, z_next, raw, k, ideal):
+    """One sample of the `Law` `law` (`LoopLaw.update`): from the state `z` (`pre`'s, then the
+    controller's), the raw measurements `raw` and the sample index `k`, the next state into
+    `z_next` and the servo torques into ``wk.u``; returns 1 when the clamping finds no belt
+    geometry at the measured ratio (``wk.meas[0]``), else 0.  `ideal` drops noise,
+    quantisation and limits (the linear model's law)."""
+    c, tb, wk = law.c, law.tb, law.wk
+    n = c.n_pre
+    status, e0, e1, u0, u1 = pre(law, z, z_next, raw, k, ideal)
+    if status:
+        return status
+    A, B, C, D, L = tb.A, tb.B, tb.C, tb.D, tb.L
     nc = z.shape[0] - n
     du0 = 0.0
     du1 = 0.0
@@ -331,6 +483,8 @@ def step_core(z, z_next, raw, k, no_ref, P, T, S, cache, res, Q, A, B, C, D, L, 
         du1 += C[1, j] * z[n + j]
     du0 = du0 + (D[0, 0] * e0 + D[0, 1] * e1)
     du1 = du1 + (D[1, 0] * e0 + D[1, 1] * e1)
+    if c.safety:  # the controller's T_ms does not reach its servo
+        du1 = du1 * c.mask1
     for i in range(nc):
         acc = 0.0
         for j in range(nc):
@@ -338,16 +492,16 @@ def step_core(z, z_next, raw, k, no_ref, P, T, S, cache, res, Q, A, B, C, D, L, 
         z_next[n + i] = acc + (B[i, 0] * e0 + B[i, 1] * e1)
     u0 = u0 + du0
     u1 = u1 + du1
-    if Q[_Q_LIMITED] != 0.0:
-        w0, w1 = res[R_M + 4], res[R_M + 5]
-        s0 = servo_limited(u0, w0, Q[_Q_T_MAX], Q[_Q_W_MAX], Q[_Q_BAND])
-        s1 = servo_limited(u1, w1, Q[_Q_S_MAX], Q[_Q_V_MAX], Q[_Q_BAND])
-        if Q[_Q_ANTI_WINDUP] != 0.0 and (s0 != u0 or s1 != u1):
+    if c.limited and not ideal:
+        w0, w1 = wk.meas[4], wk.meas[5]
+        s0 = servo_limited(u0, w0, c.T_max, c.w_max, c.band)
+        s1 = servo_limited(u1, w1, c.S_max, c.v_max, c.band)
+        if c.anti_windup and (s0 != u0 or s1 != u1):
             d0 = s0 - u0
-            d1 = s1 - u1
+            d1 = (s1 - u1) * c.mask1 if c.safety else s1 - u1
             for i in range(nc):
                 z_next[n + i] = z_next[n + i] + (L[i, 0] * d0 + L[i, 1] * d1)
         u0, u1 = s0, s1
-    u[0] = u0
-    u[1] = u1
+    wk.u[0] = u0
+    wk.u[1] = u1
     return 0

@@ -47,21 +47,15 @@ its steady state at the trim (its integrators hold the holding torques less the
 feedforward's share at the trim, computed with the feedforward's own traction estimate).
 
 `LoopLaw.update` is a pure function of the law's state (a flat vector: sensor buffers,
-feedforward filter, controller state), the raw measurements and the sample index; `step` is
-the stateful `empact.nonlinear.simulation.SampledController` interface around it, and
-`empact.control.loop` linearises the same function for the loop's linear model.  Its
-arithmetic on floats (sensors, errors, the schedule's interpolation, the clamping
-feedforward) is compiled (`empact.control._law_core`); numpy keeps what has its own
-vectorised functions or BLAS (the schedule's ``exp``, the shift feedforward's ``tanh`` and
-``expm1``, the controller's matrix products), so that every operation is the one the law's
-array form had and a run gives the same numbers to the last bit.
-
-`step` runs the whole sample compiled (`_law_core.step_core`, `LoopLaw.compiled`) when no
-sample calls the model (no safety-factor clamping, no shift feedforward on a moving ratio
-reference: the load steps, the Monte Carlo runs): the same operations, with the C library's
-``exp`` and the controller's products summed in index order, so that its torques and states
-agree with `update` to rounding (tested at every sample of the shipped load steps) and a run
-with the frozen law to the runs' own one-ulp floor; about 3 us a sample instead of 11.
+feedforward filter, decoupler filter, controller state), the raw measurements and the sample
+index; `step` is the stateful `empact.nonlinear.simulation.SampledController` interface around
+it, and `empact.control.loop` linearises its pre-processing (`preprocess`) for the loop's
+linear model.  All three run the one compiled sample (`empact.control._law_core.sample` and
+`pre`; the constants, per-sample tables and work arrays handed over as the named
+`LawConstants`, `LawTables` and `LawWork`), the safety-factor clamping and the moving shift
+feedforward included (their model calls are the kernel's compiled traction peak and creep
+law); `run_compiled` runs it with the integrator in one compiled loop
+(`empact.control._loop_core`).
 """
 from __future__ import annotations
 
@@ -69,6 +63,7 @@ from dataclasses import dataclass, replace
 from typing import Any, Mapping
 
 import numpy as np
+from numba import typeof
 from numpy.typing import NDArray
 
 from .._lazy import lazy_module
@@ -82,9 +77,9 @@ from ..nonlinear.equilibrium import (
 )
 from ..nonlinear.model import EmpactModel
 from ..nonlinear.scenario import ControllerSpec, Scenario, check_reference_names
+from ..nonlinear.simulation import SampledLoop
 from ..params import Params
 from ..variator.geometry import ratio_range, secondary_radius, variator_state
-from ..variator.shift_law import g_beta
 from . import _law_core as core
 from . import _loop_core
 from .controller import Controller
@@ -93,8 +88,16 @@ linalg = lazy_module("scipy.linalg")
 
 __all__ = ["LoopConfig", "LoopLaw", "RAW_SIGNALS", "SHIPPED_LOOP", "reference_table"]
 
-_step_core: Any = core.step_core  # (numba's Dispatcher is typed without a call signature)
+_pre: Any = core.pre  # (numba's Dispatcher is typed without a call signature)
 _run_samples: Any = _loop_core.run_samples
+
+
+def _entry(dispatcher: Any, *args: Any) -> Any:
+    """The compiled overload of `dispatcher` for the types of `args` (compiled or loaded from
+    numba's cache once), to be called without numba's per-call type dispatch (typing a
+    `_law_core.Law` costs about 2 us a call, two thirds of a sample).  It does not check its
+    arguments: the caller passes arrays of exactly these types and shapes (`LoopLaw._raw`)."""
+    return dispatcher.compile(tuple(typeof(a) for a in args))
 
 
 def _unique_rows(*columns: NDArray) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
@@ -274,6 +277,9 @@ class LoopLaw:
     """
 
     commands = ("T_mp", "T_ms")
+    _c: core.LawConstants
+    _tb: core.LawTables
+    _wk: core.LawWork
 
     def __init__(self, controller: Controller, model: EmpactModel, point: Mapping[str, float],
                  u0: NDArray, config: LoopConfig,
@@ -327,7 +333,6 @@ class LoopLaw:
         self._noise = self._make_noise()
         # the law's state: buffers, feedforward filter, controller
         self._nb = len(RAW_SIGNALS) * self._n_buf
-        self._mu_max_cache = (float("nan"), float("nan"))
         self._R_s_last = (float("nan"), float("nan"))
         self.n_state = self._nb + 2 + cd.n
         self._alpha_ff = float(np.exp(-2 * np.pi * spec.feedforward_filter_hz * dt))
@@ -339,107 +344,79 @@ class LoopLaw:
         F0 = self._ff_force(self.raw0[3], self.raw0[0], self.refs.mu[0])  # T_ds = T_l
         self._F0 = F0 if spec.feedforward else 0.0
         self._bias = np.array([self.u0[0], self.u0[1] - self._tpf * self._F0])
-        # the pre-processing's secondary servo torque at rest (the decoupler's zero)
-        self._T_ms_start = self.u0[1]
-        if spec.clamping == "safety-factor":
-            self._T_ms_start = self._safety_torque(self.raw0[3], self.raw0[0])
-        self.z0 = self.initial_state()
+        self._T_ms_start = float(self.u0[1])
         self._pack()
+        if spec.clamping == "safety-factor":
+            # the pre-processing's secondary servo torque at rest (the decoupler's zero)
+            self._T_ms_start = float(core.safety_torque(self.raw0[3], self.raw0[0], self._c,
+                                                        self._tb, self._wk))
+            self._c = self._c._replace(T_ms_start=self._T_ms_start)
+        self._law = core.law(self._c, self._tb, self._wk)
+        self.z0 = self.initial_state()
         self.reset()
+        self._sample = _entry(core.sample, self._law, self._z, self._z_spare, self.raw0, 0,
+                              False)
 
     def _pack(self) -> None:
-        """The law's constants packed once for the compiled arithmetic
-        (`empact.control._law_core`: ``P``, the per-sample table ``T``, the schedule ``S``)
-        and as floats for the rest."""
+        """The law's constants, per-sample tables and work arrays as the compiled sample
+        takes them (`empact.control._law_core`: `LawConstants`, `LawTables`, `LawWork`)."""
         cfg, spec, refs = self.config, self.config.spec, self.refs
-        p = self.model.params
-        s = cfg.sensors
+        p, s, lim = self.model.params, cfg.sensors, cfg.limits
         sched = self.controller.schedule
-        self._n_last = self.n_k - 1
-        self._ref_rows = (refs.r_g.tolist(), refs.slip.tolist(), refs.mu.tolist(),
-                          refs.rdot.tolist(), refs.decoupling.tolist())
-        self._sched = sched is not None
-        P = np.zeros(core.N_P)
-        P[[core._P_NB, core._P_NBUF, core._P_DELAY, core._P_WINDOW]] = (
-            self._nb, self._n_buf, self._delay, self._window)
-        P[core._P_QUANTISE] = s is not None and cfg.quantise
-        P[core._P_SPEED_Q] = self._speed_quantum
-        P[core._P_RATIO_Q] = float(s.ratio_quantum) if s is not None else 0.0
-        P[core._P_SLIP_NU] = self.slip_signal == "nu"
-        P[core._P_R_REF0] = self._r_ref0
-        P[core._P_LOG_R], P[core._P_LOG_S] = self._logs
-        P[core._P_SCHED] = self._sched
-        P[core._P_FEEDFORWARD] = spec.feedforward
-        P[core._P_F_S0] = self.point["F_s"]
-        P[core._P_BIAS0], P[core._P_BIAS1] = self._bias
-        P[core._P_SAFETY] = spec.clamping == "safety-factor"
-        P[core._P_FF_T_DS] = spec.feedforward_signal == "T_ds"
-        P[core._P_SHIFT_FF] = spec.shift_feedforward
-        P[core._P_J_S] = p.driveline.J_s
-        P[core._P_ALPHA_FF] = self._alpha_ff
-        P[core._P_TPF] = self._tpf
-        P[core._P_FF_GAIN] = spec.feedforward_gain
-        P[core._P_FF_DEN] = 2 * spec.traction_error
-        P[core._P_COSB] = self._cosb
-        P[core._P_L_BELT], P[core._P_A] = self._L, self._a
-        P[core._P_N_LAST] = self._n_last
-        self._P = P
-        T = np.zeros((self.n_k, core.T_NOISE + len(RAW_SIGNALS)))
-        T[:, core.T_R], T[:, core.T_SLIP], T[:, core.T_MU] = refs.r_g, refs.slip, refs.mu
-        T[:, core.T_RDOT], T[:, core.T_DEC] = refs.rdot, refs.decoupling
-        if sched is not None:
-            T[:, core.T_MU_MAX] = self.model.mu_max(refs.r_g)
-        T[:, core.T_NOISE:] = self._noise
-        self._T = T
-        self._S = sched._packed if sched is not None else np.zeros(2)
-        self._R_s_cache = np.array([np.nan, np.nan])
-        self._res = np.zeros(core.N_RES)
-        self._no_ref = np.full(5, np.nan)
-        self._F_s0 = self.point["F_s"]
-        self._safety = spec.clamping == "safety-factor"
-        self._mask = self.output_mask
-        self._mask_ones = bool(np.all(self._mask == 1.0))  # (x * 1.0 is x)
-        self._limited = cfg.limits is not None
-        lim = cfg.limits
-        if lim is not None:
-            self._lim = ((float(lim.T_mp_max), float(lim.omega_mp_max)),
-                         (float(lim.T_ms_max), float(lim.omega_ms_max)))
-        # the shift feedforward's geometry at the reference ratio of every sample where the
-        # reference moves (`_shift_torque`)
         a = p.actuation
-        self._shift = p.shift
-        self._g_beta = g_beta(p.variator.beta)
-        self._shift_gain = -(a.i_e * a.s / a.i_w)
-        self._creep_args = [np.empty(1) for _ in range(8)]
-        self._shift_rows: dict[int, tuple[float, ...]] = {}
-        if spec.shift_feedforward:
-            ks = np.flatnonzero(refs.rdot != 0.0)
-            if ks.size:
-                self._shift_rows = dict(zip(ks.tolist(),
-                                            self._shift_geometry(refs.r_g[ks])))
-        # a whole sample compiled (`_law_core.step_core`) where no sample calls the model
-        self._fast: tuple[Any, ...] | None = None
-        self._u_out = np.zeros(2)
-        if not self._safety and not (spec.shift_feedforward and np.any(refs.rdot != 0.0)):
-            c = self.controller
-            Q = np.zeros(core.N_Q)
-            Q[core._Q_N_PRE] = self.n_pre
-            Q[core._Q_SCHED] = self._sched
-            if sched is not None:
-                Q[core._Q_SIGN0], Q[core._Q_SIGN1] = sched._sign_list
-            Q[core._Q_ALPHA_DEC] = self._alpha_dec
-            Q[core._Q_T_MS_START] = self._T_ms_start
-            Q[core._Q_SHIFT_FF] = spec.shift_feedforward
-            Q[core._Q_LIMITED] = self._limited
-            if lim is not None:
-                (Q[core._Q_T_MAX], Q[core._Q_W_MAX]), (Q[core._Q_S_MAX], Q[core._Q_V_MAX]) = \
-                    self._lim
-            Q[core._Q_BAND] = SPEED_BAND
-            Q[core._Q_ANTI_WINDUP] = spec.anti_windup
-            mats = [np.ascontiguousarray(m, dtype=float)
-                    for m in (c.A, c.B, c.C, c.D, self._L_aw)]
-            self._fast = (self._no_ref, self._P, self._T, self._S, self._R_s_cache, self._res,
-                          Q, *mats)
+        sign = sched._sign_list if sched is not None else [1.0, 1.0]
+        self._c = core.constants(
+            n_pre=self.n_pre, n_buf=self._n_buf, delay=self._delay, window=self._window,
+            quantise=s is not None and cfg.quantise, speed_quantum=self._speed_quantum,
+            ratio_quantum=s.ratio_quantum if s is not None else 0.0,
+            slip_nu=self.slip_signal == "nu", r_ref0=self._r_ref0, log_r=self._logs[0],
+            log_s=self._logs[1], scheduled=sched is not None, sign0=sign[0], sign1=sign[1],
+            feedforward=spec.feedforward, ff_t_ds=spec.feedforward_signal == "T_ds",
+            F_s0=self.point["F_s"], bias0=self._bias[0], bias1=self._bias[1],
+            safety=spec.clamping == "safety-factor", safety_factor=spec.safety_factor,
+            mu_design=np.nan if self._mu_design is None else self._mu_design,
+            shift_ff=spec.shift_feedforward, J_s=p.driveline.J_s, alpha_ff=self._alpha_ff,
+            tpf=self._tpf, ff_gain=spec.feedforward_gain, ff_den=2 * spec.traction_error,
+            cosb=self._cosb, L_belt=self._L, a=self._a, alpha_dec=self._alpha_dec,
+            T_ms_start=self._T_ms_start, shift_gain=-(a.i_e * a.s / a.i_w),
+            omega_0=p.shift.omega_0, xi_sat=p.shift.xi_sat, creep=self.model.creep,
+            tau_ref=self._tau_ref, mask1=self.output_mask[1], limited=lim is not None,
+            T_max=lim.T_mp_max if lim else 0.0, w_max=lim.omega_mp_max if lim else 0.0,
+            S_max=lim.T_ms_max if lim else 0.0, v_max=lim.omega_ms_max if lim else 0.0,
+            band=SPEED_BAND, anti_windup=spec.anti_windup)
+        # the shift feedforward's geometry at the reference ratio where it moves
+        geo = [np.full(self.n_k, np.nan) for _ in range(4)]
+        ks = np.flatnonzero(refs.rdot != 0.0) if spec.shift_feedforward else np.zeros(0, int)
+        if ks.size:
+            for col, v in zip(geo, self._shift_geometry(refs.r_g[ks])):
+                col[ks] = v
+        c = self.controller
+        self._tb = core.tables(
+            r_g=refs.r_g, slip=refs.slip, mu=refs.mu, rdot=refs.rdot,
+            decoupling=refs.decoupling,
+            mu_max=self.model.mu_max(refs.r_g) if sched is not None else np.zeros(self.n_k),
+            R_p=geo[0], R_s=geo[1], phi=geo[2], kappa_geo=geo[3], noise=self._noise,
+            schedule=sched._packed if sched is not None else np.zeros(2), A=c.A, B=c.B,
+            C=c.C, D=c.D, L=self._L_aw, p=self.model.p)
+        self._wk = core.work(len(RAW_SIGNALS))
+
+    def _law_at(self, ref: NDArray, k: int) -> Any:
+        """The law on one row of tables: sample `k`'s noise, the references `ref` (``r_g,
+        slip, mu, dr_g/dt``) and what the law computes of them (`preprocess` and `update`
+        with a `ref`, the linear model's)."""
+        r_ref, slip, mu, rdot = (float(x) for x in ref)
+        rr = np.array([r_ref])
+        one = [np.full(1, np.nan) for _ in range(4)]
+        if self.config.spec.shift_feedforward and rdot != 0.0:
+            one = list(self._shift_geometry(rr))
+        kk = min(int(k), self.n_k - 1)
+        return core.law(self._c, core.tables(
+            r_g=rr, slip=[slip], mu=[mu], rdot=[rdot], decoupling=[self._decoupling0],
+            mu_max=(self.model.mu_max(rr) if self.controller.schedule is not None
+                    else np.zeros(1)),
+            R_p=one[0], R_s=one[1], phi=one[2], kappa_geo=one[3],
+            noise=self._tb.noise[kk:kk + 1], schedule=self._tb.schedule, A=self._tb.A,
+            B=self._tb.B, C=self._tb.C, D=self._tb.D, L=self._tb.L, p=self._tb.p), self._wk)
 
     # -- set-up ----------------------------------------------------------------------------
     def _references(self, references: Mapping[str, NDArray]) -> _Refs:
@@ -523,8 +500,8 @@ class LoopLaw:
 
     def reset(self) -> None:
         """Back to the first sample at rest."""
-        self._z = self.z0.copy()
-        self._z_spare = np.empty_like(self._z)
+        self._z: NDArray[np.float64] = self.z0.copy()
+        self._z_spare: NDArray[np.float64] = np.empty_like(self._z)
         self._k = 0
 
     @property
@@ -534,9 +511,8 @@ class LoopLaw:
 
     # -- the law ---------------------------------------------------------------------------
     def _R_s(self, r_g: float) -> float:
-        """Secondary running radius [m] at the measured ratio (unstretched belt; a function
-        of the ratio alone, to the last bit: the last value is reused only for the same
-        ratio)."""
+        """Secondary running radius [m] at the measured ratio (unstretched belt; the set-up's:
+        a sample's is the compiled `_law_core.secondary_radius`)."""
         r = min(max(float(r_g), 1e-3), 1e3)
         if r != self._R_s_last[0]:
             self._R_s_last = (r, secondary_radius(r, self._L, self._a))
@@ -563,7 +539,7 @@ class LoopLaw:
         """
         buf = np.ascontiguousarray(buf, dtype=float)
         m = np.empty(buf.shape[0])
-        core.sense(buf.ravel(), buf.shape[0], self._P, ideal, m)
+        core.sense(buf.ravel(), buf.shape[0], self._c, bool(ideal), m)
         return m
 
     def preprocess(self, s: NDArray, raw: NDArray, k: int, ref: NDArray | None = None,
@@ -591,72 +567,12 @@ class LoopLaw:
         """
         s = np.ascontiguousarray(s, dtype=float)
         s_next = np.empty(self.n_pre)
-        e, u, m = self._pre(s, s_next, raw, k, ref, ideal)
-        return s_next, np.array(e), np.array(u), np.array(m)
-
-    def _pre(self, s: NDArray, out: NDArray, raw: NDArray, k: int, ref: NDArray | None,
-             ideal: bool) -> tuple[list[float], list[float], list[float]]:
-        """`preprocess` into ``out[:n_pre]`` (the next pre-processing state), returning the
-        errors, the servo torques without the controller's share and the measurements as
-        floats: the arithmetic compiled (`empact.control._law_core.pre_core`), then the
-        schedule's gains, the safety-factor clamping, the shift feedforward and the
-        primary servo's low-passed share."""
-        spec = self.config.spec
-        nb = self._nb
-        kk = k if k < self._n_last else self._n_last
-        if ref is None:
-            refv = self._no_ref
-            rows = self._ref_rows
-            r_ref, rdot, dec = rows[0][kk], rows[3][kk], rows[4][kk]
-        else:
-            r = [float(x) for x in ref]
-            r_ref, rdot, dec = r[0], r[3], self._decoupling0
-            refv = np.array(r + [self._mu_max_ref(r_ref) if self._sched else np.nan])
-        res = self._res
-        core.pre_core(s, out, np.ascontiguousarray(raw, dtype=float), k, ideal, refv,
-                      self._P, self._T, self._S, self._R_s_cache, res)
-        v = res.tolist()
-        e0, e1, u0, u1, f = v[core.R_E0], v[core.R_E1], v[core.R_U0], v[core.R_U1], \
-            v[core.R_F]
-        m = v[core.R_M:]
-        if self._sched:
-            g0, g1 = self.controller.schedule.exp_gains(v[core.R_L0:core.R_L1 + 1])
-            e0 = e0 * g0
-            e1 = e1 * g1
-        if self._safety:
-            e1 = 0.0  # the slip loop is replaced by the open-loop clamping strategy
-            u1 = self._safety_torque(m[3], m[0])
-        elif spec.feedforward and v[core.R_RS] != v[core.R_RS]:
-            raise _no_geometry(m[0])
-        # the primary servo's feedforward share, low-passed: the decoupler (it follows the
-        # feedforward's clamping) and the shift feedforward
-        t_mp = dec * (u1 - self._T_ms_start)
-        if spec.shift_feedforward:
-            t_mp += self._shift_torque(r_ref, rdot, m[1], f if spec.feedforward
-                                       else self._F_s0, kk if ref is None else None)
-        g = s.item(nb + 1)
-        if dec or spec.shift_feedforward:
-            a = self._alpha_dec
-            g = a * g + (1 - a) * t_mp
-            u0 += g
-        else:
-            g = 0.0
-        out[nb + 1] = g
-        return [e0, e1], [u0, u1], m
-
-    def _safety_torque(self, T: float, r_m: float) -> float:
-        """The safety-factor strategy's secondary servo torque for the torque `T` [N m] a
-        production controller knows (the engine's torque estimate; here the driveshaft
-        torque) at the measured ratio `r_m`: ``F_s = SF |T| cos(beta) / (2 mu_design R_s)``."""
-        mu_d = self._mu_design if self._mu_design is not None else float(self.model.mu_max(r_m))
-        return self._tpf * self.config.spec.safety_factor * abs(T) * self._cosb / (
-            2 * mu_d * self._R_s(r_m))
-
-    def _mu_max_ref(self, r_ref: float) -> float:
-        """Peak traction coefficient at the reference ratio (cached per ratio)."""
-        if r_ref != self._mu_max_cache[0]:
-            self._mu_max_cache = (r_ref, float(self.model.mu_max(r_ref)))
-        return self._mu_max_cache[1]
+        law, kk = (self._law, int(k)) if ref is None else (self._law_at(ref, k), 0)
+        status, e0, e1, u0, u1 = _pre(law, s, s_next,
+                                      np.ascontiguousarray(raw, dtype=float), kk, bool(ideal))
+        if status:
+            raise _no_geometry(self._wk.meas[0])
+        return s_next, np.array([e0, e1]), np.array([u0, u1]), self._wk.meas.copy()
 
     @property
     def n_pre(self) -> int:
@@ -690,99 +606,48 @@ class LoopLaw:
         ideal : bool, optional
             Drop noise, quantisation and limits (default False).
         """
-        c, n = self.controller, self.n_pre
         z = np.ascontiguousarray(z, dtype=float)
+        if z.shape != (self.n_state,):
+            raise ValueError(f"z has shape {z.shape}: expected ({self.n_state},)")
         z_next = np.empty(self.n_state)
-        e, (u0, u1), m = self._pre(z, z_next, raw, k, ref, ideal)
-        xc = z[n:]
-        ev = np.array(e)
-        # (``M.dot(v)`` is ``M @ v``: the same BLAS call, cheaper to make)
-        du = c.C.dot(xc) + c.D.dot(ev)
-        du0, du1 = (du if self._mask_ones else du * self._mask).tolist()
-        xc_next = c.A.dot(xc) + c.B.dot(ev)
-        u0 = u0 + du0
-        u1 = u1 + du1
-        if not ideal and self._limited:
-            s0, s1 = self._limit_f(u0, u1, m[4], m[5])
-            # (without saturation the anti-windup term is zero)
-            if self.config.spec.anti_windup and (s0 != u0 or s1 != u1):
-                xc_next = xc_next + self._L_aw.dot((np.array([s0, s1]) - np.array([u0, u1]))
-                                                   * self._mask)
-            u0, u1 = s0, s1
-        z_next[n:] = xc_next
-        return z_next, np.array([u0, u1])
+        law, kk = (self._law, int(k)) if ref is None else (self._law_at(ref, k), 0)
+        if self._sample(law, z, z_next, self._raw(raw), kk, bool(ideal)):
+            raise _no_geometry(self._wk.meas[0])
+        return z_next, self._wk.u.copy()
 
-    def _shift_geometry(self, r: NDArray) -> list[tuple[float, ...]]:
-        """What `_shift_torque` needs of the reference ratios `r` (1-D) alone, per ratio:
-        ``(r, R_p, R_s, phi, R_p / a, a1 + a2 ln(r)^2, kappa*)`` (the creep coefficient's
-        factors; ``kappa*`` the geometric thrust ratio, for Shafai's law)."""
-        p = self.model.params
-        sh = p.shift
-        st = variator_state(r, p.variator)
-        lr = np.log(r)
-        rpa = st.R_p / p.variator.a
-        poly = sh.a1 + sh.a2 * lr**2
-        geo = (np.zeros(r.shape) if self.model.creep else
-               (np.pi + 2 * st.phi) / (np.pi - 2 * st.phi))
-        return list(zip(r.tolist(), st.R_p.tolist(), st.R_s.tolist(), st.phi.tolist(),
-                        rpa.tolist(), poly.tolist(), geo.tolist()))
+    def _raw(self, raw: NDArray) -> NDArray[np.float64]:
+        """The raw measurements as the compiled sample takes them (float64, shape (7,))."""
+        raw = np.ascontiguousarray(raw, dtype=float)
+        if raw.shape != (len(RAW_SIGNALS),):
+            raise ValueError(f"raw measurements of shape {raw.shape}: expected "
+                             f"({len(RAW_SIGNALS)},), {', '.join(RAW_SIGNALS)}")
+        return raw
 
-    def _shift_torque(self, r_ref: float, rdot: float, w_p: float, F_s: float,
-                      k: int | None = None) -> float:
-        """Primary servo torque [N m] over its holding value against the creep law's
-        resistance at the ratio rate `rdot` [1/s] (at the reference ratio, speed `w_p`,
-        clamping force `F_s`): the thrust ratio ``kappa* exp(xi)`` with ``xi = xi_sat
-        tanh(rdot / (omega K_c) / xi_sat)`` (`empact.variator.shift_law`) needs the primary
-        thrust ``kappa* (exp(xi) - 1) F_s`` more, ``T_mp = -(i_e s / i_w)`` times it (the
-        kernel's ratio-controller gain has the same sign); the geometry at the reference
-        ratio of sample `k` is prepared once."""
-        if rdot == 0.0:
-            return 0.0
-        row = self._shift_rows.get(k) if k is not None else None
-        if row is None or row[0] != r_ref:
-            row = self._shift_geometry(np.array([float(r_ref)]))[0]
-        _, R_p, R_s, phi, rpa, poly, keq = row
-        sh = self._shift
-        w_eff = float(np.hypot(w_p, sh.omega_0))
-        # `creep_coefficient` and `EmpactModel.static_creep`, term by term
-        D = sh.D_ref * (1 + sh.k_D * (F_s - sh.F_ref))
-        K_c = float(sh.gain * D * self._g_beta * r_ref * rpa * poly)
-        if self.model.creep:
-            keq = self.model.static_creep_point(r_ref, R_p, R_s, phi, F_s, self._tau_ref,
-                                                self._creep_args)[1]
-        xi = sh.xi_sat * np.tanh(rdot / (w_eff * K_c) / sh.xi_sat)
-        return float(self._shift_gain * keq * np.expm1(xi) * F_s)
-
-    def _limit(self, u: NDArray, w: tuple[float, float]) -> NDArray[np.float64]:
-        """The servo torques the drives deliver: within the torque limit, and the torque that
-        would drive a servo faster falls to zero over the last `SPEED_BAND` of its speed."""
-        return np.array(self._limit_f(float(u[0]), float(u[1]), float(w[0]), float(w[1])))
-
-    def _limit_f(self, u0: float, u1: float, w0: float, w1: float) -> tuple[float, float]:
-        """`_limit` on floats (`_law_core.servo_limited`, as the compiled sample)."""
-        (T_max, w_max), (S_max, v_max) = self._lim
-        return (core.servo_limited(u0, w0, T_max, w_max, SPEED_BAND),
-                core.servo_limited(u1, w1, S_max, v_max, SPEED_BAND))
+    def _shift_geometry(self, r: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """The shift feedforward's geometry at the reference ratios `r` (1-D): ``R_p``,
+        ``R_s`` [m], ``phi`` [rad] and the geometric thrust ratio (Shafai's law's)."""
+        st = variator_state(r, self.model.params.variator)
+        return st.R_p, st.R_s, st.phi, (np.pi + 2 * st.phi) / (np.pi - 2 * st.phi)
 
     @property
     def compiled(self) -> bool:
-        """Whether `step` runs the whole sample compiled (`_law_core.step_core`: no
-        safety-factor clamping, no moving shift feedforward) rather than `update`."""
-        return self._fast is not None
+        """Whether `run_compiled` can run the law (always: every sample is compiled)."""
+        return True
 
-    def run_compiled(self, k0: int, k1: int, sim: tuple[Any, ...], t: float, h: float,
-                     filled: int, n_steps: int, n_rej: int) -> tuple[Any, ...]:
+    def run_compiled(self, k0: int, k1: int, loop: SampledLoop, t: float, h: float,
+                     filled: int, n_steps: int, n_rej: int) -> tuple[int, float, float, int,
+                                                                     int, int, int]:
         """Samples `k0` to ``k1 - 1`` of the simulator's sampled loop with the law and the
-        integrator in one compiled loop (`_loop_core.run_samples`; only when `compiled`):
-        bitwise what `step` at each sample between the integrator's calls gives.
+        integrator in one compiled loop (`_loop_core.run_samples`): bitwise what `step` at
+        each sample between the integrator's calls gives
+        (`empact.nonlinear.simulation.CompiledSampledController`).
 
         Parameters
         ----------
         k0, k1 : int
             The simulator's first sample and the one after the last.
-        sim : tuple
-            The simulator's arrays and the integrator's arguments, in `run_samples`' order
-            (from ``x`` to ``J``).
+        loop : SampledLoop
+            The simulator's arrays and the integrator's arguments.
         t, h : float
             Time [s] and step size [s] the integrator continues from.
         filled, n_steps, n_rej : int
@@ -797,24 +662,22 @@ class LoopLaw:
         Raises
         ------
         ParameterError
-            When the clamping feedforward finds no belt geometry at the measured ratio (as
-            `step` does).
+            When the clamping finds no belt geometry at the measured ratio (as `step`
+            does).
         """
-        if self._fast is None:
-            raise RuntimeError("run_compiled needs a compiled law (LoopLaw.compiled)")
         status, t, h, filled, n_steps, n_rej, k, done, err = _run_samples(
-            k0, k1, self._z, self._z_spare, self._k, *self._fast, self._u_out, *sim, t, h,
-            filled, n_steps, n_rej)
+            k0, k1, self._law, self._z, self._z_spare, self._k, loop, t, h, filled, n_steps,
+            n_rej)
         self._k += done
         if done % 2:
             self._z, self._z_spare = self._z_spare, self._z
         if err:
-            raise _no_geometry(self._res[core.R_M])
+            raise _no_geometry(self._wk.meas[0])
         return status, t, h, filled, n_steps, n_rej, k
 
     def step(self, t: float, measured: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Servo torques ``[T_mp, T_ms]`` [N m] over ``[t, t + dt)``: `update` of the law's
-        state, compiled when `compiled`.
+        """Servo torques ``[T_mp, T_ms]`` [N m] over ``[t, t + dt)``: the compiled sample
+        (`update`) of the law's state.
 
         Parameters
         ----------
@@ -823,15 +686,9 @@ class LoopLaw:
         measured : ndarray, shape (len(RAW_SIGNALS),)
             The measured signals at `t` in `RAW_SIGNALS` order (SI).
         """
-        if self._fast is not None:
-            z_next = self._z_spare
-            if _step_core(self._z, z_next, np.ascontiguousarray(measured, dtype=float),
-                         self._k, *self._fast, self._u_out):
-                raise _no_geometry(self._res[core.R_M])
-            self._z_spare, self._z = self._z, z_next
-            self._k += 1
-            return self._u_out.copy()
-        self._z, u = self.update(self._z, measured, self._k)
+        z_next = self._z_spare
+        if self._sample(self._law, self._z, z_next, self._raw(measured), self._k, False):
+            raise _no_geometry(self._wk.meas[0])
+        self._z_spare, self._z = self._z, z_next
         self._k += 1
-        return u
-
+        return self._wk.u.copy()

@@ -20,7 +20,7 @@ import os
 import time
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any, Mapping, Protocol, runtime_checkable
+from typing import Any, Mapping, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,7 +38,8 @@ from .equilibrium import TrimResult, trim
 from .model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
 from .scenario import DEFAULT_METHOD, METHODS, Scenario
 
-__all__ = ["SimulationResult", "SampledController", "simulate", "run_scenario",
+__all__ = ["SimulationResult", "SampledController", "CompiledSampledController", "SampledLoop",
+           "simulate", "run_scenario",
            "scenario_model", "scenario_signals", "csv_text", "write_csv", "state_tolerances",
            "STATUS", "METHODS", "DEFAULT_METHOD"]
 
@@ -191,6 +192,103 @@ class SampledController(Protocol):
         measured : ndarray, shape (len(measured),)
             The measured values at `t`, in the order of `measured` (SI).
         """
+
+
+class SampledLoop(NamedTuple):
+    """What a compiled sampled loop (`CompiledSampledController.run_compiled`) needs of the
+    simulator: its arrays (written in place) and the integrator's arguments.
+
+    Attributes
+    ----------
+    x, u : ndarray, shape (n,), (4,)
+        The state and the inputs (both updated in place).
+    U_free : ndarray, shape (n_k + 1, n_free)
+        The inputs the controller does not drive, on the sample grid.
+    t_grid : ndarray, shape (n_k + 1,)
+        The sample times [s].
+    out_idx, cmd_idx, free_idx : ndarray of int
+        The outputs the controller measures, the inputs it drives, the others.
+    commands : ndarray, shape (n_k, n_cmd)
+        The commands of each sample (written).
+    dx, y, meas : ndarray
+        Work arrays: the derivatives, the outputs, the measurements.
+    tableau : tuple
+        The Rosenbrock method's tableau as `empact.nonlinear._rodas._run` takes it
+        (`_rodas.TABLEAUX`).
+    samples : ndarray
+        The output sample times [s].
+    p, ix : ndarray
+        The model's parameter vector and state layout (`EmpactModel.p`, ``ix``).
+    sig_t, sig_v, sig_n, brk : ndarray
+        The input signals (`_signal_table`) and their breakpoints.
+    rtol, atol : ndarray, shape (n,)
+        Per-state tolerances (`state_tolerances`).
+    hmax, omega_min : float
+        Largest step [s]; the primary speed that stops the run [rad/s].
+    max_steps : int
+        The integrator's step budget.
+    X, Y, cols, J : ndarray
+        The output states and outputs (written), the Jacobian's varying columns and its
+        work array.
+    """
+
+    x: NDArray[np.float64]
+    u: NDArray[np.float64]
+    U_free: NDArray[np.float64]
+    t_grid: NDArray[np.float64]
+    out_idx: NDArray[np.intp]
+    cmd_idx: NDArray[np.intp]
+    free_idx: NDArray[np.intp]
+    commands: NDArray[np.float64]
+    dx: NDArray[np.float64]
+    y: NDArray[np.float64]
+    meas: NDArray[np.float64]
+    tableau: tuple[Any, ...]
+    samples: NDArray[np.float64]
+    p: NDArray[np.float64]
+    ix: NDArray[np.int64]
+    sig_t: NDArray[np.float64]
+    sig_v: NDArray[np.float64]
+    sig_n: NDArray[np.int64]
+    brk: NDArray[np.float64]
+    rtol: NDArray[np.float64]
+    atol: NDArray[np.float64]
+    hmax: float
+    omega_min: float
+    max_steps: int
+    X: NDArray[np.float64]
+    Y: NDArray[np.float64]
+    cols: NDArray[Any]
+    J: NDArray[np.float64]
+
+
+@runtime_checkable
+class CompiledSampledController(SampledController, Protocol):
+    """A `SampledController` that can also run a stretch of samples with the integrator in
+    one compiled loop (bitwise what its `step` between the integrator's calls gives);
+    `simulate` uses it when `compiled` and the method is a Rodas method
+    (`empact.control.law.LoopLaw`).
+
+    Attributes
+    ----------
+    compiled : bool
+        Whether `run_compiled` may be called.
+
+    Methods
+    -------
+    run_compiled(k0, k1, loop, t, h, filled, n_steps, n_rej) -> tuple
+        Samples `k0` to ``k1 - 1`` (`SampledLoop` `loop`; from time `t` [s], step `h` [s],
+        `filled` output samples, `n_steps` and `n_rej` steps taken and rejected): the
+        tuple ``(status, t, h, filled, n_steps, n_rej, k)``: the integrator's status after
+        sample `k`, the last one run.
+    """
+
+    compiled: bool
+
+    def run_compiled(self, k0: int, k1: int, loop: SampledLoop, t: float, h: float,
+                     filled: int, n_steps: int, n_rej: int) -> tuple[int, float, float, int,
+                                                                     int, int, int]:
+        """Samples `k0` to ``k1 - 1`` with the integrator in one compiled loop."""
 
 
 def _signal_table(model: EmpactModel, signals: Mapping[str, NDArray], u0: NDArray,
@@ -401,22 +499,26 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
     status, n_steps, n_rej, filled, k = 0, 0, 0, 1, 0
     every = max(1, n_k // 100)
     # a controller whose sample is compiled runs with the integrator in one compiled loop
-    # (`empact.control.law.LoopLaw.run_compiled`), `every` samples a call (the progress bar
+    # (`CompiledSampledController.run_compiled`), `every` samples a call (the progress bar
     # and Ctrl-C between calls): bitwise this loop's result, without its Python per sample
     tableau = _rodas.TABLEAUX.get(step)
-    fast = getattr(controller, "compiled", False) and tableau is not None and out_idx is not None
+    fast = (isinstance(controller, CompiledSampledController) and controller.compiled
+            and tableau is not None and out_idx is not None)
     with progress_bar(total=n_k, desc=f"simulate {name}".strip(), unit="samples",
                       enabled=progress) as bar:
         if fast:
-            sim = (x, u, np.ascontiguousarray(U_free), t_grid, out_idx,
-                   np.array(cmd_list, dtype=np.intp), np.array(free_list, dtype=np.intp),
-                   commands, dx, y, np.empty(out_idx.size), *tableau, samples, model.p,
-                   model.ix, sig_t, sig_v, sig_n, brk_arr, rel, atol, max_step, omega_min,
-                   max_steps, X, Y, cols, J)
+            loop = SampledLoop(
+                x=x, u=u, U_free=np.ascontiguousarray(U_free), t_grid=t_grid, out_idx=out_idx,
+                cmd_idx=np.array(cmd_list, dtype=np.intp),
+                free_idx=np.array(free_list, dtype=np.intp), commands=commands, dx=dx, y=y,
+                meas=np.empty(out_idx.size), tableau=tableau, samples=samples, p=model.p,
+                ix=model.ix, sig_t=sig_t, sig_v=sig_v, sig_n=sig_n, brk=brk_arr, rtol=rel,
+                atol=atol, hmax=float(max_step), omega_min=float(omega_min),
+                max_steps=int(max_steps), X=X, Y=Y, cols=cols, J=J)
             for k0 in range(0, n_k, every):
                 k1 = min(k0 + every, n_k)
                 status, t, h, filled, n_steps, n_rej, k = controller.run_compiled(
-                    k0, k1, sim, t, h, filled, n_steps, n_rej)
+                    k0, k1, loop, t, h, filled, n_steps, n_rej)
                 bar.update(k1 - k0)
                 if status != 0:
                     break
