@@ -22,6 +22,7 @@ from .nonlinear.model import nonlinear_model
 from .nonlinear.scenario import load_scenario
 from .nonlinear.simulation import simulate
 from .params import OperatingPoint, default_params
+from .variator.geometry import secondary_radius
 
 __all__ = ["compile_all", "drop_stale_cache"]
 
@@ -33,10 +34,11 @@ def drop_stale_cache(folder: Path | None = None) -> int:
 
     numba keys a function's cache on its own file only: the integrators of ``_rodas.py`` and
     ``_rosenbrock.py`` inline the right-hand side and Jacobian of ``_kernel.py`` and keep the
-    version they were compiled with after ``_kernel.py`` changes (numba issue 6845); so does
-    the compiled closed loop (``empact/control/_loop_core.py``) with the kernel, the
-    integrators and the law's sample (``_law_core.py``), whose cache is dropped likewise.  The
-    test session calls this first, so that an edited kernel is never tested through stale
+    version they were compiled with after ``_kernel.py`` changes (numba issue 6845); so do
+    the kernel and the law's sample (``control/_law_core.py``) with the variator's compiled
+    laws (``variator/_laws.py``, ``variator/_compiled.py``), and the compiled closed loop
+    (``empact/control/_loop_core.py``) with the kernel, the integrators and the law's sample,
+    whose caches are dropped likewise.  The test session calls this first, so that an edited kernel is never tested through stale
     integrators; the price is one compile (about 20 s) after a source changed.
 
     Parameters
@@ -54,11 +56,14 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     if folder is not None:
         return _drop_stale(Path(folder) / "__pycache__", "*", list(Path(folder).glob("*.py")))
     here = Path(__file__).resolve().parent
-    nonlinear = list((here / "nonlinear").glob("*.py"))
+    # the variator's laws, compiled into the kernel and the law's sample
+    laws = [here / "variator" / "_laws.py", here / "variator" / "_compiled.py"]
+    nonlinear = list((here / "nonlinear").glob("*.py")) + laws
+    law_core = [here / "control" / "_law_core.py"] + laws
     # the compiled closed loop calls the kernel, the integrator and the law's sample
-    loop_sources = nonlinear + [here / "control" / "_law_core.py",
-                                here / "control" / "_loop_core.py"]
+    loop_sources = nonlinear + law_core + [here / "control" / "_loop_core.py"]
     return (_drop_stale(here / "nonlinear" / "__pycache__", "*", nonlinear)
+            + _drop_stale(here / "control" / "__pycache__", "_law_core.*", law_core)
             + _drop_stale(here / "control" / "__pycache__", "_loop_core.*", loop_sources))
 
 
@@ -94,6 +99,8 @@ def compile_all() -> float:
             linearize_many(model, tr.x[None], tr.u[None], np.array([tr.r_g]),
                            np.array([tr.nu]))
     plant(params)
+    # the compiled belt-length Newton solve a sampled law's Python path calls
+    secondary_radius(1.0, params.variator.L_belt, params.variator.a)
     # the sampled loop law's compiled arithmetic (`empact.control._law_core`): a sample,
     # the linearisation's ideal sample, the sensors alone, the gain schedule
     sc = load_scenario(control_example_path("slip-load-step-r1"))

@@ -22,6 +22,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..variator._compiled import secondary_radius
+
 # P: the law's constants
 (_P_NB, _P_NBUF, _P_DELAY, _P_WINDOW, _P_QUANTISE, _P_SPEED_Q, _P_RATIO_Q, _P_SLIP_NU,
  _P_R_REF0, _P_LOG_R, _P_LOG_S, _P_SCHED, _P_FEEDFORWARD, _P_F_S0, _P_BIAS0, _P_BIAS1,
@@ -117,32 +119,14 @@ def schedule_log_gains(S, values, by_variable, out):
 
 
 @njit(cache=True)
-def secondary_radius(r_g, L_belt, a):
-    """`empact.variator.geometry.secondary_radius` (no guess); NaN where it does not
-    converge."""
-    R_s = (L_belt - 2 * a) / (math.pi * (1 + r_g))
-    for _ in range(50):
-        R_p = r_g * R_s
-        x = (R_p - R_s) / a
-        if not -1.0 <= x <= 1.0:
-            return np.nan
-        phi = math.asin(x)
-        f = 2 * a * math.cos(phi) + (math.pi + 2 * phi) * R_p + (math.pi - 2 * phi) * R_s \
-            - L_belt
-        step = f / (r_g * (math.pi + 2 * phi) + (math.pi - 2 * phi))
-        R_s -= step
-        if abs(step) <= 1e-13 * L_belt:
-            return R_s
-    return np.nan
-
-
-@njit(cache=True)
 def _radius(r_g, P, cache):
-    """`LoopLaw._R_s`: the secondary radius at the measured ratio, the last one reused."""
+    """`LoopLaw._R_s`: the secondary radius at the measured ratio (the law,
+    `empact.variator._laws.secondary_radius`; NaN where it finds no belt geometry), the last
+    one reused."""
     r = _lo_hi(r_g, 1e-3, 1e3)
     if r != cache[0]:
         cache[0] = r
-        cache[1] = secondary_radius(r, P[_P_L_BELT], P[_P_A])
+        cache[1] = secondary_radius(r, P[_P_L_BELT], P[_P_A], np.nan, 1e-13)
     return cache[1]
 
 

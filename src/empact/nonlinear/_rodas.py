@@ -34,7 +34,7 @@ on that problem.
 Everything else is the order-2 integrator's (`_rosenbrock.integrate`): the same signature and
 semantics, piecewise-linear inputs found by running indices, no step across a breakpoint, the
 explicit time derivative through the inputs (``df/dt = (df/du) du/dt``, exact on a linear
-input piece), the Jacobian exact (forward mode, `_kernel._state_jacobian`) at every step and
+input piece), the Jacobian exact (forward mode, `_tangent._state_jacobian`) at every step and
 in full only on the first
 call of a run, the stop conditions checked at every accepted step, the same status codes.
 The state at the end of a step is evaluated once (for the stop conditions) and reused as the
@@ -53,8 +53,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._kernel import NY, _eval, _input_direction, _state_jacobian, stop_status
+from ._kernel import NY, _eval, stop_status
 from ._rosenbrock import STATUS, _lu, _lu_solve, _segment_inputs, _u_at
+from ._tangent import _input_direction, _state_jacobian
 
 __all__ = ["integrate", "integrate_rodas4", "METHODS", "STATUS"]
 

@@ -5,7 +5,7 @@ A linearly implicit (Rosenbrock) method of order 2 with an embedded order-3 erro
 the modified Rosenbrock formula of Shampine & Reichelt (MATLAB's ``ode23s``), L-stable, one
 LU factorisation per step, with its continuous extension for output between steps.  The
 Jacobian is exact (forward-mode derivatives of the compiled right-hand side,
-`_kernel._state_jacobian`), the
+`_tangent._state_jacobian`), the
 explicit time dependence through the inputs is included (``df/dt = B du/dt``).
 
 Inputs are piecewise linear in time (a repeated time is a step); the integrator never steps
@@ -29,7 +29,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._kernel import NY, _eval, _input_direction, _state_jacobian, stop_status
+from ._kernel import NY, _eval, stop_status
+from ._tangent import _input_direction, _state_jacobian
 
 D_GAMMA = 1.0 / (2.0 + np.sqrt(2.0))
 E32 = 6.0 + np.sqrt(2.0)

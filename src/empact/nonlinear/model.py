@@ -118,7 +118,9 @@ from ..linear.actuation import actuation_model
 from ..params import DAMPING_LEVELS, Params
 from ..variator.shift_law import SHIFT_LAWS, CreepMap, g_beta, load_creep_map
 from ..variator.thrust_ratio import TabulatedThrustRatio, load_thrust_ratio
+from . import _batch as KB
 from . import _kernel as K
+from . import _tangent as KT
 
 control = lazy_module("control")
 
@@ -417,7 +419,7 @@ class EmpactModel:
         B = np.empty((self.n, 4))
         C = np.empty((len(self.outputs), self.n))
         D = np.empty((len(self.outputs), 4))
-        K._jacobian(x, u, self.p, self.ix, A, B, C, D)
+        KT._jacobian(x, u, self.p, self.ix, A, B, C, D)
         return A, B, C, D
 
     def traction(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
@@ -426,7 +428,7 @@ class EmpactModel:
         if np.any(r <= 0):
             raise ValueError(f"r_g = {r[r <= 0].flat[0]:g}: must be positive")
         out = np.empty(nu.size)
-        K.traction_many(np.ascontiguousarray(nu.ravel()), np.ascontiguousarray(r.ravel()),
+        KB.traction_many(np.ascontiguousarray(nu.ravel()), np.ascontiguousarray(r.ravel()),
                         self.p, out)
         return out.reshape(nu.shape)
 
@@ -435,7 +437,7 @@ class EmpactModel:
         ratio is ``tau = mu / mu_max``)."""
         r = np.asarray(r_g, float)
         out = np.empty(r.size)
-        K.mu_max_many(np.ascontiguousarray(r.ravel()), self.p, out)
+        KB.mu_max_many(np.ascontiguousarray(r.ravel()), self.p, out)
         return out.reshape(r.shape)
 
     def static_creep(self, r_g, R_p, R_s, phi, F_el, tau) -> tuple[NDArray, NDArray]:
@@ -451,7 +453,7 @@ class EmpactModel:
             return (np.zeros(shape),
                     ((np.pi + 2 * phi_) / (np.pi - 2 * phi_)).reshape(shape))
         lam, keq = np.empty(args[0].size), np.empty(args[0].size)
-        K.creep_many(*args, self.p, lam, keq)
+        KB.creep_many(*args, self.p, lam, keq)
         return lam.reshape(shape), keq.reshape(shape)
 
     def static_creep_point(self, r_g: float, R_p: float, R_s: float, phi: float,
@@ -465,7 +467,7 @@ class EmpactModel:
         a = work if work is not None else [np.empty(1) for _ in range(8)]
         for j, v in enumerate((r_g, R_p, R_s, phi, F_el, tau)):
             a[j][0] = v
-        K.creep_many(a[0], a[1], a[2], a[3], a[4], a[5], self.p, a[6], a[7])
+        KB.creep_many(a[0], a[1], a[2], a[3], a[4], a[5], self.p, a[6], a[7])
         return float(a[6][0]), float(a[7][0])
 
     def evaluate_many(self, X: ArrayLike, U: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -473,7 +475,7 @@ class EmpactModel:
         derivatives (N, n) and outputs (N, len(outputs))."""
         X, U = np.ascontiguousarray(X, float), np.ascontiguousarray(U, float)
         DX, Y = np.empty_like(X), np.empty((X.shape[0], len(self.outputs)))
-        K.eval_batch(X, U, self.p, self.ix, DX, Y)
+        KB.eval_batch(X, U, self.p, self.ix, DX, Y)
         return DX, Y
 
     def jacobian_many(self, X: ArrayLike, U: ArrayLike) -> tuple[NDArray, ...]:
@@ -483,7 +485,7 @@ class EmpactModel:
         N, n, ny = X.shape[0], self.n, len(self.outputs)
         A, B = np.empty((N, n, n)), np.empty((N, n, 4))
         C, D = np.empty((N, ny, n)), np.empty((N, ny, 4))
-        K.linearize_batch(X, U, self.p, self.ix, np.empty((N, n)), A, B, C, D)
+        KB.linearize_batch(X, U, self.p, self.ix, np.empty((N, n)), A, B, C, D)
         return A, B, C, D
 
     def stop_status(self, y: NDArray[np.float64], omega_min: float = 1.0) -> int:
