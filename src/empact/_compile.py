@@ -38,8 +38,9 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     the kernel and the law's sample (``control/_law_core.py``) with the variator's compiled
     laws (``variator/_laws.py``, ``variator/_compiled.py``), and the compiled closed loop
     (``empact/control/_loop_core.py``) with the kernel, the integrators and the law's sample,
-    whose caches are dropped likewise.  The test session calls this first, so that an edited kernel is never tested through stale
-    integrators; the price is one compile (about 20 s) after a source changed.
+    whose caches are dropped likewise.  The test session calls this first, so that an edited
+    kernel is never tested through stale integrators; the price is one compile (about 20 s)
+    after a source changed.
 
     Parameters
     ----------

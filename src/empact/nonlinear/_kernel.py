@@ -478,13 +478,35 @@ def _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p,
     y[Y_MUMAX] = mu_max
 
 
+@njit(cache=True)
+def _finish(x, u, p, ix, dx, y, belt, sp, dm, r_g, nu, mu, mu_max, tau, F_b, T_b, lam, kap, keq,
+            dr5, dr6, rdot):
+    """A pass from the creep force `lam` on: the clamping forces at the contacts (opening the
+    sheaves: the belt element's and the creep's), the belt torque, the servo, drive and load
+    torques, the equations of motion into `dx` and the outputs into `y` (`belt`, `sp`, `dm`:
+    `_belt`'s, `_springs`' and `_dampers`' values).  Returns ``(F_s, T_b, T_mp, G, err, T_d,
+    T_l)`` for the tangent pass."""
+    R_p, R_s, phi, e, g5, g6, edot, N, F_p_el, F_s_el = belt
+    F_p = F_p_el + lam * dr5
+    F_s = F_s_el - lam * r_g / (p[P_TB] * R_s)
+    T_b, T_on_p, P_slip = _belt_torque(x, p, ix, dx, mu, F_s, F_b, T_b, R_p, R_s, r_g)
+    T_mp, G, err = _ratio_servo(x, u, p, ix, dx, R_p, R_s, phi, r_g, F_s_el, F_p_el)
+    T_d, T_l = _drive_load(x, u, p, ix, dx)
+    T_ds = _motion(x, p, dx, sp, dm, T_mp, u[1], T_d, T_l, N, g5, g6, lam, dr5, dr6, T_on_p,
+                   T_b)
+    _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p, F_s, tau, kap,
+             keq, T_b, mu, mu_max, R_p, R_s, phi, T_mp, u[1], T_d, T_l, T_ds)
+    return F_s, T_b, T_mp, G, err, T_d, T_l
+
+
 # -- the value pass ---------------------------------------------------------------------------
 @njit(cache=True)
 def _eval(x, u, p, ix, dx, y):
     """Fill ``dx`` (shape (n,)) and ``y`` (shape (NY,)) at state x and inputs u."""
     tb = p[P_TB]
     v5, v6, wp, ws = x[10], x[11], x[15], x[16]
-    R_p, R_s, phi, e, g5, g6, edot, N, F_p_el, F_s_el = _belt(x, p)
+    belt = _belt(x, p)
+    R_p, R_s, phi, _, _, _, _, _, _, F_s_el = belt
     sp = _springs(x, p)
     dm = _dampers(x, p)
 
@@ -508,18 +530,8 @@ def _eval(x, u, p, ix, dx, y):
         keq = kap
     else:
         lam, kap, keq = creep_force(r_g, R_p, R_s, phi, F_s_el, tau, rdot, wp, p)
-    # clamping forces at the contacts (opening the sheaves): the belt element's and the creep's
-    F_p = F_p_el + lam * dr5
-    F_s = F_s_el - lam * r_g / (tb * R_s)
-
-    T_b, T_on_p, P_slip = _belt_torque(x, p, ix, dx, mu, F_s, F_b, T_b, R_p, R_s, r_g)
-    T_mp, _, _ = _ratio_servo(x, u, p, ix, dx, R_p, R_s, phi, r_g, F_s_el, F_p_el)
-    T_ms = u[1]
-    T_d, T_l = _drive_load(x, u, p, ix, dx)
-    T_ds = _motion(x, p, dx, sp, dm, T_mp, T_ms, T_d, T_l, N, g5, g6, lam, dr5, dr6, T_on_p,
-                   T_b)
-    _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p, F_s, tau, kap,
-             keq, T_b, mu, mu_max, R_p, R_s, phi, T_mp, T_ms, T_d, T_l, T_ds)
+    _finish(x, u, p, ix, dx, y, belt, sp, dm, r_g, nu, mu, mu_max, tau, F_b, T_b, lam, kap, keq,
+            dr5, dr6, rdot)
 
 
 # -- the complex-step references ----------------------------------------------------------------

@@ -5,7 +5,7 @@
 of directions in one pass: `_jacobian` (A, B, C, D for the linearisation and the families),
 `_state_jacobian` and `_input_direction` (the integrators' columns and df/du du).  It computes
 its values with the value pass's own helpers (`_kernel._belt`, `_springs`, `_dampers`,
-`_torque_ratio`, `_belt_torque`, `_ratio_servo`, `_drive_load`, `_motion`, `_outputs`) and
+`_torque_ratio` and `_finish`) and
 the laws' partials (`_kernel.traction_mu_d`, `mu_max_d`, `log_kappa_eq_d`,
 `creep_coefficient_d`), so the same ``dx`` and ``y``; every branch is the one the complex
 step (`_kernel._jacobian_cs`) takes (a knot or a table sample counts to the segment on its
@@ -103,12 +103,8 @@ from ._kernel import (
     Y_XP,
     Y_XS,
     _belt,
-    _belt_torque,
     _dampers,
-    _drive_load,
-    _motion,
-    _outputs,
-    _ratio_servo,
+    _finish,
     _springs,
     _torque_ratio,
     creep_coefficient_d,
@@ -144,7 +140,8 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
     ide = p[P_LAW] == LAW_IDE
 
     # -- values and local partials --
-    R_p, R_s, phi, e, g5, g6, edot, N, F_p_el, F_s_el = _belt(x, p)
+    belt = _belt(x, p)
+    R_p, R_s, phi, e, g5, g6, edot, N, F_p_el, F_s_el = belt
     sig = p[P_SIG]
     z = (R_p - R_s) / a
     cphi = np.cos(phi)
@@ -204,19 +201,12 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
             kap = keq * np.exp(xi)
         den = dr5 + kap * b6
         lam = F_s_el * (kap - kgeo) / den
-    F_p = F_p_el + lam * dr5
-    F_s = F_s_el - lam * r_g / (tb * R_s)
-
-    T_b, T_on_p, P_slip = _belt_torque(x, p, ix, dx, mu, F_s, F_b, T_b, R_p, R_s, r_g)
-    slipv = r_g * wp - ws
-    T_mp, G, err = _ratio_servo(x, u, p, ix, dx, R_p, R_s, phi, r_g, F_s_el, F_p_el)
-    c0g = -s * i_e / (i_w * tb)
+    F_s, T_b, T_mp, G, err, T_d, T_l = _finish(x, u, p, ix, dx, y, belt, sp, dm, r_g, nu, mu,
+                                               mu_max, tau, F_b, T_b, lam, kap, keq, dr5, dr6,
+                                               rdot)
     T_ms = u[1]
-    T_d, T_l = _drive_load(x, u, p, ix, dx)
-    T_ds = _motion(x, p, dx, sp, dm, T_mp, T_ms, T_d, T_l, N, g5, g6, lam, dr5, dr6, T_on_p,
-                   T_b)
-    _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p, F_s, tau, kap,
-             keq, T_b, mu, mu_max, R_p, R_s, phi, T_mp, T_ms, T_d, T_l, T_ds)
+    slipv = r_g * wp - ws
+    c0g = -s * i_e / (i_w * tb)
     cmp_ = p[P_CMP]
     cms = p[P_CMS]
     csp = p[P_CSP]

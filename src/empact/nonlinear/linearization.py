@@ -84,11 +84,11 @@ def linearize(op: TrimResult, inputs: Sequence[str] | None = None,
     Parameters
     ----------
     op : TrimResult
-        The operating point (its ``model`` is linearised).
+        The trimmed point to linearise at (and its ``model``).
     inputs, outputs : sequence of str, optional
-        Subsets of ``op.model.inputs`` / ``op.model.outputs`` (default: all).
+        The signals to keep, of ``op.model.inputs`` / ``op.model.outputs`` (default: all).
     name : str
-        System name.
+        The system's name.
 
     Returns
     -------

@@ -204,9 +204,9 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     rtol : float
         Relative tolerance (see `state_tolerances`).
     max_step : float
-        Largest step [s].
+        Largest integration step [s].
     omega_min : float
-        Stop when omega_p falls to this [rad/s].
+        The run stops when omega_p falls to this [rad/s] (slip undefined).
     max_steps : int
         Give up (incomplete result) after this many integration steps.
     method : {"rodas4", "rodas5p", "ros2"}

@@ -109,9 +109,9 @@ def belt_length(R_p: ArrayLike, R_s: ArrayLike, a: float) -> NDArray[np.float64]
     Parameters
     ----------
     R_p, R_s : array_like
-        Primary and secondary running radii [m], broadcast together.
+        Running radii [m] on the primary and the secondary, broadcast together.
     a : float
-        Centre distance [m].
+        Centre distance between the pulley shafts [m].
 
     Returns
     -------

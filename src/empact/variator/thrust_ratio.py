@@ -356,12 +356,10 @@ def ratio_stability_map(kmap: AnalyticThrustRatio | TabulatedThrustRatio,
 
     Parameters
     ----------
-    kmap : AnalyticThrustRatio or TabulatedThrustRatio
-        The equilibrium thrust-ratio map.
-    variator : VariatorParams
-        The geometry.
-    mu_max : callable
-        The traction curve's peak value [-] over the ratio, vectorised.
+    kmap, variator, mu_max
+        As `ratio_stability`: the equilibrium thrust-ratio map (analytic or tabulated), the
+        geometry (`VariatorParams`) and the traction curve's peak value [-] over the ratio
+        (a vectorised callable).
     tau : array_like, shape (n_tau,)
         Torque ratios [-].
     r_g : array_like, shape (n_r,)
