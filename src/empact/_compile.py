@@ -94,8 +94,10 @@ def compile_all() -> float:
               else params.operating)
         tr = trim(model, op)
         model.jacobian(tr.x, tr.u)
-        simulate(model, tr.x, {model.inputs[1]: np.array([[0.0, tr.u[1]], [0.002, tr.u[1]]])},
-                 0.002, u0=tr.u)
+        for method in ("rodas4", "ros2") if not options else ("rodas4",):
+            simulate(model, tr.x, {model.inputs[1]: np.array([[0.0, tr.u[1]],
+                                                                [0.002, tr.u[1]]])},
+                     0.002, u0=tr.u, method=method)
         if "T_mp" in model.inputs and not options.get("belt"):
             linearize_many(model, tr.x[None], tr.u[None], np.array([tr.r_g]),
                            np.array([tr.nu]))

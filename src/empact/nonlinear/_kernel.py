@@ -18,9 +18,9 @@ complex step differentiates it too (`_jacobian_cs`, `_state_jacobian_cs`,
 `_input_direction_cs`; exact to rounding: no subtraction, step 1e-30), kept as the reference
 the forward mode is tested and benchmarked against.  Comparisons use the real part; ``abs``
 is written as a sign flip so that it stays analytic; the forward mode takes the same branch
-at every comparison.  What both passes compute alike is written once, in the helpers below
-`_eval`'s (`_belt`, `_springs`, `_dampers`, `_drive_load`, `_ratio_servo`, `_motion`,
-`_outputs`), and the variator's laws (belt geometry, traction, tables, thrust ratio, creep)
+at every comparison.  What both passes compute alike is written once, in the helpers above
+`_eval` (`_belt`, `_springs`, `_dampers`, `_torque_ratio`, and `_finish` with the forces,
+torques, equations of motion and outputs), and the variator's laws (belt geometry, traction, tables, thrust ratio, creep)
 are `empact.variator._laws`, compiled (`empact.variator._compiled`).  The modules around
 this one: `_tangent` (forward mode), `_batch` (loops over operating points).
 

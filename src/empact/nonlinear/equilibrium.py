@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ParameterError, TrimError
 from ..params import OperatingPoint
+from ..variator import _laws
 from ..variator.geometry import check_ratio, radii, ratio_range, stretched_radii
 from ..variator.traction import traction_from_params
 from . import _batch as KB
@@ -372,7 +373,7 @@ def _contact(model: EmpactModel, r, F_contact, tau_of):
     active = np.ones(r.shape, dtype=bool)
     for _ in range(60):
         R_p, R_s, phi, e = radii(F_el)
-        kgeo = (np.pi + 2 * phi) / (np.pi - 2 * phi)
+        kgeo = _laws.kappa_geo(phi)
         _, keq = model.static_creep(r, R_p, R_s, phi, F_el, tau_of(R_s, F_el))
         a, b = r / (c.tan_beta * R_p), r / (c.tan_beta * R_s)
         new = np.where(active, F_contact * (a + keq * b) / (a + kgeo * b), F_el)

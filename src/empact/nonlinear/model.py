@@ -116,6 +116,7 @@ from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
 from ..linear.actuation import actuation_model
 from ..params import DAMPING_LEVELS, Params
+from ..variator import _laws
 from ..variator.shift_law import SHIFT_LAWS, CreepMap, g_beta, load_creep_map
 from ..variator.thrust_ratio import TabulatedThrustRatio, load_thrust_ratio
 from . import _batch as KB
@@ -450,8 +451,7 @@ class EmpactModel:
         shape = np.broadcast(r_g, R_p, R_s, phi, F_el, tau).shape
         if not self.creep:
             phi_ = args[3]
-            return (np.zeros(shape),
-                    ((np.pi + 2 * phi_) / (np.pi - 2 * phi_)).reshape(shape))
+            return np.zeros(shape), _laws.kappa_geo(phi_).reshape(shape)
         lam, keq = np.empty(args[0].size), np.empty(args[0].size)
         KB.creep_many(*args, self.p, lam, keq)
         return lam.reshape(shape), keq.reshape(shape)
@@ -463,7 +463,7 @@ class EmpactModel:
         sample): the same compiled loop on one-element arrays, `work` (eight of them) if
         given."""
         if not self.creep:
-            return 0.0, float((np.pi + 2 * phi) / (np.pi - 2 * phi))
+            return 0.0, float(_laws.kappa_geo(phi))
         a = work if work is not None else [np.empty(1) for _ in range(8)]
         for j, v in enumerate((r_g, R_p, R_s, phi, F_el, tau)):
             a[j][0] = v
