@@ -20,8 +20,9 @@ the forward mode is tested and benchmarked against.  Comparisons use the real pa
 is written as a sign flip so that it stays analytic; the forward mode takes the same branch
 at every comparison.  What both passes compute alike is written once, in the helpers above
 `_eval` (`_belt`, `_springs`, `_dampers`, `_torque_ratio`, and `_finish` with the forces,
-torques, equations of motion and outputs), and the variator's laws (belt geometry, traction, tables, thrust ratio, creep)
-are `empact.variator._laws`, compiled (`empact.variator._compiled`).  The modules around
+torques, equations of motion and outputs), and the variator's laws (belt geometry, traction,
+tables, thrust ratio, creep) are `empact.variator._laws`, compiled
+(`empact.variator._compiled`).  The modules around
 this one: `_tangent` (forward mode), `_batch` (loops over operating points).
 
 This module owns the layout of ``p``, ``x`` and ``y``: every index has a name here

@@ -247,12 +247,14 @@ class MagicFormulaTraction:
     def mu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
         """Traction coefficient ``D sin(C arctan(phi))`` [-], shape of ``broadcast(nu, r_g)``."""
         nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
-        return _laws.magic_formula(nu_a, *self.coefficients(r_a))
+        B, C, D, E = self.coefficients(r_a)
+        return _laws.magic_formula(nu_a, B, C, D, E)
 
     def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
         """Slope ``d mu / d nu`` [-] (analytic), shape of ``broadcast(nu, r_g)``."""
         nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
-        return _laws.magic_formula_d(nu_a, *self.coefficients(r_a), 0.0, 0.0, 0.0, 0.0)[1]
+        B, C, D, E = self.coefficients(r_a)
+        return _laws.magic_formula_d(nu_a, B, C, D, E, 0.0, 0.0, 0.0, 0.0)[1]
 
 
 # --------------------------------------------------------------------------------------------
