@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._kernel import NY, _eval, _jacobian_cs, creep_force, mu_max_d, traction_mu
+from ._kernel import NY, _eval, _jacobian_cs, creep_force, mu_peak, traction_mu
 from ._tangent import _eval_tangent, _full_seeds, _split
 
 __all__ = ["traction_many", "bisect_rising_many", "traction_peak_many", "mu_max_many",
@@ -71,7 +71,7 @@ def traction_peak_many(r_g, g, p, nu_out, mu_out):
 def mu_max_many(r_g, p, out):
     """Peak traction coefficient D(r_g) (the magic formula's) for a 1-D array of ratios."""
     for k in range(r_g.shape[0]):
-        out[k] = mu_max_d(np.log(r_g[k]), p)[0]
+        out[k] = mu_peak(np.log(r_g[k]), p)
 
 
 @njit(cache=True)

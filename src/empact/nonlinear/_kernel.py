@@ -138,38 +138,44 @@ def state_layout(locked_belt: bool, drive_speed: bool, load_speed: bool,
 
 
 # -- the variator's laws on the parameter vector (the laws: `empact.variator._laws`) ----------
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _coefficients(lr, p):
     """The magic formula's ``B, C, D, E`` at log-ratio `lr` (linear in ln r_g between the
-    LOW, MED and OD knots, constant outside) and their slopes d/d(lr)."""
-    B, B_l = law.knots_at(lr, p, P_LLOW, P_B0, 3)
-    C, C_l = law.knots_at(lr, p, P_LLOW, P_C0, 3)
-    D, D_l = law.knots_at(lr, p, P_LLOW, P_D0, 3)
-    E, E_l = law.knots_at(lr, p, P_LLOW, P_E0, 3)
-    return B, C, D, E, B_l, C_l, D_l, E_l
+    LOW, MED and OD knots, constant outside), each with its rise and run (slope d/d(lr) =
+    rise / run)."""
+    return (law.knots_at(lr, p, P_LLOW, P_B0, 3), law.knots_at(lr, p, P_LLOW, P_C0, 3),
+            law.knots_at(lr, p, P_LLOW, P_D0, 3), law.knots_at(lr, p, P_LLOW, P_E0, 3))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def traction_mu(nu, r_g, p):
     """Magic-formula traction coefficient mu(nu, r_g) (scalar; real or complex)."""
-    B, C, D, E, _, _, _, _ = _coefficients(np.log(r_g), p)
-    return law.magic_formula(nu, B, C, D, E)
+    B, C, D, E = _coefficients(np.log(r_g), p)
+    return law.magic_formula(nu, B[0], C[0], D[0], E[0])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def traction_mu_d(nu, r_g, p):
     """``(mu, dmu/dnu, dmu/d ln r_g)``: `traction_mu` and its partials."""
-    B, C, D, E, B_l, C_l, D_l, E_l = _coefficients(np.log(r_g), p)
-    return law.magic_formula_d(nu, B, C, D, E, B_l, C_l, D_l, E_l)
+    B, C, D, E = _coefficients(np.log(r_g), p)
+    return law.magic_formula_d(nu, B[0], C[0], D[0], E[0], B[1] / B[2], C[1] / C[2],
+                               D[1] / D[2], E[1] / E[2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def mu_peak(lr, p):
+    """The traction curve's peak value D at log-ratio `lr`."""
+    return law.knots_at(lr, p, P_LLOW, P_D0, 3)[0]
+
+
+@njit(cache=True, inline="always")
 def mu_max_d(lr, p):
-    """``(D, dD/d lr)``: the traction curve's peak value at log-ratio `lr` and its slope."""
-    return law.knots_at(lr, p, P_LLOW, P_D0, 3)
+    """``(D, dD/d lr)``: `mu_peak` and its slope."""
+    D, rise, run = law.knots_at(lr, p, P_LLOW, P_D0, 3)
+    return D, rise / run
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def log_kappa_eq_d(tau, lr, kgeo, p):
     """``(ln kappa*, d/d tau, d/d lr, d/d kappa_geo)``: the equilibrium thrust ratio F_p* /
     F_s at torque ratio `tau` and log-ratio `lr` (kappa_geo = `kgeo`), analytic or
@@ -181,13 +187,15 @@ def log_kappa_eq_d(tau, lr, kgeo, p):
     return v, d_tau, d_lr, 0.0 * kgeo
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def log_kappa_eq(tau, lr, kgeo, p):
-    """``ln kappa*(tau, r_g)`` (`log_kappa_eq_d`'s value)."""
-    return log_kappa_eq_d(tau, lr, kgeo, p)[0]
+    """``ln kappa*(tau, r_g)`` (`log_kappa_eq_d`'s value, without the partials)."""
+    if p[P_TAB] == 0.0:
+        return law.log_kappa_eq(tau, lr, kgeo, p[P_KP0], p[P_KB0], p[P_KB1])
+    return law.table_at(tau, lr, p, int(p[P_TAB]))[0]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def creep_coefficient_d(r_g, R_p, F_s, p):
     """``(K_c, dK_c/dF_s, dK_c/dr_g, dK_c/dR_p, dK_c/d ln r_g)`` [-]: creep rate per radian of
     primary rotation per unit log thrust-ratio error (Carbone et al. 2007), or ``gain``
@@ -200,7 +208,7 @@ def creep_coefficient_d(r_g, R_p, F_s, p):
                                    p[P_DREF], p[P_KD], p[P_FREF], p[P_A1], p[P_A2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def creep_coefficient(r_g, R_p, F_s, p):
     """``K_c`` [-] (`creep_coefficient_d`'s value; real or complex)."""
     lr = np.log(r_g)
@@ -210,7 +218,7 @@ def creep_coefficient(r_g, R_p, F_s, p):
                                  p[P_KD], p[P_FREF], p[P_A1], p[P_A2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def creep_force(r_g, R_p, R_s, phi, F_s, tau, rdot, w_p, p):
     """``(Lambda, kappa, kappa_eq)``: the belt's shift resistance as a generalised force on the
     ratio [N m] (on the sheaves as ``-Lambda dr_g/dq``), the thrust ratio F_p / F_s it
@@ -240,7 +248,7 @@ def creep_force(r_g, R_p, R_s, phi, F_s, tau, rdot, w_p, p):
     return F_s * (kap - kgeo) / (a + kap * b), kap, keq
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sabs(w):
     """|w| for real w, analytic continuation (sign flip) for the complex step."""
     if w.real < 0:
@@ -251,7 +259,7 @@ def _sabs(w):
 # -- what the value pass (`_eval`) and the tangent pass (`_tangent._eval_tangent`) compute
 # alike: each returns the values of its block (and, where the tangent pass needs them, the
 # local slopes), real or complex
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _belt(x, p):
     """The belt on the full geometry (eqs. 4 and 6): ``R_p, R_s, phi, e`` (stretch), ``g5,
     g6`` (dL/dq5, dL/dq6), ``edot``, the belt element's force ``N`` (elastic + proportional
@@ -269,7 +277,7 @@ def _belt(x, p):
     return R_p, R_s, phi, e, g5, g6, edot, N, N * g5, N * (np.pi - 2.0 * phi) / tb
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _springs(x, p):
     """The actuation springs (sign conventions of `empact.linear.actuation`): deflections and
     their rates ``e_w, ed_w, e_c, ed_c, d_p, dd_p, d_s, dd_s`` and forces ``T_w, T_c, F_tp,
@@ -292,34 +300,30 @@ def _springs(x, p):
             p[P_KTS] * (d_s + alpha * dd_s))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _dampers(x, p):
     """Shafai pulley damping with the current pulley speeds (shift law "shafai" only) and
     smooth Coulomb friction in the spindles (screw rotations q3 and q4 - q3): ``c_p, c_s``
-    and their slopes in omega_p, omega_s, ``Tf_sp, Tf_ss`` and their slopes in the spindle
-    speeds (|w| at w = 0 has slope +1)."""
+    with the speeds' magnitudes ``|omega_p|, |omega_s|`` they divide by, ``Tf_sp, Tf_ss``
+    with their tanh (the tangent pass's slopes; 0 / 1 where off)."""
     zero = 0.0 * x[0]
-    c_p = c_s = cp_w = cs_w = zero
+    c_p = c_s = Tf_sp = Tf_ss = th_sp = th_ss = zero
+    ap = aps = 1.0 + zero
     if p[P_LAW] == LAW_SHAFAI and p[P_CSH] != 0.0:
         ap = _sabs(x[15])
         aps = _sabs(x[16])
         c_p = p[P_CSH] / ap
         c_s = p[P_CSH] / aps
-        cp_w = -c_p / ap * (-1.0 if x[15].real < 0 else 1.0)
-        cs_w = -c_s / aps * (-1.0 if x[16].real < 0 else 1.0)
-    Tf_sp = Tf_ss = fsp_w = fss_w = zero
     if p[P_TCSP] != 0.0:
-        th = np.tanh(x[8] / p[P_WC])
-        Tf_sp = p[P_TCSP] * th
-        fsp_w = p[P_TCSP] * (1.0 - th * th) / p[P_WC]
+        th_sp = np.tanh(x[8] / p[P_WC])
+        Tf_sp = p[P_TCSP] * th_sp
     if p[P_TCSS] != 0.0:
-        th = np.tanh((x[9] - x[8]) / p[P_WC])
-        Tf_ss = p[P_TCSS] * th
-        fss_w = p[P_TCSS] * (1.0 - th * th) / p[P_WC]
-    return c_p, c_s, cp_w, cs_w, Tf_sp, Tf_ss, fsp_w, fss_w
+        th_ss = np.tanh((x[9] - x[8]) / p[P_WC])
+        Tf_ss = p[P_TCSS] * th_ss
+    return c_p, c_s, ap, aps, Tf_sp, Tf_ss, th_sp, th_ss
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _torque_ratio(x, p, ix, mu, mu_max, F_s_el, R_s):
     """``(tau, F_b, T_b, den)``: the torque ratio, with the locked belt from its elastic chain
     element (force F_b, torque T_b, ``tau = T_b cos(beta) / den``), else ``mu / mu_max``."""
@@ -332,7 +336,7 @@ def _torque_ratio(x, p, ix, mu, mu_max, F_s_el, R_s):
     return mu / mu_max, zero, zero, 1.0 + zero
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _belt_torque(x, p, ix, dx, mu, F_s, F_b, T_b, R_p, R_s, r_g):
     """``(T_b, T_on_p, P_slip)``: the belt torque on the secondary, its reaction on the
     primary and the slip power; traction (eq. 1) with the secondary clamping force, or the
@@ -344,7 +348,7 @@ def _belt_torque(x, p, ix, dx, mu, F_s, F_b, T_b, R_p, R_s, r_g):
     return T_b, -r_g * T_b, T_b * (r_g * x[15] - x[16])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _ratio_servo(x, u, p, ix, dx, R_p, R_s, phi, r_g, F_s_el, F_p_el):
     """``(T_mp, G, err)``: the primary servo torque, direct or by the ratio controller (the
     integral carries the holding torque; its rate into `dx`), with the ratio's gain ``G``
@@ -365,7 +369,7 @@ def _ratio_servo(x, u, p, ix, dx, R_p, R_s, phi, r_g, F_s_el, F_p_el):
     return x[ix[3]] + p[P_RKP] * err - p[P_RKD] * x[6], G, err
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _drive_load(x, u, p, ix, dx):
     """``(T_d, T_l)``: drive and load torques, direct or by their speed loops (the integrals'
     rates into `dx`)."""
@@ -382,7 +386,7 @@ def _drive_load(x, u, p, ix, dx):
     return T_d, T_l
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _motion(x, p, dx, sp, dm, T_mp, T_ms, T_d, T_l, N, g5, g6, lam, dr5, dr6, T_on_p, T_b):
     """The equations of motion into ``dx[:18]``: actuation, then the driveline (rotating
     frame: twists and speeds); `sp` and `dm` are `_springs`' and `_dampers`' values.
@@ -416,7 +420,7 @@ def _motion(x, p, dx, sp, dm, T_mp, T_ms, T_d, T_l, N, g5, g6, lam, dr5, dr6, T_
     return T_ds
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p, F_s, tau, kap,
              keq, T_b, mu, mu_max, R_p, R_s, phi, T_mp, T_ms, T_d, T_l, T_ds):
     """The outputs into `y` (`OUTPUTS`), with the stored energy, the input power and the
@@ -479,7 +483,7 @@ def _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p,
     y[Y_MUMAX] = mu_max
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _finish(x, u, p, ix, dx, y, belt, sp, dm, r_g, nu, mu, mu_max, tau, F_b, T_b, lam, kap, keq,
             dr5, dr6, rdot):
     """A pass from the creep force `lam` on: the clamping forces at the contacts (opening the
@@ -501,9 +505,14 @@ def _finish(x, u, p, ix, dx, y, belt, sp, dm, r_g, nu, mu, mu_max, tau, F_b, T_b
 
 
 # -- the value pass ---------------------------------------------------------------------------
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _eval(x, u, p, ix, dx, y):
-    """Fill ``dx`` (shape (n,)) and ``y`` (shape (NY,)) at state x and inputs u."""
+    """Fill ``dx`` (shape (n,)) and ``y`` (shape (NY,)) at state x and inputs u.
+
+    The helpers above are inlined (numba IR, ``inline="always"``); numpy's error model (a
+    zero divisor gives inf or NaN, which `stop_status` reports as a non-finite output,
+    instead of raising) lets numba drop the reference counting of their array arguments on
+    the raise paths, which would cost the common path ~25 %."""
     tb = p[P_TB]
     v5, v6, wp, ws = x[10], x[11], x[15], x[16]
     belt = _belt(x, p)
@@ -516,7 +525,7 @@ def _eval(x, u, p, ix, dx, y):
     nu = 1.0 - ws / (r_g * wp)
     mu = traction_mu(nu, r_g, p)
     lr = np.log(r_g)
-    mu_max = mu_max_d(lr, p)[0]
+    mu_max = mu_peak(lr, p)
     tau, F_b, T_b, _ = _torque_ratio(x, p, ix, mu, mu_max, F_s_el, R_s)
 
     # the belt's shift resistance (creep-mode shifting): a generalised force Lambda on the

@@ -27,6 +27,7 @@ from ._kernel import (
     P_CMP,
     P_CMS,
     P_COSB,
+    P_CSH,
     P_CSP,
     P_CSS,
     P_DKI,
@@ -62,7 +63,10 @@ from ._kernel import (
     P_S,
     P_SIG,
     P_TB,
+    P_TCSP,
+    P_TCSS,
     P_W0,
+    P_WC,
     P_XSAT,
     Y_E,
     Y_EN,
@@ -117,7 +121,7 @@ __all__ = ["_eval_tangent", "_jacobian", "_state_jacobian", "_input_direction",
            "_full_seeds", "_split"]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
     """`_kernel._eval` (fills ``dx``, ``y``) and K directional derivatives by forward mode:
     ``Fd[:, k] = df/dx Sx[:, k] + df/du Su[:, k]`` and ``Yd[:, k] = dy/dx Sx[:, k] +
@@ -126,7 +130,7 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
     One pass computes the values (the value pass's helpers, so the same ``dx`` and ``y``)
     and the local partial derivatives, then a loop over the directions propagates the
     tangents through the same formulas - about one real evaluation plus ~250 multiply-adds
-    per direction.  Exact to rounding.
+    per direction.  Exact to rounding.  numpy's error model, as `_kernel._eval`.
     """
     K = Sx.shape[1]
     want_y = Yd.shape[0] > 0
@@ -159,7 +163,15 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
     sp = _springs(x, p)
     e_w, ed_w, e_c, ed_c, d_p, dd_p, d_s, dd_s, _, _, _, _ = sp
     dm = _dampers(x, p)
-    c_p, c_s, cp_w, cs_w, Tf_sp, Tf_ss, fsp_w, fss_w = dm
+    c_p, c_s, ap, aps, Tf_sp, Tf_ss, th_sp, th_ss = dm
+    cp_w = cs_w = fsp_w = fss_w = 0.0  # slopes in omega_p, omega_s and the spindle speeds
+    if shafai and p[P_CSH] != 0.0:
+        cp_w = -c_p / ap * (-1.0 if wp < 0 else 1.0)
+        cs_w = -c_s / aps * (-1.0 if ws < 0 else 1.0)
+    if p[P_TCSP] != 0.0:
+        fsp_w = p[P_TCSP] * (1.0 - th_sp * th_sp) / p[P_WC]
+    if p[P_TCSS] != 0.0:
+        fss_w = p[P_TCSS] * (1.0 - th_ss * th_ss) / p[P_WC]
     w43 = w4 - w3
 
     r_g = R_p / R_s

@@ -109,16 +109,23 @@ def lerp(x, x0, x1, y0, y1):
 
 
 def knots_at(x, p, k0, v0, n):
-    """``(value, slope)`` of the piecewise-linear function through the `n` samples
+    """``(value, rise, run)`` of the piecewise-linear function through the `n` samples
     ``(p[k0 + j], p[v0 + j])`` at `x` (scalar, real or complex), held constant outside the
-    knots; a knot counts to the segment on its left (the complex step's branch)."""
+    knots; a knot counts to the segment on its left (the complex step's branch).  The slope
+    is ``rise / run`` (``0 / 1`` outside), divided only by a caller that needs it."""
     if x.real <= p[k0]:
-        return p[v0] + 0.0 * x, 0.0
+        return p[v0] + 0.0 * x, 0.0, 1.0
     for j in range(n - 1):
         if x.real <= p[k0 + j + 1]:
             return (lerp(x, p[k0 + j], p[k0 + j + 1], p[v0 + j], p[v0 + j + 1]),
-                    (p[v0 + j + 1] - p[v0 + j]) / (p[k0 + j + 1] - p[k0 + j]))
-    return p[v0 + n - 1] + 0.0 * x, 0.0
+                    p[v0 + j + 1] - p[v0 + j], p[k0 + j + 1] - p[k0 + j])
+    return p[v0 + n - 1] + 0.0 * x, 0.0, 1.0
+
+
+def _curve_at(xv, p, s):
+    """``(value, slope)`` of the table's curve starting at ``p[s]`` (`knots_at`)."""
+    v, rise, run = knots_at(xv, p, s + 1, s + 1 + int(p[s]), int(p[s]))
+    return v, rise / run
 
 
 def table_at(xv, lr, p, base):
@@ -128,20 +135,16 @@ def table_at(xv, lr, p, base):
     outside (`knots_at` along both)."""
     n_r = int(p[base])
     if n_r == 1 or lr.real <= p[base + 1]:
-        s = base + int(p[base + 1 + n_r])
-        v, d = knots_at(xv, p, s + 1, s + 1 + int(p[s]), int(p[s]))
+        v, d = _curve_at(xv, p, base + int(p[base + 1 + n_r]))
         return v, d, 0.0
     for i in range(n_r - 1):
         if lr.real <= p[base + 2 + i]:
-            s0 = base + int(p[base + 1 + n_r + i])
-            s1 = base + int(p[base + 2 + n_r + i])
-            c0, d0 = knots_at(xv, p, s0 + 1, s0 + 1 + int(p[s0]), int(p[s0]))
-            c1, d1 = knots_at(xv, p, s1 + 1, s1 + 1 + int(p[s1]), int(p[s1]))
+            c0, d0 = _curve_at(xv, p, base + int(p[base + 1 + n_r + i]))
+            c1, d1 = _curve_at(xv, p, base + int(p[base + 2 + n_r + i]))
             l0, l1 = p[base + 1 + i], p[base + 2 + i]
             return (lerp(lr, l0, l1, c0, c1), lerp(lr, l0, l1, d0, d1),
                     (c1 - c0) / (l1 - l0))
-    s = base + int(p[base + 2 * n_r])
-    v, d = knots_at(xv, p, s + 1, s + 1 + int(p[s]), int(p[s]))
+    v, d = _curve_at(xv, p, base + int(p[base + 2 * n_r]))
     return v, d, 0.0
 
 
