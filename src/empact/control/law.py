@@ -665,7 +665,7 @@ class LoopLaw:
         st = variator_state(r, p.variator)
         lr = np.log(r)
         rpa = st.R_p / p.variator.a
-        poly = sh.a1 + sh.a2 * lr * lr  # as `empact.variator._laws.creep_factors`
+        poly = sh.a1 + sh.a2 * lr**2
         geo = (np.zeros(r.shape) if self.model.creep else
                (np.pi + 2 * st.phi) / (np.pi - 2 * st.phi))
         return list(zip(r.tolist(), st.R_p.tolist(), st.R_s.tolist(), st.phi.tolist(),

@@ -19,7 +19,8 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import ParameterError
 from . import _laws
 
-__all__ = ["check_curve", "read_curves", "encode_curves", "interp_knots", "interpolate_curves"]
+__all__ = ["check_curve", "read_curves", "encode_curves", "interp_knots", "knot_segments",
+           "interpolate_curves"]
 
 Curves = dict[float, tuple[list[float], list[float]]]
 
@@ -60,7 +61,9 @@ def encode_curves(ratios, xs, ys) -> NDArray[np.float64]:
     return np.array(head + starts + body, dtype=float)
 
 
-def interp_knots(x: ArrayLike, knots: ArrayLike, values: ArrayLike) -> NDArray[np.float64]:
+def interp_knots(x: ArrayLike, knots: ArrayLike, values: ArrayLike,
+                 segments: tuple[NDArray[np.intp], NDArray[np.intp]] | None = None
+                 ) -> NDArray[np.float64]:
     """The piecewise-linear function through ``(knots[j], values[j])`` at `x`, held constant
     outside the knots, a knot counting to the segment on its left: the rule of the compiled
     law `empact.variator._laws.knots_at`, on arrays, with the same line (`_laws.lerp`), so
@@ -74,6 +77,8 @@ def interp_knots(x: ArrayLike, knots: ArrayLike, values: ArrayLike) -> NDArray[n
         Strictly increasing abscissae.
     values : array_like, shape (n,) or (n,) + x.shape
         The ordinates, one per knot (per point of `x` when they vary with it).
+    segments : (ndarray, ndarray), optional
+        `knot_segments` of `x` and `knots`, when several functions share them.
 
     Returns
     -------
@@ -83,17 +88,25 @@ def interp_knots(x: ArrayLike, knots: ArrayLike, values: ArrayLike) -> NDArray[n
     xa = np.asarray(x, float)
     k = np.asarray(knots, float)
     v = np.asarray(values, float)
-    v = np.broadcast_to(v.reshape(v.shape[:1] + (1,) * (xa.ndim - v.ndim + 1)) if v.ndim == 1
-                        else v, k.shape + xa.shape)
-    i = np.searchsorted(k, xa, side="left")  # knots[i - 1] < x <= knots[i]
-    j = np.clip(i - 1, 0, max(len(k) - 2, 0))[None]
-    lo = np.take_along_axis(v, j, 0)[0]
+    zero = 0.0 * xa
     if len(k) == 1:
-        return lo + 0.0 * xa
-    hi = np.take_along_axis(v, j + 1, 0)[0]
+        return v[0] + zero
+    i, j = knot_segments(xa, k) if segments is None else segments
+    if v.ndim == 1:
+        lo, hi = v[j], v[j + 1]
+    else:
+        lo = np.take_along_axis(v, j[None], 0)[0]
+        hi = np.take_along_axis(v, (j + 1)[None], 0)[0]
     with np.errstate(invalid="ignore", over="ignore"):
-        inside = _laws.lerp(xa, k[j[0]], k[j[0] + 1], lo, hi)
-    return np.where(i == 0, v[0] + 0.0 * xa, np.where(i == len(k), v[-1] + 0.0 * xa, inside))
+        inside = _laws.lerp(xa, k[j], k[j + 1], lo, hi)
+    return np.where(i == 0, v[0] + zero, np.where(i == len(k), v[-1] + zero, inside))
+
+
+def knot_segments(x: ArrayLike, knots: ArrayLike) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """``(i, j)`` for `interp_knots`: ``knots[i - 1] < x <= knots[i]`` and the segment ``j``
+    (``i - 1`` held to the first and last), each the shape of `x`."""
+    i = np.searchsorted(np.asarray(knots, float), np.asarray(x, float), side="left")
+    return i, np.clip(i - 1, 0, max(len(knots) - 2, 0))
 
 
 def interpolate_curves(ratios, xs, ys, x: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:

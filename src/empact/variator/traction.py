@@ -56,7 +56,7 @@ from .._lazy import lazy_module
 from .._section import Section, param
 from ..errors import ParameterError
 from . import _laws
-from ._tables import check_curve, interp_knots, read_curves
+from ._tables import check_curve, interp_knots, knot_segments, read_curves
 
 interpolate = lazy_module("scipy.interpolate")
 
@@ -236,7 +236,9 @@ class MagicFormulaTraction:
             raise ParameterError(f"r_g = {float(np.ravel(bad)[0]):g}: must be a positive finite "
                                  "ratio")
         x, xp = np.log(r), np.log(self.ratios)
-        return tuple(interp_knots(x, xp, getattr(self, name)) for name in ("B", "C", "D", "E"))
+        seg = knot_segments(x, xp)
+        return tuple(interp_knots(x, xp, getattr(self, name), seg)
+                     for name in ("B", "C", "D", "E"))
 
     def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
         """The curve's peak value ``D(r_g)`` [-] (reached where ``C arctan(phi) = pi / 2``,
