@@ -12,7 +12,7 @@ when ``_laws.py`` changes.
 from __future__ import annotations
 
 import types
-from typing import Any, Callable
+from typing import Any, Callable, Literal
 
 from numba import njit
 
@@ -23,7 +23,7 @@ __all__ = list(_laws.__all__)
 _NAMESPACE: dict[str, Any] = dict(vars(_laws))
 
 
-def _compile(law: Callable[..., Any], inline: str = "always") -> Any:
+def _compile(law: Callable[..., Any], inline: Literal["always", "never"] = "always") -> Any:
     """`law` compiled, resolving the laws it calls to their compiled twins; inlined into its
     callers (numba IR) unless `inline` is ``"never"`` (the loops and the tables' rare path:
     inlined, they would crowd the kernel's common path)."""

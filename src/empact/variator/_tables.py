@@ -105,8 +105,9 @@ def interp_knots(x: ArrayLike, knots: ArrayLike, values: ArrayLike,
 def knot_segments(x: ArrayLike, knots: ArrayLike) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     """``(i, j)`` for `interp_knots`: ``knots[i - 1] < x <= knots[i]`` and the segment ``j``
     (``i - 1`` held to the first and last), each the shape of `x`."""
-    i = np.searchsorted(np.asarray(knots, float), np.asarray(x, float), side="left")
-    return i, np.clip(i - 1, 0, max(len(knots) - 2, 0))
+    k = np.asarray(knots, float)
+    i = np.searchsorted(k, np.asarray(x, float), side="left")
+    return i, np.clip(i - 1, 0, max(len(k) - 2, 0))
 
 
 def interpolate_curves(ratios, xs, ys, x: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
