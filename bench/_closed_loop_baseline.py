@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from empact.errors import ParameterError
 from empact.nonlinear import _kernel as K
-from empact.nonlinear._rosenbrock import integrate
+from empact.nonlinear._rodas import integrate_ros2 as integrate
 from empact.nonlinear.simulation import scenario_signals, state_tolerances
 from empact.variator.geometry import radii
 

@@ -13,6 +13,7 @@ from numba import njit
 from scipy.integrate import odeint
 
 from empact.nonlinear import _kernel as K
+from empact.nonlinear import _tangent as KT
 from empact.nonlinear.simulation import state_tolerances
 
 #: LSODA's counters of the last `simulate_odeint` run: steps, f and Jacobian evaluations
@@ -52,7 +53,7 @@ def _jac(x, t, p, ix, sig_t, sig_v, sig_n, t_a, t_b):
     u = np.empty(sig_n.shape[0])
     _inputs(t, t_a, t_b, sig_t, sig_v, sig_n, u)
     A = np.empty((x.shape[0], x.shape[0]))
-    K._state_jacobian(x, u, p, ix, A, np.arange(x.shape[0]))
+    KT._state_jacobian(x, u, p, ix, A, np.arange(x.shape[0]))
     return A
 
 

@@ -53,6 +53,7 @@ from bench_rig_odeint import workload  # noqa: E402
 from numba import njit  # noqa: E402
 
 from empact.nonlinear import _kernel as K  # noqa: E402
+from empact.nonlinear import _tangent as KT  # noqa: E402
 from empact.nonlinear._rosenbrock import _lu, _lu_solve  # noqa: E402
 from empact.nonlinear.scenario import example_path, list_examples, load_scenario  # noqa: E402
 from empact.nonlinear.simulation import scenario_model, scenario_signals, simulate  # noqa: E402
@@ -141,7 +142,7 @@ def _loop_eval(x, u, du, p, ix, cols, N):
 def _loop_jac(x, u, du, p, ix, cols, N):
     J = np.empty((x.shape[0], x.shape[0]))
     for _ in range(N):
-        K._state_jacobian(x, u, p, ix, J, cols)
+        KT._state_jacobian(x, u, p, ix, J, cols)
     return J[0, 0]
 
 
@@ -149,7 +150,7 @@ def _loop_jac(x, u, du, p, ix, cols, N):
 def _loop_dir(x, u, du, p, ix, cols, N):
     out = np.empty(x.shape[0])
     for _ in range(N):
-        K._input_direction(x, u, du, p, ix, out)
+        KT._input_direction(x, u, du, p, ix, out)
     return out[0]
 
 
@@ -157,7 +158,7 @@ def _loop_dir(x, u, du, p, ix, cols, N):
 def _loop_lu(x, u, du, p, ix, cols, N):
     n = x.shape[0]
     J = np.empty((n, n))
-    K._state_jacobian(x, u, p, ix, J, np.arange(n))
+    KT._state_jacobian(x, u, p, ix, J, np.arange(n))
     W = np.empty((n, n))
     piv = np.empty(n, dtype=np.int64)
     for _ in range(N):
@@ -173,7 +174,7 @@ def _loop_lu(x, u, du, p, ix, cols, N):
 def _loop_solve(x, u, du, p, ix, cols, N):
     n = x.shape[0]
     J = np.empty((n, n))
-    K._state_jacobian(x, u, p, ix, J, np.arange(n))
+    KT._state_jacobian(x, u, p, ix, J, np.arange(n))
     W = np.eye(n) - 1e-4 * J
     piv = np.empty(n, dtype=np.int64)
     _lu(W, piv)

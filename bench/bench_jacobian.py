@@ -46,6 +46,8 @@ from numba import njit  # noqa: E402
 
 from empact.control.family import design_family, plant_family  # noqa: E402
 from empact.nonlinear import _kernel as K  # noqa: E402
+from empact.nonlinear import _tangent as KT  # noqa: E402
+from empact.nonlinear import _batch as KB  # noqa: E402
 from empact.nonlinear import _rodas  # noqa: E402
 from empact.nonlinear.equilibrium import trim, trim_grid  # noqa: E402
 from empact.nonlinear.linearization import linearize  # noqa: E402
@@ -121,11 +123,11 @@ def unit_costs(model, x, u, N=20000):
     du = np.array([1.0, 0.5, 0.0, 2.0])
     p, ix = model.p, model.ix
     calls = {"f": lambda n: _loop_eval(x, u, p, ix, n),
-             "cols fm": lambda n: _loop_cols(K._state_jacobian, x, u, p, ix, cols, n),
+             "cols fm": lambda n: _loop_cols(KT._state_jacobian, x, u, p, ix, cols, n),
              "cols cs": lambda n: _loop_cols(K._state_jacobian_cs, x, u, p, ix, cols, n),
-             "full fm": lambda n: _loop_full(K._jacobian, x, u, p, ix, n),
+             "full fm": lambda n: _loop_full(KT._jacobian, x, u, p, ix, n),
              "full cs": lambda n: _loop_full(K._jacobian_cs, x, u, p, ix, n),
-             "du fm": lambda n: _loop_dir(K._input_direction, x, u, du, p, ix, n),
+             "du fm": lambda n: _loop_dir(KT._input_direction, x, u, du, p, ix, n),
              "du cs": lambda n: _loop_dir(K._input_direction_cs, x, u, du, p, ix, n)}
     best = {k: np.inf for k in calls}
     for f in calls.values():
@@ -200,12 +202,12 @@ def differences(model, a, b):
 def with_reference(fn):
     """`fn` run with the package's exact-Jacobian entry points swapped for the complex step."""
     def run():
-        saved = K._jacobian, K.linearize_batch
-        K._jacobian, K.linearize_batch = K._jacobian_cs, K.linearize_batch_cs
+        saved = KT._jacobian, KB.linearize_batch
+        KT._jacobian, KB.linearize_batch = K._jacobian_cs, KB.linearize_batch_cs
         try:
             return fn()
         finally:
-            K._jacobian, K.linearize_batch = saved
+            KT._jacobian, KB.linearize_batch = saved
     return run
 
 

@@ -1,4 +1,4 @@
-"""The simulator's integrators (`empact.nonlinear._rosenbrock`, `empact.nonlinear._rodas`):
+"""The simulator's integrators (`empact.nonlinear._rodas`, `empact.nonlinear._rosenbrock`):
 orders, dense output, agreement with a tight reference, stops and status codes, the
 ``method`` choice."""
 import hashlib
@@ -21,11 +21,13 @@ from empact.nonlinear.scenario import example_path, load_scenario, scenario_from
 from empact.nonlinear.simulation import METHODS, STATUS, scenario_model, scenario_signals, simulate
 from empact.params import OperatingPoint
 
-NEW = ("rodas5p", "rodas4")
+NEW = ("rodas5p", "rodas4", "ros2")
 TABLEAU = {"rodas5p": (_rodas.R5P_A, _rodas.R5P_C, _rodas.R5P_c, _rodas.R5P_d, _rodas.R5P_H,
                        _rodas.R5P_GAMMA, 5.0),
            "rodas4": (_rodas.R4_A, _rodas.R4_C, _rodas.R4_c, _rodas.R4_d, _rodas.R4_H,
-                      _rodas.R4_GAMMA, 4.0)}
+                      _rodas.R4_GAMMA, 4.0),
+           "ros2": (_rodas.ROS2_A, _rodas.ROS2_C, _rodas.ROS2_c, _rodas.ROS2_d, _rodas.ROS2_H,
+                    _rodas.ROS2_GAMMA, 3.0)}
 
 
 # -- the stepper's own code on a stiff linear problem with a known solution ---------------------
@@ -131,11 +133,13 @@ def _order(errors):
 
 
 @pytest.mark.parametrize("method, p, ks", [("rodas5p", 5, range(3, 7)),
-                                           ("rodas4", 4, range(4, 9))])
+                                           ("rodas4", 4, range(4, 9)),
+                                           ("ros2", 2, range(5, 10))])
 def test_order_on_stiff_linear_problem(linear_stepper, method, p, ks):
     """Fixed steps h = 2^-k on the stiff linear problem: the error at t = 1 and the dense
-    output's at the mid-steps fall by ~2^p per halving (Rodas5P p = 5, Rodas4 p = 4; the dense
-    output, of order 4 and 3, adds local errors of order p + 1 - 1 = p); the range of k stops
+    output's at the mid-steps fall by ~2^p per halving (Rodas5P p = 5, Rodas4 p = 4, ros2 p = 2,
+    the ode23s tableau of the same driver; the dense output, of order 4, 3 and 2, adds local
+    errors of order p + 1 - 1 = p); the range of k stops
     above rounding (~1e-11, the -1e7 component).  Tolerance: fitted order >= p - 0.3."""
     solve, exact = linear_stepper
     end, dense = [], []

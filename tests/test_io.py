@@ -94,7 +94,7 @@ def test_a_first_run_says_that_the_model_compiles(capsys):
     _common.announce_compilation()
     _common._announced.value = 0  # (as in a fresh process: a first run)
     other = numba.njit(lambda x: x + 1)
-    for disp in (other, _kernel.traction_mu, _kernel.belt_geometry):
+    for disp in (other, _kernel.traction_mu, _kernel.law.belt_geometry):
         with event.trigger_event("numba:compile", data={"dispatcher": disp, "args": (),
                                                         "return_type": None}):
             pass

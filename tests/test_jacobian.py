@@ -14,7 +14,9 @@ speed-controlled drive and load, ratio controller) and every shift law and table
 import numpy as np
 import pytest
 
+from empact.nonlinear import _batch as KB
 from empact.nonlinear import _kernel as K
+from empact.nonlinear import _tangent as KT
 from empact.nonlinear.equilibrium import trim
 from empact.nonlinear.model import nonlinear_model
 from empact.params import OperatingPoint
@@ -56,7 +58,7 @@ def _pair(m, x, u, p=None):
     n = m.n
     fm = [np.empty((n, n)), np.empty((n, 4)), np.empty((K.NY, n)), np.empty((K.NY, 4))]
     cs = [np.empty_like(a) for a in fm]
-    K._jacobian(x, u, p, m.ix, *fm)
+    KT._jacobian(x, u, p, m.ix, *fm)
     K._jacobian_cs(x, u, p, m.ix, *cs)
     return fm, cs
 
@@ -108,8 +110,8 @@ def test_forward_mode_equals_complex_step(params, name):
         # the values are the real evaluation's, bit for bit
         dx0, y0, dx1, y1 = np.empty(m.n), np.empty(K.NY), np.empty(m.n), np.empty(K.NY)
         K._eval(x, u, m.p, m.ix, dx0, y0)
-        Sx, Su, Fd, Yd = K._full_seeds(m.n, 4)
-        K._eval_tangent(x, u, m.p, m.ix, Sx, Su, dx1, y1, Fd, Yd)
+        Sx, Su, Fd, Yd = KT._full_seeds(m.n, 4)
+        KT._eval_tangent(x, u, m.p, m.ix, Sx, Su, dx1, y1, Fd, Yd)
         assert np.array_equal(dx0, dx1) and np.array_equal(y0, y1), (name, k)
 
 
@@ -160,14 +162,15 @@ def test_on_a_knot_the_branch_of_the_complex_step(params, knot):
 
 
 def test_piecewise_helpers_at_their_samples():
-    """`_interp3_d`, `_curve_d`, `_table_d` at and between their knots and samples and
-    outside: values equal and slopes equal to the complex step of the complex routines."""
+    """The laws' piecewise-linear helpers (`empact.variator._laws.knots_at`, `table_at`, as
+    the kernel calls them) at and between their knots and samples and outside: the real
+    values equal the complex ones' real parts and the slopes the complex step's."""
     h = 1e-30
-    l0, l1, l2, c0, c1, c2 = -0.8, 0.1, 0.8, 2.0, 3.0, 1.5
-    for lr in (-1.2, l0, -0.3, l1, 0.5, l2, 1.3):
-        v, s = K._interp3_d(lr, l0, l1, l2, c0, c1, c2)
-        z = K._interp3(complex(lr, h), l0, l1, l2, c0, c1, c2)
-        assert v == z.real and s == pytest.approx(z.imag / h, rel=1e-14, abs=1e-300)
+    knots = np.array([-0.8, 0.1, 0.8, 2.0, 3.0, 1.5])
+    for lr in (-1.2, -0.8, -0.3, 0.1, 0.5, 0.8, 1.3):
+        v, rise, run = K.law.knots_at(lr, knots, 0, 3, 3)
+        z = K.law.knots_at(complex(lr, h), knots, 0, 3, 3)[0]
+        assert v == z.real and rise / run == pytest.approx(z.imag / h, rel=1e-14, abs=1e-300)
     p = np.zeros(K.NP)
     tables = np.concatenate([KMAP.encode(), CMAP.encode()])
     p = np.concatenate([p, tables])
@@ -177,10 +180,10 @@ def test_piecewise_helpers_at_their_samples():
         for lr in (np.log(0.3), np.log(0.5), np.log(0.7), 0.0, np.log(1.5), np.log(2.0),
                    np.log(2.5)):
             for xv in xs:
-                v, sx, sl = K._table_d(xv, lr, p, base)
-                zx = K._table(complex(xv, h), lr + 0j, p, base)
-                zl = K._table(xv + 0j, complex(lr, h), p, base)
-                assert v == pytest.approx(zx.real, rel=1e-15)
+                v, sx, sl = K.law.table_at(xv, lr, p, base)
+                zx = K.law.table_at(complex(xv, h), lr + 0j, p, base)[0]
+                zl = K.law.table_at(xv + 0j, complex(lr, h), p, base)[0]
+                assert v == zx.real
                 assert sx == pytest.approx(zx.imag / h, rel=1e-13, abs=1e-300)
                 assert sl == pytest.approx(zl.imag / h, rel=1e-13, abs=1e-300)
 
@@ -196,12 +199,12 @@ def test_integrator_routines_and_batch(params, name):
     for x, u in pts:
         for cols in (K.varying_columns(m.ix), np.arange(n)):
             A0, A1 = np.zeros((n, n)), np.zeros((n, n))
-            K._state_jacobian(x, u, m.p, m.ix, A0, cols)
+            KT._state_jacobian(x, u, m.p, m.ix, A0, cols)
             K._state_jacobian_cs(x, u, m.p, m.ix, A1, cols)
             _check([A0], [A1], (name, "cols"))
         for du in (np.zeros(4), np.array([1.0, -2.0, 30.0, 4.0])):
             o0, o1 = np.empty(n), np.empty(n)
-            K._input_direction(x, u, du, m.p, m.ix, o0)
+            KT._input_direction(x, u, du, m.p, m.ix, o0)
             K._input_direction_cs(x, u, du, m.p, m.ix, o1)
             assert np.all(np.abs(o0 - o1) <= COL_TOL * np.abs(o1).max() + 0.0)
     X = np.array([x for x, _ in pts])
@@ -210,8 +213,8 @@ def test_integrator_routines_and_batch(params, name):
     fm = [np.empty((N, n)), np.empty((N, n, n)), np.empty((N, n, 4)), np.empty((N, K.NY, n)),
           np.empty((N, K.NY, 4))]
     cs = [np.empty_like(a) for a in fm]
-    K.linearize_batch(X, U, m.p, m.ix, *fm)
-    K.linearize_batch_cs(X, U, m.p, m.ix, *cs)
+    KB.linearize_batch(X, U, m.p, m.ix, *fm)
+    KB.linearize_batch_cs(X, U, m.p, m.ix, *cs)
     assert np.array_equal(fm[0], cs[0])
     for k in range(N):
         _check([a[k] for a in fm[1:]], [b[k] for b in cs[1:]], (name, "batch", k))

@@ -126,6 +126,7 @@ def test_energy_conserved_undamped_locked_belt(params):
     E = lambda x: m.output_dict(x, u)["E"] - u[0] * x[0] - u[1] * x[1]  # noqa: E731
     # the raw compiled kernel (no input checks) under LSODA with the exact Jacobian
     from empact.nonlinear import _kernel as K
+    from empact.nonlinear import _tangent as KT
 
     dx, y, J = np.empty(m.n), np.empty(K.NY), np.empty((m.n, m.n))
     cols = np.arange(m.n)
@@ -135,7 +136,7 @@ def test_energy_conserved_undamped_locked_belt(params):
         return dx.copy()
 
     def jac(x, t):
-        K._state_jacobian(x, u, m.p, m.ix, J, cols)
+        KT._state_jacobian(x, u, m.p, m.ix, J, cols)
         return J.copy()
 
     t = np.linspace(0, 0.05, 51)

@@ -185,3 +185,23 @@ def test_bad_files_are_refused(tmp_path, name, text, match):
     path.write_text(text)
     with pytest.raises(ParameterError, match=match):
         load_traction(path)
+
+
+def test_numpy_curve_is_the_compiled_law_bitwise(params, magic):
+    """One law for both routes (issue 31): `MagicFormulaTraction.mu`, ``dmu`` and
+    ``mu_max`` (numpy, `empact.variator._tables.interp_knots` for the coefficients) equal the
+    compiled kernel's `traction_mu`, `traction_mu_d` and the peak at random slips and ratios,
+    at the knots and outside them, to the last bit (tolerance 0: the same operations)."""
+    from empact.nonlinear import _kernel as K
+    from empact.nonlinear.model import nonlinear_model
+
+    p = nonlinear_model(params).p
+    rng = np.random.default_rng(31)
+    r = np.concatenate([np.exp(rng.uniform(np.log(0.3), np.log(3.0), 300)), RATIOS,
+                        [params.traction.r_low, params.traction.r_med, params.traction.r_od]])
+    nu = rng.uniform(-0.2, 0.2, r.size)
+    mu, dmu, peak = magic.mu(nu, r), magic.dmu(nu, r), magic.mu_max(r)
+    for k in range(r.size):
+        assert mu[k] == K.traction_mu(nu[k], r[k], p)
+        assert dmu[k] == K.traction_mu_d(nu[k], r[k], p)[1]
+        assert peak[k] == K.mu_peak(np.log(r[k]), p)

@@ -24,6 +24,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from empact.nonlinear import _kernel as K
+from empact.nonlinear import _tangent as KT
 from empact.nonlinear.equilibrium import traction_peak, trim
 from empact.nonlinear.model import nonlinear_model
 from empact.nonlinear.simulation import simulate
@@ -182,8 +183,8 @@ def test_forward_mode_equals_complex_step_on_a_table(params):
             _check(*_pair(m, x, u), (options, k))
             dx0, y0, dx1, y1 = np.empty(m.n), np.empty(K.NY), np.empty(m.n), np.empty(K.NY)
             K._eval(x, u, m.p, m.ix, dx0, y0)
-            Sx, Su, Fd, Yd = K._full_seeds(m.n, 4)
-            K._eval_tangent(x, u, m.p, m.ix, Sx, Su, dx1, y1, Fd, Yd)
+            Sx, Su, Fd, Yd = KT._full_seeds(m.n, 4)
+            KT._eval_tangent(x, u, m.p, m.ix, Sx, Su, dx1, y1, Fd, Yd)
             assert np.array_equal(dx0, dx1) and np.array_equal(y0, y1)
 
 

@@ -23,6 +23,7 @@ from .nonlinear.model import nonlinear_model
 from .nonlinear.scenario import load_scenario
 from .nonlinear.simulation import simulate
 from .params import OperatingPoint, default_params
+from .variator.geometry import secondary_radius
 from .variator.traction import TabulatedTraction
 
 __all__ = ["compile_all", "drop_stale_cache"]
@@ -35,12 +36,14 @@ def drop_stale_cache(folder: Path | None = None) -> int:
 
     numba keys a function's cache on its own file only: the integrators of ``_rodas.py`` and
     ``_rosenbrock.py`` inline the right-hand side and Jacobian of ``_kernel.py`` and keep the
-    version they were compiled with after ``_kernel.py`` changes (numba issue 6845); so does
-    the compiled closed loop (``empact/control/_loop_core.py``) with the kernel, the
-    integrators and the law's sample (``_law_core.py``), and the law's sample with the
-    kernel's traction peak and creep law: their caches are dropped likewise.  The
-    test session calls this first, so that an edited kernel is never tested through stale
-    integrators; the price is one compile (about 20 s) after a source changed.
+    version they were compiled with after ``_kernel.py`` changes (numba issue 6845); so do
+    the kernel with the variator's compiled laws (``variator/_laws.py``,
+    ``variator/_compiled.py``) and the tabulated traction law (``variator/_traction_table.py``),
+    the law's sample (``control/_law_core.py``) with those and the kernel's traction peak and
+    creep law, and the compiled closed loop (``control/_loop_core.py``) with the kernel, the
+    integrators and the law's sample: their caches are dropped likewise.  The test session
+    calls this first, so that an edited kernel is never tested through stale integrators;
+    the price is one compile (about 20 s) after a source changed.
 
     Parameters
     ----------
@@ -57,15 +60,17 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     if folder is not None:
         return _drop_stale(Path(folder) / "__pycache__", "*", list(Path(folder).glob("*.py")))
     here = Path(__file__).resolve().parent
-    # the kernel compiles in the tabulated traction law of `empact.variator`
-    nonlinear = list((here / "nonlinear").glob("*.py")) + [here / "variator" /
-                                                           "_traction_table.py"]
-    # the compiled closed loop calls the kernel, the integrator and the law's sample, which
-    # calls the kernel
-    loop_sources = nonlinear + [here / "control" / "_law_core.py",
-                                here / "control" / "_loop_core.py"]
+    # the variator's laws, compiled into the kernel and the law's sample, and the tabulated
+    # traction law the kernel compiles in
+    laws = [here / "variator" / "_laws.py", here / "variator" / "_compiled.py",
+            here / "variator" / "_traction_table.py"]
+    nonlinear = list((here / "nonlinear").glob("*.py")) + laws
+    # the law's sample calls the kernel (traction peak, creep law)
+    law_core = [here / "control" / "_law_core.py"] + nonlinear
+    # the compiled closed loop calls the kernel, the integrator and the law's sample
+    loop_sources = law_core + [here / "control" / "_loop_core.py"]
     return (_drop_stale(here / "nonlinear" / "__pycache__", "*", nonlinear)
-            + _drop_stale(here / "control" / "__pycache__", "_law_core.*", loop_sources)
+            + _drop_stale(here / "control" / "__pycache__", "_law_core.*", law_core)
             + _drop_stale(here / "control" / "__pycache__", "_loop_core.*", loop_sources))
 
 
@@ -95,14 +100,18 @@ def compile_all() -> float:
               else params.operating)
         tr = trim(model, op)
         model.jacobian(tr.x, tr.u)
-        simulate(model, tr.x, {model.inputs[1]: np.array([[0.0, tr.u[1]], [0.002, tr.u[1]]])},
-                 0.002, u0=tr.u)
+        for method in ("rodas4", "ros2") if not options else ("rodas4",):
+            simulate(model, tr.x, {model.inputs[1]: np.array([[0.0, tr.u[1]],
+                                                                [0.002, tr.u[1]]])},
+                     0.002, u0=tr.u, method=method)
         if "T_mp" in model.inputs and not options.get("belt"):
             linearize_many(model, tr.x[None], tr.u[None], np.array([tr.r_g]),
                            np.array([tr.nu]))
     plant(params)
     # the tabulated traction law's own entry point (`TabulatedTraction.peak`)
     TabulatedTraction.from_curves({1.0: ([0.0, 0.01, 0.02], [0.0, 0.05, 0.08])}).mu_max(1.0)
+    # the compiled belt-length Newton solve a sampled law's Python path calls
+    secondary_radius(1.0, params.variator.L_belt, params.variator.a)
     # the sampled loop law's compiled arithmetic (`empact.control._law_core`): a sample,
     # the linearisation's ideal sample, the sensors alone, the gain schedule
     sc = load_scenario(control_example_path("slip-load-step-r1"))

@@ -6,8 +6,9 @@ errors, the gain schedule, the clamping feedforward and its filter or the safety
 clamping, the decoupler and the shift feedforward with their low-pass, the controller, the
 servo limits and the anti-windup; `pre` is the same up to the controller (`preprocess`, what
 `empact.control.loop` linearises).  The model's laws come from the compiled kernel
-(`empact.nonlinear._kernel`: the traction peak ``mu_max_many``, ``creep_coefficient`` and
-the creep law ``creep_force``), the secondary radius from `secondary_radius`.
+(`empact.nonlinear._batch.mu_max_many`: the traction peak; `empact.nonlinear._kernel`:
+``creep_coefficient`` and the creep law ``creep_force``), the secondary radius from the one
+belt-geometry law (`empact.variator._laws.secondary_radius`, compiled).
 
 The law is handed over in three named structures (`LawConstants`, `LawTables`, `LawWork`,
 built by `LoopLaw`) behind one reference (`Law`): its constants, its per-sample tables
@@ -29,7 +30,9 @@ import numpy as np
 from numba import njit, types
 from numba.experimental import structref
 
-from ..nonlinear._kernel import creep_coefficient, creep_force, mu_max_many
+from ..nonlinear._batch import mu_max_many
+from ..nonlinear._kernel import creep_coefficient, creep_force
+from ..variator._compiled import secondary_radius
 
 
 class LawConstants(NamedTuple):
@@ -240,32 +243,14 @@ def schedule_log_gains(S, values, by_variable, out):
 
 
 @njit(cache=True)
-def secondary_radius(r_g, L_belt, a):
-    """`empact.variator.geometry.secondary_radius` (no guess); NaN where it does not
-    converge."""
-    R_s = (L_belt - 2 * a) / (math.pi * (1 + r_g))
-    for _ in range(50):
-        R_p = r_g * R_s
-        x = (R_p - R_s) / a
-        if not -1.0 <= x <= 1.0:
-            return np.nan
-        phi = math.asin(x)
-        f = 2 * a * math.cos(phi) + (math.pi + 2 * phi) * R_p + (math.pi - 2 * phi) * R_s \
-            - L_belt
-        step = f / (r_g * (math.pi + 2 * phi) + (math.pi - 2 * phi))
-        R_s -= step
-        if abs(step) <= 1e-13 * L_belt:
-            return R_s
-    return np.nan
-
-
-@njit(cache=True)
 def _radius(r_g, L_belt, a, cache):
-    """The secondary radius at the measured ratio, the last one reused."""
+    """The secondary radius at the measured ratio (the one law,
+    `empact.variator._laws.secondary_radius`; NaN where it finds no belt geometry), the last
+    one reused."""
     r = _lo_hi(r_g, 1e-3, 1e3)
     if r != cache[0]:
         cache[0] = r
-        cache[1] = secondary_radius(r, L_belt, a)
+        cache[1] = secondary_radius(r, L_belt, a, np.nan, 1e-13)
     return cache[1]
 
 

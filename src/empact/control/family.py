@@ -6,7 +6,7 @@ servo torques ``T_mp, T_ms`` and the load input (``T_l``, or ``omega_l_ref`` wit
 speed-controlled load) as the disturbance, to ``r_g, nu, nu_r``, in the same physical state
 coordinates at every point (deviations from each point's trim).  It is built in one batch:
 `empact.nonlinear.equilibrium.trim_grid` trims all points at once and one compiled loop
-(`empact.nonlinear._kernel.linearize_batch`) linearises them exactly (forward mode).
+(`empact.nonlinear._batch.linearize_batch`) linearises them exactly (forward mode).
 
 Operating variables (axes, any subset, in this order): ``r_g`` [-], ``nu`` [-] or ``tau``
 [-] (the slip, or the torque ratio ``mu / mu_max``), ``F_s`` [N], ``omega_p`` [rad/s], ``T_l``

@@ -10,12 +10,16 @@ Springer 1996, sec. IV.7), with ``W = I - h gamma J`` factorised once per step::
     x_new = x + sum_j A_sj k_j + k_s         (stiffly accurate: the last stage's argument
     err   = k_s                               plus k_s; the embedded solution omits k_s)
 
+in general ``x_new = x + sum_j b_j k_j`` and ``err = sum_j e_j k_j`` (rows 3 and 4 of H below:
+for Rodas ``b`` the last row of A plus the last stage, ``e`` the last stage)
+
 and the continuous extension (dense output) ::
 
     x(t + theta h) = (1 - theta) x + theta (x_new + (1 - theta) (K1 + theta (K2 + theta K3))),
     K_r = sum_j H_rj k_j.
 
-Tableaus (A, C, c, d, H below):
+Tableaus (A, C, c, d, H below; H's rows 0-2 the dense output, 3 the solution weights b, 4
+the error weights e):
 
 * ``rodas5p``: Rodas5P, order 5 with an embedded order-4 estimate, 8 stages, dense output of
   order 4 - G. Steinebach, "Construction of Rosenbrock-Wanner method Rodas5P and numerical
@@ -26,37 +30,45 @@ Tableaus (A, C, c, d, H below):
   cit., sec. VI.4, and their code RODAS (``rodas.f``, the coefficients of ``METH = 1`` with
   the dense-output coefficients ``H``), as tabulated in the same Julia file
   (``Rodas4Tableau``).
+* ``ros2``: the modified Rosenbrock formula of Shampine & Reichelt (MATLAB's ``ode23s``),
+  order 2 with an order-3 error estimate, L-stable, 3 stages, with its continuous extension -
+  L. F. Shampine, M. W. Reichelt, "The MATLAB ODE Suite", SIAM J. Sci. Comput. 18, 1 (1997),
+  written in the form above: with ``d = 1 / (2 + sqrt(2))`` and ``k_i`` its stages, this
+  driver's ``k_1 = h d k_1``, ``k_2 = h d (k_2 - k_1)``, ``k_3 = h d (k_3 - e32 (k_2 - k_1) -
+  2 k_1)`` (``e32 = 6 + sqrt(2)``, the formula's F0 and F1 eliminated through its stage
+  equations), so ``gamma = d`` and the coefficients of `ROS2_A`, `ROS2_C`, `ROS2_d`, `ROS2_H`.
 
 `tests/test_integrators.py` checks the orders (step ends and dense output) by fixed-step
 convergence on a stiff linear problem with a known solution, running this module's own code
 on that problem.
 
-Everything else is the order-2 integrator's (`_rosenbrock.integrate`): the same signature and
-semantics, piecewise-linear inputs found by running indices, no step across a breakpoint, the
-explicit time derivative through the inputs (``df/dt = (df/du) du/dt``, exact on a linear
-input piece), the Jacobian exact (forward mode, `_kernel._state_jacobian`) at every step and
-in full only on the first
-call of a run, the stop conditions checked at every accepted step, the same status codes.
-The state at the end of a step is evaluated once (for the stop conditions) and reused as the
-first stage of the next step while the inputs are continuous there (first same as last).
+One driver (`_run`) for all three: piecewise-linear inputs found by running indices, no step
+across a breakpoint, the explicit time derivative through the inputs (``df/dt = (df/du)
+du/dt``, exact on a linear input piece), the Jacobian exact (forward mode,
+`_tangent._state_jacobian`) at every step and in full only on the first call of a run, the stop
+conditions checked at every accepted step, the status codes of `_rosenbrock.STATUS`. The state
+at the end of a step is evaluated once (for the stop conditions) and reused as the first stage
+of the next step while the inputs are continuous there (first same as last).
 
 Step size: the elementary controller with the predictive (Gustafsson) correction of
-``rodas.f``, exponent ``1/q`` (q = 5 for Rodas5P, 4 for Rodas4), factors in [0.2, 6], safety
-0.9, no increase right after a rejection; a step shortened to land on a breakpoint or the end
-of the call does not shrink the proposal for the next one.
+``rodas.f``, exponent ``1/q`` (q = 5 for Rodas5P, 4 for Rodas4, 3 for ros2), factors in [0.2,
+6], safety 0.9, no increase right after a rejection; a step shortened to land on a breakpoint
+or the end of the call does not shrink the proposal for the next one.
 
 Numba caches this module's compiled code with `_kernel._eval` inlined and re-checks only this
-file's time stamp (see `_rosenbrock`).
+file's time stamp: `empact._compile.drop_stale_cache` drops the cache when a source of
+`empact.nonlinear` changes.
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-from ._kernel import NY, _eval, _input_direction, _state_jacobian, stop_status
+from ._kernel import NY, _eval, stop_status
 from ._rosenbrock import STATUS, _lu, _lu_solve, _segment_inputs, _u_at
+from ._tangent import _input_direction, _state_jacobian
 
-__all__ = ["integrate", "integrate_rodas4", "METHODS", "STATUS"]
+__all__ = ["integrate", "integrate_rodas4", "integrate_ros2", "METHODS", "STATUS"]
 
 # -- Rodas5P (Steinebach 2023) ---------------------------------------------------------------
 R5P_GAMMA = 0.21193756319429014
@@ -96,7 +108,9 @@ R5P_H = np.array([
     [-9.91568850695171, -0.9689944594115154, 3.0438037242978453, -24.495224566215796,
      20.176138334709044, 15.98066361424651, -6.789040303419874, -6.710236069923372],
     [11.419903575922262, 2.8879645146136994, 72.92137995996029, 80.12511834622643,
-     -52.072871366152654, -59.78993625266729, -0.15582684282751913, 4.883087185713722]])
+     -52.072871366152654, -59.78993625266729, -0.15582684282751913, 4.883087185713722],
+    [*R5P_A[-1, :-1], 1.0],
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])
 
 # -- Rodas4 (Hairer & Wanner 1996) -----------------------------------------------------------
 R4_GAMMA = 0.25
@@ -122,14 +136,28 @@ R4_H = np.array([
      1.025137723295662, 0.0],
     [-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386,
      -6.594389125716872, 0.0],
-    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]])
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [*R4_A[-1, :-1], 1.0],
+    [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])
+
+# -- ros2 (Shampine & Reichelt 1997, ode23s) -------------------------------------------------
+ROS2_GAMMA = 1.0 / (2.0 + np.sqrt(2.0))
+_E32 = 6.0 + np.sqrt(2.0)
+_G = ROS2_GAMMA
+ROS2_A = np.array([[0.0, 0.0, 0.0], [0.5 / _G, 0.0, 0.0], [1.0 / _G, 1.0 / _G, 0.0]])
+ROS2_C = np.array([[0.0, 0.0, 0.0], [-1.0 / _G, 0.0, 0.0], [-2.0 / _G, -_E32 / _G, 0.0]])
+ROS2_c = np.array([0.0, 0.5, 1.0])
+ROS2_d = np.array([_G, 0.0, -_G])
+ROS2_H = np.array([[0.0, -1.0 / (_G * (1.0 - 2.0 * _G)), 0.0], [0.0, 0.0, 0.0],
+                   [0.0, 0.0, 0.0], [1.0 / _G, 1.0 / _G, 0.0],
+                   [1.0 / (6.0 * _G), (_E32 - 2.0) / (6.0 * _G), 1.0 / (6.0 * _G)]])
 
 
 @njit(cache=True)
 def _run(A, C, c, d, H, gam, q, x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk,
          rtol, atol, hmin, hmax, omega_min, max_steps, X, Y, cols, J, full):
     """The stepper for one tableau (see the module docstring); arguments after `q` (the
-    error's order) and the return value as `_rosenbrock.integrate`."""
+    error's order) and the return value as `integrate`."""
     n = x.shape[0]
     m = sig_n.shape[0]
     s = A.shape[0]
@@ -137,6 +165,7 @@ def _run(A, C, c, d, H, gam, q, x, t, t_end, h, samples, p, ix, sig_t, sig_v, si
     piv = np.empty(n, dtype=np.int64)
     K = np.empty((s, n))
     D = np.zeros((3, n))
+    E = np.empty(n)
     F0 = np.empty(n)
     Fs = np.empty(n)
     S = np.empty(n)
@@ -226,11 +255,24 @@ def _run(A, C, c, d, H, gam, q, x, t, t_end, h, samples, p, ix, sig_t, sig_v, si
                 for i in range(n):
                     K[st, i] = hg * (Fs[i] + S[i] + dh * T[i])
                 _lu_solve(W, piv, K[st])
+            # x_new = x + sum_j b_j k_j, the error sum_j e_j k_j (H's rows 3 and 4; zero
+            # weights skipped, so a stiffly accurate method's x_s + k_s to the last bit)
+            for i in range(n):
+                xn[i] = x[i]
+                E[i] = 0.0
+            for j in range(s):
+                bj = H[3, j]
+                ej = H[4, j]
+                if bj != 0.0:
+                    for i in range(n):
+                        xn[i] += bj * K[j, i]
+                if ej != 0.0:
+                    for i in range(n):
+                        E[i] += ej * K[j, i]
             err = 0.0
             for i in range(n):
-                xn[i] = xs[i] + K[s - 1, i]
                 sc = atol[i] + rtol[i] * max(abs(x[i]), abs(xn[i]))
-                e = K[s - 1, i] / sc
+                e = E[i] / sc
                 err += e * e
             err = np.sqrt(err / n)
             if not np.isfinite(err):
@@ -302,7 +344,16 @@ def _run(A, C, c, d, H, gam, q, x, t, t_end, h, samples, p, ix, sig_t, sig_v, si
 @njit(cache=True)
 def integrate(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, atol,
               hmin, hmax, omega_min, max_steps, X, Y, cols, J, full):
-    """Rodas5P: `_rosenbrock.integrate`'s signature, semantics and return value."""
+    """Rodas5P: integrate from `t` to `t_end` in place on `x`; fill `X`, `Y` at `samples` in
+    (t, t_end].
+
+    `cols` are the Jacobian columns that change (`_kernel.varying_columns`); `J` (n, n) holds
+    the Jacobian between calls: with `full` every column is evaluated at the first step (the
+    first call of a run), otherwise only `cols` (the others are constant over a run).
+
+    Returns ``(status, t, h, n_filled, n_steps, n_rejected)`` (`_rosenbrock.STATUS`); on a
+    stop, `x` holds the last accepted state at time `t`.
+    """
     return _run(R5P_A, R5P_C, R5P_c, R5P_d, R5P_H, R5P_GAMMA, 5.0, x, t, t_end, h, samples,
                 p, ix, sig_t, sig_v, sig_n, brk, rtol, atol, hmin, hmax, omega_min,
                 max_steps, X, Y, cols, J, full)
@@ -311,15 +362,25 @@ def integrate(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, at
 @njit(cache=True)
 def integrate_rodas4(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, atol,
                      hmin, hmax, omega_min, max_steps, X, Y, cols, J, full):
-    """Rodas4: `_rosenbrock.integrate`'s signature, semantics and return value."""
+    """Rodas4: `integrate`'s signature, semantics and return value."""
     return _run(R4_A, R4_C, R4_c, R4_d, R4_H, R4_GAMMA, 4.0, x, t, t_end, h, samples,
                 p, ix, sig_t, sig_v, sig_n, brk, rtol, atol, hmin, hmax, omega_min,
                 max_steps, X, Y, cols, J, full)
 
 
+@njit(cache=True)
+def integrate_ros2(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, atol,
+                   hmin, hmax, omega_min, max_steps, X, Y, cols, J, full):
+    """ros2 (ode23s): `integrate`'s signature, semantics and return value."""
+    return _run(ROS2_A, ROS2_C, ROS2_c, ROS2_d, ROS2_H, ROS2_GAMMA, 3.0, x, t, t_end, h,
+                samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, atol, hmin, hmax, omega_min,
+                max_steps, X, Y, cols, J, full)
+
+
 #: the integrators of this module by `simulate`'s method name
-METHODS = {"rodas5p": integrate, "rodas4": integrate_rodas4}
+METHODS = {"rodas5p": integrate, "rodas4": integrate_rodas4, "ros2": integrate_ros2}
 #: each integrator's tableau as `_run` takes it (``A, C, c, d, H, gamma, q``): a compiled
 #: loop around the integrator (`empact.control._loop_core`) calls `_run` with it
 TABLEAUX = {integrate: (R5P_A, R5P_C, R5P_c, R5P_d, R5P_H, R5P_GAMMA, 5.0),
-            integrate_rodas4: (R4_A, R4_C, R4_c, R4_d, R4_H, R4_GAMMA, 4.0)}
+            integrate_rodas4: (R4_A, R4_C, R4_c, R4_d, R4_H, R4_GAMMA, 4.0),
+            integrate_ros2: (ROS2_A, ROS2_C, ROS2_c, ROS2_d, ROS2_H, ROS2_GAMMA, 3.0)}

@@ -26,8 +26,9 @@ from .._deprecate import warn_renamed
 from .._results import Result
 from ..errors import ParameterError, TrimError
 from ..params import OperatingPoint, ResolvedPoint, check_clamping, check_one_slip
+from ..variator import _laws
 from ..variator.geometry import check_ratio, radii, ratio_range, stretched_radii
-from . import _kernel as K
+from . import _batch as KB
 from .model import EmpactModel
 
 __all__ = ["TrimError", "TrimResult", "TrimGrid", "trim", "trim_grid", "traction_peak",
@@ -144,7 +145,7 @@ class TrimGrid(Result):
 def traction_peak(model: EmpactModel, r_g: ArrayLike) -> tuple[Any, Any]:
     """Slip at the peak of the kernel's traction curve and the peak value ``(nu_peak,
     mu_peak)`` at ratio(s) `r_g` (golden-section search on [0, 0.99], to rounding; the
-    curve is unimodal in slip; compiled: `_kernel.traction_peak_many`, bitwise the
+    curve is unimodal in slip; compiled: `_batch.traction_peak_many`, bitwise the
     vectorised search `_traction_peak_numpy`).
 
     Parameters
@@ -170,7 +171,7 @@ def traction_peak(model: EmpactModel, r_g: ArrayLike) -> tuple[Any, Any]:
         raise ValueError(f"r_g = {r[r <= 0].flat[0]:g}: must be positive")
     flat = np.ascontiguousarray(r.ravel())
     nu, mu = np.empty(flat.size), np.empty(flat.size)
-    K.traction_peak_many(flat, _GOLDEN, model.p, nu, mu)
+    KB.traction_peak_many(flat, _GOLDEN, model.p, nu, mu)
     if np.ndim(r_g) == 0:
         return float(nu[0]), float(mu[0])
     return nu.reshape(r.shape), mu.reshape(r.shape)
@@ -351,7 +352,7 @@ def slip_at_torque_ratio(model: EmpactModel, tau: ArrayLike,
 
 def _bisect_rising(model: EmpactModel, r: NDArray, target: NDArray, nu_pk: NDArray) -> NDArray:
     """The slip in ``[0, nu_pk]`` where the kernel's curve reaches ``|target|`` (64 bisection
-    steps: to rounding, compiled: `_kernel.bisect_rising_many`), with the sign of `target`
+    steps: to rounding, compiled: `_batch.bisect_rising_many`), with the sign of `target`
     (arrays of one shape)."""
     if np.any(r <= 0):
         raise ValueError(f"r_g = {r[r <= 0].flat[0]:g}: must be positive")
@@ -359,7 +360,7 @@ def _bisect_rising(model: EmpactModel, r: NDArray, target: NDArray, nu_pk: NDArr
     r_, goal, top = (np.ascontiguousarray(np.broadcast_to(np.asarray(v, float), shape)).ravel()
                      for v in (r, np.abs(target), nu_pk))
     out = np.empty(r_.size)
-    K.bisect_rising_many(r_, goal, top, model.p, out)
+    KB.bisect_rising_many(r_, goal, top, model.p, out)
     return np.sign(target) * out.reshape(shape)
 
 
@@ -376,7 +377,7 @@ def _contact(model: EmpactModel, r, F_contact, tau_of):
     active = np.ones(r.shape, dtype=bool)
     for _ in range(60):
         R_p, R_s, phi, e = radii(F_el)
-        kgeo = (np.pi + 2 * phi) / (np.pi - 2 * phi)
+        kgeo = _laws.kappa_geo(phi)
         _, keq = model.static_creep(r, R_p, R_s, phi, F_el, tau_of(R_s, F_el))
         a, b = r / (c.tan_beta * R_p), r / (c.tan_beta * R_s)
         new = np.where(active, F_contact * (a + keq * b) / (a + kgeo * b), F_el)

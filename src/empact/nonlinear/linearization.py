@@ -2,7 +2,7 @@
 
 The Jacobians are exact: forward-mode (tangent) derivatives of the compiled right-hand side,
 hand derived and propagated along all state and input directions in one pass
-(`empact.nonlinear._kernel._eval_tangent`) - no truncation or cancellation error, unlike a
+(`empact.nonlinear._tangent._eval_tangent`) - no truncation or cancellation error, unlike a
 fixed-step difference; equal to the complex step (``df/dx_j = Im f(x + i h e_j) / h``,
 ``h = 1e-30``, kept as the reference) to rounding.
 
@@ -85,11 +85,11 @@ def linearize(op: TrimResult, inputs: Sequence[str] | None = None,
     Parameters
     ----------
     op : TrimResult
-        The operating point (its ``model`` is linearised).
+        The trimmed point to linearise at (and its ``model``).
     inputs, outputs : sequence of str, optional
-        Subsets of ``op.model.inputs`` / ``op.model.outputs`` (default: all).
+        The signals to keep, of ``op.model.inputs`` / ``op.model.outputs`` (default: all).
     name : str
-        System name.
+        The system's name.
 
     Returns
     -------

@@ -116,6 +116,7 @@ from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
 from ..linear.actuation import actuation_model
 from ..params import DAMPING_LEVELS, Params
+from ..variator import _laws
 from ..variator.shift_law import SHIFT_LAWS, CreepMap, g_beta, load_creep_map
 from ..variator.thrust_ratio import TabulatedThrustRatio, load_thrust_ratio
 from ..variator.traction import (
@@ -124,7 +125,9 @@ from ..variator.traction import (
     load_traction,
     traction_from_params,
 )
+from . import _batch as KB
 from . import _kernel as K
+from . import _tangent as KT
 
 control = lazy_module("control")
 
@@ -502,7 +505,7 @@ class EmpactModel:
         B = np.empty((self.n, 4))
         C = np.empty((len(self.outputs), self.n))
         D = np.empty((len(self.outputs), 4))
-        K._jacobian(x, u, self.p, self.ix, A, B, C, D)
+        KT._jacobian(x, u, self.p, self.ix, A, B, C, D)
         return A, B, C, D
 
     def traction(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
@@ -519,7 +522,7 @@ class EmpactModel:
         if np.any(r <= 0):
             raise ValueError(f"r_g = {r[r <= 0].flat[0]:g}: must be positive")
         out = np.empty(nu.size)
-        K.traction_many(np.ascontiguousarray(nu.ravel()), np.ascontiguousarray(r.ravel()),
+        KB.traction_many(np.ascontiguousarray(nu.ravel()), np.ascontiguousarray(r.ravel()),
                         self.p, out)
         return out.reshape(nu.shape)
 
@@ -542,7 +545,7 @@ class EmpactModel:
         """
         r = np.asarray(r_g, float)
         out = np.empty(r.size)
-        K.mu_max_many(np.ascontiguousarray(r.ravel()), self.p, out)
+        KB.mu_max_many(np.ascontiguousarray(r.ravel()), self.p, out)
         return out.reshape(r.shape)
 
     def static_creep(self, r_g, R_p, R_s, phi, F_el, tau) -> tuple[NDArray, NDArray]:
@@ -569,11 +572,10 @@ class EmpactModel:
         shape = np.broadcast(r_g, R_p, R_s, phi, F_el, tau).shape
         if not self.creep:
             phi_ = args[3]
-            return (np.zeros(shape),
-                    ((np.pi + 2 * phi_) / (np.pi - 2 * phi_)).reshape(shape))
+            return np.zeros(shape), _laws.kappa_geo(phi_).reshape(shape)
         lam, keq = np.empty(args[0].size), np.empty(args[0].size)
         r, R_p_, R_s_, phi_, F_el_, tau_ = args
-        K.creep_many(r, R_p_, R_s_, phi_, F_el_, tau_, self.p, lam, keq)
+        KB.creep_many(r, R_p_, R_s_, phi_, F_el_, tau_, self.p, lam, keq)
         return lam.reshape(shape), keq.reshape(shape)
 
     def static_creep_point(self, r_g: float, R_p: float, R_s: float, phi: float,
@@ -599,11 +601,11 @@ class EmpactModel:
             Eight one-element work arrays, reused between calls (default: new ones).
         """
         if not self.creep:
-            return 0.0, float((np.pi + 2 * phi) / (np.pi - 2 * phi))
+            return 0.0, float(_laws.kappa_geo(phi))
         a = work if work is not None else [np.empty(1) for _ in range(8)]
         for j, v in enumerate((r_g, R_p, R_s, phi, F_el, tau)):
             a[j][0] = v
-        K.creep_many(a[0], a[1], a[2], a[3], a[4], a[5], self.p, a[6], a[7])
+        KB.creep_many(a[0], a[1], a[2], a[3], a[4], a[5], self.p, a[6], a[7])
         return float(a[6][0]), float(a[7][0])
 
     def evaluate_many(self, X: ArrayLike, U: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -619,7 +621,7 @@ class EmpactModel:
         """
         X, U = np.ascontiguousarray(X, float), np.ascontiguousarray(U, float)
         DX, Y = np.empty_like(X), np.empty((X.shape[0], len(self.outputs)))
-        K.eval_batch(X, U, self.p, self.ix, DX, Y)
+        KB.eval_batch(X, U, self.p, self.ix, DX, Y)
         return DX, Y
 
     def jacobian_many(self, X: ArrayLike, U: ArrayLike) -> tuple[NDArray, ...]:
@@ -637,7 +639,7 @@ class EmpactModel:
         N, n, ny = X.shape[0], self.n, len(self.outputs)
         A, B = np.empty((N, n, n)), np.empty((N, n, 4))
         C, D = np.empty((N, ny, n)), np.empty((N, ny, 4))
-        K.linearize_batch(X, U, self.p, self.ix, np.empty((N, n)), A, B, C, D)
+        KB.linearize_batch(X, U, self.p, self.ix, np.empty((N, n)), A, B, C, D)
         return A, B, C, D
 
     def stop_status(self, y: NDArray[np.float64], omega_min: float = 1.0) -> int:

@@ -6,7 +6,7 @@ piecewise-linear input signals; `run_scenario` trims a scenario's initial point
 
 The integrator is a compiled, L-stable Rosenbrock method with an exact Jacobian: by
 default the order-4 Rodas4 of `empact.nonlinear._rodas` (``method="rodas4"``), or the
-order-5 Rodas5P (``"rodas5p"``) or the order-2 method of `empact.nonlinear._rosenbrock`
+order-5 Rodas5P (``"rodas5p"``) or the order-2 ode23s tableau of the same driver
 (``"ros2"``, the default up to 0.1); see `METHODS`.  It stops - keeping everything computed
 so far, marked incomplete - when omega_p reaches ``omega_min`` (the slip of eq. 2 is undefined
 at a standing primary), the belt goes slack, a radius leaves the variator's range, or the solver
@@ -33,7 +33,8 @@ from ..errors import ParameterError
 from ..params import Params
 from . import _kernel as K
 from . import _rodas
-from ._rosenbrock import STATUS, integrate
+from ._rodas import integrate_ros2 as integrate
+from ._rosenbrock import STATUS
 from .equilibrium import TrimResult, trim
 from .model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
 from .scenario import DEFAULT_METHOD, METHODS, Scenario
@@ -347,9 +348,9 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     rtol : float
         Relative tolerance (see `state_tolerances`).
     max_step : float
-        Largest step [s].
+        Largest integration step [s].
     omega_min : float
-        Stop when omega_p falls to this [rad/s].
+        The run stops when omega_p falls to this [rad/s] (slip undefined).
     max_steps : int
         Give up (incomplete result) after this many integration steps.
     method : {"rodas4", "rodas5p", "ros2"}

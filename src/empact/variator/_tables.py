@@ -17,8 +17,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ParameterError
+from . import _laws
 
-__all__ = ["check_curve", "read_curves", "encode_curves"]
+__all__ = ["check_curve", "read_curves", "encode_curves", "interp_knots", "knot_segments",
+           "interpolate_curves"]
 
 Curves = dict[float, tuple[list[float], list[float]]]
 
@@ -41,7 +43,7 @@ def read_curves(path: str | os.PathLike[str], what: str, x: str, y: str) -> Curv
 
 def encode_curves(ratios, xs, ys) -> NDArray[np.float64]:
     """Flat encoding of curves ``y(x)`` at several ratios for the compiled model, appended to
-    its parameter vector (`empact.nonlinear._kernel._table` reads it)::
+    its parameter vector (`empact.variator._laws.table_at` reads it)::
 
         [n_r, ln r_1 .. ln r_n, start_1 .. start_n,
          (n_x, x_1 .. x_nx, y_1 .. y_nx) per curve]
@@ -59,22 +61,63 @@ def encode_curves(ratios, xs, ys) -> NDArray[np.float64]:
     return np.array(head + starts + body, dtype=float)
 
 
+def interp_knots(x: ArrayLike, knots: ArrayLike, values: ArrayLike,
+                 segments: tuple[NDArray[np.intp], NDArray[np.intp]] | None = None
+                 ) -> NDArray[np.float64]:
+    """The piecewise-linear function through ``(knots[j], values[j])`` at `x`, held constant
+    outside the knots, a knot counting to the segment on its left: the rule of the compiled
+    law `empact.variator._laws.knots_at`, on arrays, with the same line (`_laws.lerp`), so
+    the same numbers.
+
+    Parameters
+    ----------
+    x : array_like
+        Where to evaluate, any shape.
+    knots : array_like, shape (n,)
+        Strictly increasing abscissae.
+    values : array_like, shape (n,) or (n,) + x.shape
+        The ordinates, one per knot (per point of `x` when they vary with it).
+    segments : (ndarray, ndarray), optional
+        `knot_segments` of `x` and `knots`, when several functions share them.
+
+    Returns
+    -------
+    ndarray
+        The values, the shape of `x`.
+    """
+    xa = np.asarray(x, float)
+    k = np.asarray(knots, float)
+    v = np.asarray(values, float)
+    zero = 0.0 * xa
+    if len(k) == 1:
+        return v[0] + zero
+    i, j = knot_segments(xa, k) if segments is None else segments
+    if v.ndim == 1:
+        lo, hi = v[j], v[j + 1]
+    else:
+        lo = np.take_along_axis(v, j[None], 0)[0]
+        hi = np.take_along_axis(v, (j + 1)[None], 0)[0]
+    with np.errstate(invalid="ignore", over="ignore"):
+        inside = _laws.lerp(xa, k[j], k[j + 1], lo, hi)
+    return np.where(i == 0, v[0] + zero, np.where(i == len(k), v[-1] + zero, inside))
+
+
+def knot_segments(x: ArrayLike, knots: ArrayLike) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """``(i, j)`` for `interp_knots`: ``knots[i - 1] < x <= knots[i]`` and the segment ``j``
+    (``i - 1`` held to the first and last), each the shape of `x`."""
+    k = np.asarray(knots, float)
+    i = np.searchsorted(k, np.asarray(x, float), side="left")
+    return i, np.clip(i - 1, 0, max(len(k) - 2, 0))
+
+
 def interpolate_curves(ratios, xs, ys, x: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-    """The interpolation `encode_curves` gives the kernel, in numpy: linear in x along each
-    curve (held constant outside its samples), linear in ln r_g between the curves (held
-    constant outside), at points `x`, `r_g` (broadcast)."""
+    """The interpolation `encode_curves` gives the kernel (`empact.variator._laws.table_at`)
+    on arrays: linear in x along each curve (held constant outside its samples), linear in
+    ln r_g between the curves (held constant outside), at points `x`, `r_g` (broadcast);
+    `interp_knots` along both, so the kernel's numbers."""
     x, r = np.broadcast_arrays(np.asarray(x, float), np.asarray(r_g, float))
-    vals = [np.interp(x, xc, yc) for xc, yc in zip(xs, ys)]
-    lr = np.log(np.asarray(ratios, float))
-    if len(lr) == 1:
-        return vals[0]
-    q = np.clip(np.log(r), lr[0], lr[-1])
-    j = np.clip(np.searchsorted(lr, q, side="right") - 1, 0, len(lr) - 2)
-    w = (q - lr[j]) / (lr[j + 1] - lr[j])
-    stack = np.stack(vals)
-    lo = np.take_along_axis(stack, j[None], 0)[0]
-    hi = np.take_along_axis(stack, (j + 1)[None], 0)[0]
-    return lo + w * (hi - lo)
+    vals = np.stack([interp_knots(x, xc, yc) for xc, yc in zip(xs, ys)])
+    return interp_knots(np.log(r), np.log(np.asarray(ratios, float)), vals)
 
 
 def check_curve(where: str, x: ArrayLike, y: ArrayLike, names: tuple[str, str],

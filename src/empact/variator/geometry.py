@@ -10,9 +10,10 @@ Conventions (SI): running radii ``R_p`` (primary) and ``R_s`` (secondary) [m], g
 All functions accept arrays and broadcast.  The root finds are Newton iterations on the exact
 derivatives above (vectorised over ratios; bracketed for the range): no scipy import, which
 keeps ``empact params`` fast (see ``bench/bench_geometry.py`` for the comparison with
-``scipy.optimize``).  The compiled nonlinear kernel has a numba twin of `belt_length`
-(`empact.nonlinear._kernel.belt_geometry`), tested equal; apart from it eq. 6 is written only
-here (`belt_length`; `radii` and `stretched_radii` solve it).
+``scipy.optimize``).  Eqs. 4 and 6 and the Newton step on them are written once, in
+`empact.variator._laws` (`wrap_angle`, `belt_geometry`, `belt_newton_step`): the functions
+here evaluate them on arrays, and the compiled kernel and the sampled loop law call their
+compiled twins (`empact.variator._compiled`).
 
 The functions take plain numbers (`wrap_angle`, `belt_length`, `radii`, `stretched_radii`) or
 the variator's own parameter block `VariatorParams` (``[variator]`` of a parameter file).
@@ -27,10 +28,15 @@ from typing import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._lazy import lazy_module
 from .._results import Result
 from .._section import Section, param
 from .._validate import check_values
 from ..errors import ParameterError
+from . import _laws
+
+#: the compiled laws (numba), loaded on first use (`secondary_radius`)
+_compiled = lazy_module("empact.variator._compiled")
 
 __all__ = ["VariatorParams", "wrap_angle", "belt_length", "radii", "stretched_radii",
            "ratio_range", "VariatorState", "variator_state", "check_ratio",
@@ -93,29 +99,27 @@ def wrap_angle(R_p: ArrayLike, R_s: ArrayLike, a: float) -> NDArray[np.float64]:
         The wrapped-angle term ``phi`` [rad], the broadcast shape of `R_p` and `R_s` (NaN
         where ``|R_p - R_s| > a``).
     """
-    return np.arcsin((np.asarray(R_p, float) - np.asarray(R_s, float)) / a)
+    return _laws.wrap_angle(np.asarray(R_p, float), np.asarray(R_s, float), a)
 
 
 def belt_length(R_p: ArrayLike, R_s: ArrayLike, a: float) -> NDArray[np.float64]:
     """Belt length ``L = 2 a cos(phi) + (pi + 2 phi) R_p + (pi - 2 phi) R_s`` [m] (eq. 6).
 
-    The only implementation of eq. 6 outside the compiled kernel (which has a numba twin).
+    The law `empact.variator._laws.belt_geometry` (the compiled code calls its twin).
 
     Parameters
     ----------
     R_p, R_s : array_like
-        Primary and secondary running radii [m], broadcast together.
+        Running radii [m] on the primary and the secondary, broadcast together.
     a : float
-        Centre distance [m].
+        Centre distance between the pulley shafts [m].
 
     Returns
     -------
     ndarray
         The belt length [m], the broadcast shape of `R_p` and `R_s`.
     """
-    phi = wrap_angle(R_p, R_s, a)
-    return 2 * a * np.cos(phi) + (np.pi + 2 * phi) * np.asarray(R_p, float) \
-        + (np.pi - 2 * phi) * np.asarray(R_s, float)
+    return _laws.belt_geometry(np.asarray(R_p, float), np.asarray(R_s, float), a)[1]
 
 
 def radii(r_g: ArrayLike, L_belt: float, a: float, *, tol: float = 1e-13,
@@ -151,16 +155,13 @@ def radii(r_g: ArrayLike, L_belt: float, a: float, *, tol: float = 1e-13,
         pulleys at that ratio).
     """
     r = check_values("r_g", r_g, 0.0, lo_open=True)
-    R_s = (L_belt - 2 * a) / (np.pi * (1 + r))  # exact for phi = 0
+    R_s = _laws.radius_at_zero_wrap(r, L_belt, a)
     # each point stops on its own convergence, so its radius does not depend on the others
     # (a sweep's chunks give bitwise the same result)
     active = np.ones(np.shape(R_s), dtype=bool)
     with np.errstate(invalid="ignore"):
         for _ in range(max_iter):
-            R_p = r * R_s
-            phi = wrap_angle(R_p, R_s, a)
-            f = 2 * a * np.cos(phi) + (np.pi + 2 * phi) * R_p + (np.pi - 2 * phi) * R_s - L_belt
-            step = np.where(active, f / (r * (np.pi + 2 * phi) + (np.pi - 2 * phi)), 0.0)
+            step = np.where(active, _laws.belt_newton_step(R_s, r, L_belt, a), 0.0)
             R_s = R_s - step
             active = active & ~(np.abs(step) <= tol * L_belt)
             if not active.any():
@@ -177,19 +178,14 @@ def radii(r_g: ArrayLike, L_belt: float, a: float, *, tol: float = 1e-13,
 def secondary_radius(r_g: float, L_belt: float, a: float, guess: float | None = None,
                      tol: float = 1e-13) -> float:
     """`radii`'s ``R_s`` [m] for one ratio in plain floats (a sampled controller calls it at
-    every sample): the same Newton iteration, started at `guess` (the last sample's radius)
-    or at the exact solution for ``phi = 0``."""
-    R_s = (L_belt - 2 * a) / (math.pi * (1 + r_g)) if guess is None else guess
-    for _ in range(50):
-        R_p = r_g * R_s
-        phi = math.asin((R_p - R_s) / a)
-        f = 2 * a * math.cos(phi) + (math.pi + 2 * phi) * R_p + (math.pi - 2 * phi) * R_s \
-            - L_belt
-        step = f / (r_g * (math.pi + 2 * phi) + (math.pi - 2 * phi))
-        R_s -= step
-        if abs(step) <= tol * L_belt:
-            return R_s
-    raise ParameterError(f"r_g = {r_g:g}: no belt geometry at this ratio")
+    every sample): the same Newton steps, compiled (`empact.variator._laws.
+    secondary_radius`), started at `guess` (the last sample's radius) or at the exact
+    solution for ``phi = 0``."""
+    R_s = _compiled.secondary_radius(float(r_g), float(L_belt), float(a),
+                                     math.nan if guess is None else float(guess), float(tol))
+    if R_s != R_s:
+        raise ParameterError(f"r_g = {r_g:g}: no belt geometry at this ratio")
+    return float(R_s)
 
 
 def stretched_radii(r_g: ArrayLike, F: ArrayLike, L_belt: float, a: float, beta: float,
@@ -360,8 +356,7 @@ def primary_radius_per_ratio(r_g: ArrayLike, variator: VariatorParams) -> NDArra
     r = check_ratio(r_g, v)
     R_p, R_s = radii(r, v.L_belt, v.a)
     phi = wrap_angle(R_p, R_s, v.a)
-    kgeo = (np.pi + 2 * phi) / (np.pi - 2 * phi)
-    return R_s / (1 + r * kgeo)
+    return R_s / (1 + r * _laws.kappa_geo(phi))
 
 
 @dataclass(frozen=True)

@@ -46,6 +46,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._section import Section, param
 from .._validate import check_choice, check_number
 from ..errors import ParameterError
+from . import _laws
 from ._tables import check_curve, encode_curves, interpolate_curves, read_curves
 from .geometry import VariatorParams, check_ratio, variator_state
 
@@ -280,6 +281,9 @@ def creep_coefficient(params: _HasShift, r_g: ArrayLike, F_s: ArrayLike,
         return sh.gain * creep_map.K_c(r, F_s)
     if R_p is None:
         R_p = variator_state(r, v).R_p
+    # `empact.variator._laws.creep_coefficient`, but for one rounding: ``a2 lr**2`` here,
+    # ``(a2 lr) lr`` there; the loop law's shift feedforward (`empact.control.law`) spells
+    # this form term by term, and a closed-loop shift run moves by 1e-6 on either change
     lr = np.log(r)
     D = sh.D_ref * (1 + sh.k_D * (np.asarray(F_s, float) - sh.F_ref))
     return sh.gain * D * g_beta(v.beta) * r * (np.asarray(R_p) / v.a) * (sh.a1 + sh.a2 * lr**2)
@@ -380,7 +384,7 @@ def creep_damping(params: _HasShift, r_g: float, omega_p: float, F_s: float,
     geo = variator_state(r, v)
     R_p, R_s, phi = float(geo.R_p), float(geo.R_s), float(geo.phi)
     tb = np.tan(v.beta)
-    kgeo = (np.pi + 2 * phi) / (np.pi - 2 * phi)
+    kgeo = _laws.kappa_geo(phi)
     k = kgeo if kappa_eq is None else check_number("kappa_eq", kappa_eq, 0.0, lo_open=True)
     w_eff = np.hypot(omega_p, params.shift.omega_0)
     a, b = r / (tb * R_p), r / (tb * R_s)

@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._results import Result
 from .._section import Section, param
 from ..errors import ParameterError
+from . import _laws
 from ._tables import check_curve, encode_curves, interpolate_curves, read_curves
 from .geometry import VariatorParams, radii, wrap_angle
 
@@ -105,8 +106,7 @@ def kappa_geo(r_g: ArrayLike, variator: VariatorParams) -> NDArray[np.float64]:
         The geometric thrust ratio [-], the shape of `r_g`.
     """
     R_p, R_s = radii(np.asarray(r_g, float), variator.L_belt, variator.a)
-    phi = wrap_angle(R_p, R_s, variator.a)
-    return (np.pi + 2 * phi) / (np.pi - 2 * phi)
+    return _laws.kappa_geo(wrap_angle(R_p, R_s, variator.a))
 
 
 @dataclass(frozen=True)
@@ -151,8 +151,8 @@ class AnalyticThrustRatio:
             Geometric ratios [-] (broadcast against `tau`).
         """
         tau, r = np.broadcast_arrays(np.asarray(tau, float), np.asarray(r_g, float))
-        return np.exp(self.p0 * np.log(kappa_geo(r, self.variator))
-                      + (self.b0 - self.b1 * np.log(r)) * tau)
+        return np.exp(_laws.log_kappa_eq(tau, np.log(r), kappa_geo(r, self.variator), self.p0,
+                                         self.b0, self.b1))
 
 
 @dataclass(frozen=True)
@@ -381,12 +381,10 @@ def ratio_stability_map(kmap: AnalyticThrustRatio | TabulatedThrustRatio,
 
     Parameters
     ----------
-    kmap : AnalyticThrustRatio or TabulatedThrustRatio
-        The equilibrium thrust-ratio map.
-    variator : VariatorParams
-        The geometry.
-    mu_max : callable
-        The traction curve's peak value [-] over the ratio, vectorised.
+    kmap, variator, mu_max
+        As `ratio_stability`: the equilibrium thrust-ratio map (analytic or tabulated), the
+        geometry (`VariatorParams`) and the traction curve's peak value [-] over the ratio
+        (a vectorised callable).
     tau : array_like, shape (n_tau,)
         Torque ratios [-].
     r_g : array_like, shape (n_r,)

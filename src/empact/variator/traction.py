@@ -58,7 +58,8 @@ from numpy.typing import ArrayLike, NDArray
 from .._lazy import lazy_module
 from .._section import Section, param
 from ..errors import ParameterError
-from ._tables import check_curve, read_curves
+from . import _laws
+from ._tables import check_curve, interp_knots, knot_segments, read_curves
 
 interpolate = lazy_module("scipy.interpolate")
 #: the compiled law (numba: loaded when a peak is first asked for)
@@ -257,7 +258,7 @@ class MagicFormulaTraction:
         """``(B, C, D, E)`` at ratio(s) `r_g`, each shaped like `r_g`.
 
         Linear interpolation in ``log(r_g)`` between the LOW, MED and OD values, constant
-        outside: ``numpy.interp(log(r_g), log(ratios), values)``.
+        outside (`empact.variator._tables.interp_knots`: the compiled kernel's numbers).
 
         Parameters
         ----------
@@ -270,7 +271,9 @@ class MagicFormulaTraction:
             raise ParameterError(f"r_g = {float(np.ravel(bad)[0]):g}: must be a positive finite "
                                  "ratio")
         x, xp = np.log(r), np.log(self.ratios)
-        return tuple(np.interp(x, xp, getattr(self, name)) for name in ("B", "C", "D", "E"))
+        seg = knot_segments(x, xp)
+        return tuple(interp_knots(x, xp, getattr(self, name), seg)
+                     for name in ("B", "C", "D", "E"))
 
     def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
         """The curve's peak value ``D(r_g)`` [-] (reached where ``C arctan(phi) = pi / 2``,
@@ -296,9 +299,7 @@ class MagicFormulaTraction:
         """
         nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
         B, C, D, E = self.coefficients(r_a)
-        bx = B * nu_a
-        phi = bx - E * (bx - np.arctan(bx))
-        return D * np.sin(C * np.arctan(phi))
+        return _laws.magic_formula(nu_a, B, C, D, E)
 
     def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
         """Slope ``d mu / d nu`` [-] (analytic), shape of ``broadcast(nu, r_g)``.
@@ -312,10 +313,7 @@ class MagicFormulaTraction:
         """
         nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
         B, C, D, E = self.coefficients(r_a)
-        bx = B * nu_a
-        phi = bx - E * (bx - np.arctan(bx))
-        dphi = B * (1 - E + E / (1 + bx**2))
-        return D * C * np.cos(C * np.arctan(phi)) / (1 + phi**2) * dphi
+        return _laws.magic_formula_d(nu_a, B, C, D, E, 0.0, 0.0, 0.0, 0.0)[1]
 
 
 # --------------------------------------------------------------------------------------------
