@@ -458,7 +458,19 @@ class ResolvedPoint(OperatingPoint):
 
     def replace(self, **changes: float | None) -> OperatingPoint:
         """A copy with some variables changed (validated): a `ResolvedPoint` while it is
-        given by ``nu`` and ``F_s``, else the `OperatingPoint` request (resolve it)."""
+        given by ``nu`` and ``F_s``, else the `OperatingPoint` request (resolve it).
+
+        Parameters
+        ----------
+        **changes : float or None
+            Operating variables by name (``r_g``, ``nu``, ``tau``, ``F_s``, ``T_l``,
+            ``omega_p``) and their new values (SI; None removes one).
+
+        Returns
+        -------
+        OperatingPoint
+            A `ResolvedPoint` when the copy is given by ``nu`` and ``F_s``.
+        """
         out = self.request.replace(**changes)
         return out.resolve_given()
 

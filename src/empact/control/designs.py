@@ -54,7 +54,18 @@ class ControllerType:
                 if p.default is not inspect.Parameter.empty}
 
     def accepts(self, option: str) -> bool:
-        """Whether the design function takes the keyword `option`."""
+        """Whether the design function takes the keyword `option`.
+
+        Parameters
+        ----------
+        option : str
+            A keyword argument name (``"alpha_min"``, ``"bandwidth"``, ...).
+
+        Returns
+        -------
+        bool
+            True where the registered design function accepts it.
+        """
         return option in inspect.signature(self.design_function()).parameters
 
 

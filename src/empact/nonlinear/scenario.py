@@ -338,7 +338,18 @@ class Scenario:
 
     def with_options(self, **changes: Any) -> "Scenario":
         """A copy whose model options have the `changes` (`ModelOptions` fields, e.g.
-        ``traction=load_traction("curves.csv")``), validated."""
+        ``traction=load_traction("curves.csv")``), validated.
+
+        Parameters
+        ----------
+        **changes
+            `ModelOptions` fields by name and their new values.
+
+        Returns
+        -------
+        Scenario
+            The scenario with the changed options (`ModelOptions.from_mapping` validates them).
+        """
         values = {f.name: getattr(self.options, f.name) for f in fields(self.options)}
         return replace(self, options=ModelOptions.from_mapping({**values, **changes}))
 

@@ -289,7 +289,25 @@ class CompiledSampledController(SampledController, Protocol):
     def run_compiled(self, k0: int, k1: int, loop: SampledLoop, t: float, h: float,
                      filled: int, n_steps: int, n_rej: int) -> tuple[int, float, float, int,
                                                                      int, int, int]:
-        """Samples `k0` to ``k1 - 1`` with the integrator in one compiled loop."""
+        """Samples `k0` to ``k1 - 1`` with the integrator in one compiled loop.
+
+        Parameters
+        ----------
+        k0, k1 : int
+            The simulator's first sample and the one after the last.
+        loop : SampledLoop
+            The simulator's arrays and the integrator's arguments.
+        t, h : float
+            Time [s] and step size [s] the integrator continues from.
+        filled, n_steps, n_rej : int
+            Output samples filled, integration steps taken and rejected so far.
+
+        Returns
+        -------
+        tuple
+            ``(status, t, h, filled, n_steps, n_rej, k)``: the integrator's status after
+            sample `k`, the last one run.
+        """
 
 
 def _signal_table(model: EmpactModel, signals: Mapping[str, NDArray], u0: NDArray,

@@ -479,7 +479,18 @@ class TabulatedTraction:
 
         The true largest value of ``mu(., r_g)`` over `nu_range` (the slips every curve
         covers), found exactly on the piecewise-cubic interpolant by the compiled law the
-        nonlinear model uses (`empact.variator._traction_table.table_peak`)."""
+        nonlinear model uses (`empact.variator._traction_table.table_peak`).
+
+        Parameters
+        ----------
+        r_g : array_like
+            Geometric ratio(s) [-], > 0.
+
+        Returns
+        -------
+        nu_peak, mu_peak : ndarray
+            Slip [-] and traction coefficient [-] at the peak, each shaped like `r_g`.
+        """
         r = np.asarray(r_g, float)
         if np.any(~np.isfinite(r) | (r <= 0)):
             bad = r[~np.isfinite(r) | (r <= 0)] if r.ndim else r
@@ -495,7 +506,13 @@ class TabulatedTraction:
     def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
         """Peak traction coefficient ``mu_max(r_g)`` [-] of the interpolated curve at each
         ratio (`peak`), shaped like `r_g`: the torque ratio is ``tau = mu / mu_max``, as the
-        compiled model computes it."""
+        compiled model computes it.
+
+        Parameters
+        ----------
+        r_g : array_like
+            Geometric ratio(s) [-], > 0.
+        """
         return self.peak(r_g)[1]
 
 
