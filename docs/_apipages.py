@@ -9,7 +9,8 @@ from pathlib import Path
 #: page -> (title, modules whose __all__ it lists); in the order of the README's layout
 PAGES = {
     "empact": ("empact: the curated namespace", ["empact"]),
-    "params": ("Parameters and operating points", ["empact.params", "empact.errors"]),
+    "params": ("Parameters and operating points",
+               ["empact.params", "empact.operating", "empact.errors"]),
     "variator": ("empact.variator: geometry, traction, creep, thrust ratio",
                  ["empact.variator", "empact.variator.geometry", "empact.variator.traction",
                   "empact.variator.shift_law", "empact.variator.thrust_ratio"]),
@@ -20,9 +21,11 @@ PAGES = {
              ["empact.slip.coupling", "empact.slip.model", "empact.slip.loci",
               "empact.slip.stability"]),
     "nonlinear": ("empact.nonlinear: the whole CVT (Secs. 2.3, 3)",
-                  ["empact.nonlinear.model", "empact.nonlinear.equilibrium",
+                  ["empact.nonlinear.model", "empact.nonlinear.options",
+                   "empact.nonlinear.equilibrium",
                    "empact.nonlinear.linearization", "empact.nonlinear.nmp",
-                   "empact.nonlinear.scenario", "empact.nonlinear.simulation"]),
+                   "empact.nonlinear.scenario", "empact.nonlinear.controller_spec",
+                   "empact.nonlinear.simulation"]),
     "identification": ("empact.identification: realisation, FRF estimation, records",
                        ["empact.identification.realization",
                         "empact.identification.frf_estimation",

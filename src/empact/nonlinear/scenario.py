@@ -101,12 +101,13 @@ from numpy.typing import NDArray
 
 from .._deprecate import REMOVAL, warn_renamed
 from .._lazy import lazy_module
-from .._validate import check_bool, check_choice, check_number, check_values
+from .._validate import check_choice, check_number, check_values
 from ..errors import ParameterError
 from ..hardware import SensorParams, ServoLimits
 from ..params import OPERATING_VARIABLES, OperatingPoint, Params, check_clamping, read_toml
 from ..variator.geometry import check_ratio
 from ..variator.traction import traction_from_params
+from .controller_spec import CLAMPING, ControllerSpec
 from .model import ModelOptions
 
 __all__ = ["Scenario", "ControllerSpec", "load_scenario", "scenario_from_dict", "list_examples",
@@ -116,13 +117,6 @@ __all__ = ["Scenario", "ControllerSpec", "load_scenario", "scenario_from_dict", 
 
 optimize = lazy_module("scipy.optimize")
 
-#: clamping strategies of a closed-loop scenario: the slip loop, or a production CVT's
-#: open-loop safety factor
-CLAMPING = ("feedback", "safety-factor")
-#: the safety-factor strategy's traction coefficient: one for all ratios, or per ratio
-MU_DESIGN = ("ratio-blind", "ratio-aware")
-#: what the clamping feedforward may use: the driveshaft torque, the load motor's torque
-FF_SIGNALS = ("T_ds", "T_l_act")
 
 #: integration methods (``[solver] method``, `empact.nonlinear.simulation.simulate`'s
 #: ``method``): the compiled order-2 Rosenbrock method (ode23s) and the stiffly accurate
@@ -156,95 +150,6 @@ _MOVED = {"controller": "[controller] file", "controller_rate": "[controller] ra
 
 #: places of the shipped scenarios: open loop, closed loop
 _EXAMPLE_FOLDERS = ("scenarios", "control")
-
-
-@dataclass(frozen=True)
-class ControllerSpec:
-    """The ``[controller]`` table of a scenario (data only: `empact.control.closed_loop`
-    loads the file and builds the loop law, `empact.control.law`).
-
-    Attributes
-    ----------
-    file : str
-        Controller file (absolute, or relative to the scenario's folder once loaded) or
-        ``"shipped:NAME"``.
-    rate : float
-        Sample rate [Hz]; the commands are held between samples.
-    feedforward : bool
-        Clamping feedforward of a measured torque.
-    feedforward_gain : float
-        Share of the measured torque the feedforward clamps for (below 1 the belt keeps part
-        of its damping of the driveshaft mode, which a full feedforward cancels).
-    feedforward_signal : {"T_ds", "T_l_act"}
-        The driveshaft torque a bench measures, or the load motor's torque (a vehicle's
-        engine torque estimate plays its part at the input).
-    feedforward_filter_hz : float
-        Corner of the feedforward's first-order low-pass [Hz].
-    traction_error : float
-        Factor on the feedforward's traction coefficient (1.05: the estimate 5 % high).
-    clamping : {"feedback", "safety-factor"}
-    safety_factor : float
-    mu_design : {"ratio-blind", "ratio-aware"}
-        The safety-factor strategy's traction coefficient: the smallest peak over the ratio
-        range, or the peak at the measured ratio.
-    decoupling : bool
-        The primary servo torque follows the feedforward's clamping (the holding torques'
-        ratio at the reference ratio), so that a clamping change keeps the thrust ratio.
-    decoupling_filter_hz : float
-        Corner of the decoupler's first-order low-pass [Hz].
-    shift_feedforward : bool
-        Coordinated shifting: the primary servo torque of the reference's ratio rate and the
-        clamping of the secondary side's acceleration, fed forward.
-    anti_windup : bool
-    sensors, limits : bool
-        The parameter set's (and the scenario's) sensors and servo limits; False: ideal.
-    seed : int
-        Seed of the sensor noise.
-    """
-
-    file: str
-    rate: float = 1000.0
-    feedforward: bool = False
-    feedforward_gain: float = 0.9
-    feedforward_signal: str = "T_ds"
-    feedforward_filter_hz: float = 100.0
-    traction_error: float = 1.0
-    clamping: str = "feedback"
-    safety_factor: float = 1.3
-    mu_design: str = "ratio-blind"
-    decoupling: bool = False
-    decoupling_filter_hz: float = 5.0
-    shift_feedforward: bool = False
-    anti_windup: bool = True
-    sensors: bool = True
-    limits: bool = True
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        rate = check_number("controller.rate", self.rate, 1.0, 1e5, unit="Hz")
-        object.__setattr__(self, "rate", rate)
-        object.__setattr__(self, "feedforward_filter_hz", check_number(
-            "controller.feedforward_filter_hz", self.feedforward_filter_hz, 0.0, 0.5 * rate,
-            lo_open=True, unit="Hz", note="below the Nyquist frequency"))
-        object.__setattr__(self, "decoupling_filter_hz", check_number(
-            "controller.decoupling_filter_hz", self.decoupling_filter_hz, 0.0, 0.5 * rate,
-            lo_open=True, unit="Hz", note="below the Nyquist frequency"))
-        object.__setattr__(self, "traction_error", check_number(
-            "controller.traction_error", self.traction_error, 0.5, 2.0))
-        object.__setattr__(self, "feedforward_gain", check_number(
-            "controller.feedforward_gain", self.feedforward_gain, 0.0, 1.5, lo_open=False))
-        object.__setattr__(self, "safety_factor", check_number(
-            "controller.safety_factor", self.safety_factor, 1.0, 3.0))
-        check_choice("controller.clamping", self.clamping, CLAMPING)
-        check_choice("controller.mu_design", self.mu_design, MU_DESIGN)
-        check_choice("controller.feedforward_signal", self.feedforward_signal, FF_SIGNALS)
-        for name in ("feedforward", "decoupling", "shift_feedforward", "anti_windup",
-                     "sensors", "limits"):
-            check_bool(f"controller.{name}", getattr(self, name))
-        seed = check_number("controller.seed", self.seed, 0, 2**32 - 1, lo_open=False)
-        if seed != int(seed):
-            raise ParameterError(f"controller.seed = {self.seed!r}: must be a whole number")
-        object.__setattr__(self, "seed", int(seed))
 
 
 _SCENARIO_KEYS["controller"] = {f.name for f in fields(ControllerSpec)}
