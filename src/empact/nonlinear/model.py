@@ -225,7 +225,7 @@ class EmpactModel:
         Parameters
         ----------
         name : str
-            One of `outputs`.
+            An output's name (`outputs`; `OUTPUT_UNITS` gives its unit).
         """
         return _index(self.outputs, name, "output")
 
@@ -235,7 +235,7 @@ class EmpactModel:
         Parameters
         ----------
         name : str
-            One of `inputs`.
+            An input's name (`inputs`: torques, or references where a loop is closed).
         """
         return _index(self.inputs, name, "input")
 
@@ -300,10 +300,8 @@ class EmpactModel:
         ----------
         t : float
             Time [s] (unused).
-        x : array_like, shape (n,)
-            State, in the order of `states` (SI).
-        u : array_like, shape (4,)
-            Inputs, in the order of `inputs` (SI).
+        x, u : array_like, shapes (n,) and (4,)
+            As `evaluate`'s.
         """
         return self.evaluate(x, u)[0]
 
@@ -314,10 +312,8 @@ class EmpactModel:
         ----------
         t : float
             Time [s] (unused: the model is autonomous).
-        x : array_like, shape (n,)
-            State, in the order of `states` (SI).
-        u : array_like, shape (4,)
-            Inputs, in the order of `inputs` (SI).
+        x, u : array_like, shapes (n,) and (4,)
+            The state (`states`) and the inputs (`inputs`), SI.
         """
         return self.evaluate(x, u)[1]
 
@@ -326,10 +322,8 @@ class EmpactModel:
 
         Parameters
         ----------
-        x : array_like, shape (n,)
-            State, in the order of `states` (SI).
-        u : array_like, shape (4,)
-            Inputs, in the order of `inputs` (SI).
+        x, u : array_like, shapes (n,) and (4,)
+            As `evaluate`'s.
         """
         return dict(zip(self.outputs, map(float, self.output(0.0, x, u))))
 
@@ -340,10 +334,8 @@ class EmpactModel:
 
         Parameters
         ----------
-        x : array_like, shape (n,)
-            State, in the order of `states` (SI).
-        u : array_like, shape (4,)
-            Inputs, in the order of `inputs` (SI).
+        x, u : array_like, shapes (n,) and (4,)
+            The point to linearise at, as `evaluate` takes it.
         """
         x, u = self._check(x, u)
         A = np.empty((self.n, self.n))
@@ -432,16 +424,8 @@ class EmpactModel:
 
         Parameters
         ----------
-        r_g : float
-            Geometric ratio [-].
-        R_p, R_s : float
-            Primary and secondary running radii [m].
-        phi : float
-            Wrap angle on the primary pulley [rad].
-        F_el : float
-            The belt element's secondary force [N].
-        tau : float
-            Torque ratio ``mu / mu_max`` [-].
+        r_g, R_p, R_s, phi, F_el, tau : float
+            One point of `static_creep`'s arrays, in its units.
         work : list of ndarray, optional
             Eight one-element work arrays, reused between calls (default: new ones).
         """
@@ -475,10 +459,8 @@ class EmpactModel:
 
         Parameters
         ----------
-        X : array_like, shape (N, n)
-            States, one per row.
-        U : array_like, shape (N, 4)
-            Inputs, one per row.
+        X, U : array_like, shapes (N, n) and (N, 4)
+            The points, one per row, as `evaluate_many` takes them.
         """
         X, U = np.ascontiguousarray(X, float), np.ascontiguousarray(U, float)
         N, n, ny = X.shape[0], self.n, len(self.outputs)

@@ -99,11 +99,12 @@ class SimulationResult:
         Returns
         -------
         pandas.DataFrame
+            One row per sample time, one column per signal.
 
         Raises
         ------
         ImportError
-            Without pandas.
+            Where pandas is not installed.
         """
         columns = {"t": self.t, **{n: self.y[:, k] for k, n in enumerate(self.outputs)},
                    **{n: self.u[:, k] for k, n in enumerate(self.inputs)
@@ -294,19 +295,19 @@ class CompiledSampledController(SampledController, Protocol):
         Parameters
         ----------
         k0, k1 : int
-            The simulator's first sample and the one after the last.
+            Sample range ``[k0, k1)`` to run.
         loop : SampledLoop
-            The simulator's arrays and the integrator's arguments.
+            What `simulate` hands over (signals, outputs, the integrator's settings).
         t, h : float
-            Time [s] and step size [s] the integrator continues from.
+            Where the integration stands: time [s] and next step size [s].
         filled, n_steps, n_rej : int
-            Output samples filled, integration steps taken and rejected so far.
+            Counters carried across calls (rows written, steps accepted, steps rejected).
 
         Returns
         -------
         tuple
-            ``(status, t, h, filled, n_steps, n_rej, k)``: the integrator's status after
-            sample `k`, the last one run.
+            The counters and the time after the range, with the integrator's status and
+            the last sample run: ``(status, t, h, filled, n_steps, n_rej, k)``.
         """
 
 

@@ -209,9 +209,9 @@ class TabulatedThrustRatio:
         Parameters
         ----------
         tau : array_like
-            Torque ratios ``mu / mu_max`` [-].
+            Torque ratios ``mu / mu_max`` [-] (held at the table's ends outside it).
         r_g : array_like
-            Geometric ratios [-] (broadcast against `tau`).
+            Geometric ratios [-], broadcast with `tau` (interpolated in ``ln r_g``).
         """
         return np.exp(interpolate_curves(self.ratios, self.tau_data,
                                          [np.log(k) for k in self.kappa_data], tau, r_g))

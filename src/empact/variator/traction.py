@@ -150,9 +150,9 @@ class TractionModel(Protocol):
         Parameters
         ----------
         nu : array_like
-            Slip [-].
+            Slip [-] (a fraction), in `nu_range`.
         r_g : array_like
-            Geometric ratio [-] (broadcast against `nu`).
+            Geometric ratio ``R_p / R_s`` [-], broadcast with `nu`.
         """
 
     def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
@@ -160,10 +160,8 @@ class TractionModel(Protocol):
 
         Parameters
         ----------
-        nu : array_like
-            Slip [-].
-        r_g : array_like
-            Geometric ratio [-] (broadcast against `nu`).
+        nu, r_g : array_like
+            Slip [-] in `nu_range` and geometric ratio [-], broadcast together.
         """
 
 
@@ -293,27 +291,26 @@ class MagicFormulaTraction:
         Parameters
         ----------
         nu : array_like
-            Slip [-].
+            Slip [-], within `nu_range`.
         r_g : array_like
             Geometric ratio [-] (broadcast against `nu`).
         """
-        nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
-        B, C, D, E = self.coefficients(r_a)
-        return _laws.magic_formula(nu_a, B, C, D, E)
+        return _laws.magic_formula(*self._at(nu, r_g))
 
     def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
         """Slope ``d mu / d nu`` [-] (analytic), shape of ``broadcast(nu, r_g)``.
 
         Parameters
         ----------
-        nu : array_like
-            Slip [-].
-        r_g : array_like
-            Geometric ratio [-] (broadcast against `nu`).
+        nu, r_g : array_like
+            Slip [-] within `nu_range` and geometric ratio [-], broadcast together.
         """
+        return _laws.magic_formula_d(*self._at(nu, r_g), 0.0, 0.0, 0.0, 0.0)[1]
+
+    def _at(self, nu: ArrayLike, r_g: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+        """``(nu, B, C, D, E)`` at the checked, broadcast slips and ratios."""
         nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
-        B, C, D, E = self.coefficients(r_a)
-        return _laws.magic_formula_d(nu_a, B, C, D, E, 0.0, 0.0, 0.0, 0.0)[1]
+        return (nu_a, *self.coefficients(r_a))
 
 
 # --------------------------------------------------------------------------------------------
@@ -440,9 +437,9 @@ class TabulatedTraction:
         Parameters
         ----------
         nu : array_like
-            Slip [-].
+            Slip [-], within `nu_range` (the slips every curve covers).
         r_g : array_like
-            Geometric ratio [-] (broadcast against `nu`).
+            Geometric ratio [-] (broadcast against `nu`; held at the end curves outside).
         """
         return self._evaluate(nu, r_g, self._interp)
 
@@ -451,10 +448,8 @@ class TabulatedTraction:
 
         Parameters
         ----------
-        nu : array_like
-            Slip [-].
-        r_g : array_like
-            Geometric ratio [-] (broadcast against `nu`).
+        nu, r_g : array_like
+            As `mu`'s.
         """
         return self._evaluate(nu, r_g, self._slope)
 
