@@ -272,3 +272,17 @@ def test_ratio_is_statically_stable_at_the_shipped_set_points(params, r_g):
     predicted = -np.hypot(300.0, slow.shift.omega_0) * creep_coefficient(
         slow, r_g, 1e4, pl.trim.model.output_dict(pl.trim.x, pl.trim.u)["R_p"]) * S
     assert real.size == 1 and real[0].real == pytest.approx(predicted, rel=0.1)
+
+
+def test_numpy_creep_coefficient_is_the_compiled_law_bitwise(params):
+    """One law, one place (issue 31): the NumPy creep coefficient evaluates
+    `empact.variator._laws.creep_coefficient`, the code the kernel's compiled law is built
+    from, so the two agree to the last bit (reference: the kernel's `creep_coefficient` on the
+    shipped parameter vector; tolerance: none, bitwise)."""
+    m = nonlinear_model(params)
+    r = np.array([0.45, 0.8, 1.0, 1.7, 2.2])
+    F = np.array([3e3, 8e3, 1.2e4, 2e4, 3e4])
+    R_p = np.array([0.03, 0.045, 0.05, 0.06, 0.07])
+    got = creep_coefficient(params, r, F, R_p)
+    want = np.array([K.creep_coefficient(ri, Ri, Fi, m.p) for ri, Ri, Fi in zip(r, R_p, F)])
+    np.testing.assert_array_equal(got, want)

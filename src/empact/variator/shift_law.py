@@ -281,12 +281,10 @@ def creep_coefficient(params: _HasShift, r_g: ArrayLike, F_s: ArrayLike,
         return sh.gain * creep_map.K_c(r, F_s)
     if R_p is None:
         R_p = variator_state(r, v).R_p
-    # `empact.variator._laws.creep_coefficient`, but for one rounding: ``a2 lr**2`` here,
-    # ``(a2 lr) lr`` there; the loop law's shift feedforward (`empact.control.law`) spells
-    # this form term by term, and a closed-loop shift run moves by 1e-6 on either change
-    lr = np.log(r)
-    D = sh.D_ref * (1 + sh.k_D * (np.asarray(F_s, float) - sh.F_ref))
-    return sh.gain * D * g_beta(v.beta) * r * (np.asarray(R_p) / v.a) * (sh.a1 + sh.a2 * lr**2)
+    # the one law, as the kernel and the loop law's compiled sample evaluate it
+    return _laws.creep_coefficient(r, np.asarray(R_p, float), np.asarray(F_s, float), np.log(r),
+                                   v.a, sh.gain, g_beta(v.beta), sh.D_ref, sh.k_D, sh.F_ref,
+                                   sh.a1, sh.a2)
 
 
 def shift_rate(params: _HasShift, r_g: ArrayLike, omega_p: ArrayLike, kappa: ArrayLike,

@@ -307,10 +307,13 @@ class MagicFormulaTraction:
         """
         return _laws.magic_formula_d(*self._at(nu, r_g), 0.0, 0.0, 0.0, 0.0)[1]
 
-    def _at(self, nu: ArrayLike, r_g: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+    def _at(self, nu: ArrayLike, r_g: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                                          NDArray[np.float64], NDArray[np.float64],
+                                                          NDArray[np.float64]]:
         """``(nu, B, C, D, E)`` at the checked, broadcast slips and ratios."""
         nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
-        return (nu_a, *self.coefficients(r_a))
+        B, C, D, E = self.coefficients(r_a)
+        return nu_a, B, C, D, E
 
 
 # --------------------------------------------------------------------------------------------
