@@ -19,6 +19,8 @@ References and tolerances:
   (coefficients linear in ln r_g) are two different interpolations: the outputs agree to
   2e-3 of their largest value (measured 3.9e-4 for the slip, 1.7e-4 for tau).
 """
+import re
+
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -389,3 +391,94 @@ def test_a_table_where_it_cannot_apply_is_one_line(tmp_path, params):
         assert res.exit_code == 2, res.output
         lines = res.output.strip().splitlines()
         assert len(lines) == 1 and match in lines[0], lines
+
+
+# -- the parameter file: [traction] table = "curves.csv" ------------------------------------
+def _params_with_table(tmp_path, params, table='"t.csv"'):
+    """A parameter file in `tmp_path` naming a table next to it (relative path)."""
+    _write_sampled(tmp_path / "t.csv", params)
+    path = tmp_path / "p.toml"
+    path.write_text(f"[traction]\ntable = {table}\n")
+    return path
+
+
+def test_a_parameter_file_names_a_table_the_model_uses(tmp_path, params, monkeypatch):
+    """The table is read relative to the parameter file (not the working folder), once; the
+    model of that set holds it: its parameter vector ``p`` equals, bitwise, the one built
+    with the same table as an explicit option; an explicit option wins over the file's."""
+    from empact.params import load_params
+    from empact.variator.traction import load_traction
+
+    path = _params_with_table(tmp_path, params)
+    monkeypatch.chdir(tmp_path.parent)  # a relative path would not resolve from here
+    p = load_params(path)
+    assert p.traction_table_file == str(tmp_path / "t.csv")
+    assert p.traction_table is not None and p.traction == params.traction
+    explicit = nonlinear_model(params, traction=load_traction(tmp_path / "t.csv"))
+    model = nonlinear_model(p)
+    assert model.options.traction is p.traction_table
+    assert np.array_equal(model.p, explicit.p)
+    assert not np.array_equal(model.p, nonlinear_model(params).p)
+    assert np.array_equal(nonlinear_model(p, traction=MEASURED).p,
+                          nonlinear_model(params, traction=MEASURED).p)
+    # a changed copy keeps the loaded table (not read again) and the set stays hashable
+    q = p.from_dotted({"actuation.k_w": 2 * params.actuation.k_w})
+    assert q.traction_table is p.traction_table and hash(q) != hash(p)
+
+
+@pytest.mark.parametrize("value, match", [
+    ('"missing.csv"', r"missing\.csv': no such traction table$"),
+    ('"bad.csv"', r"nu must increase"),
+    ("3", r"must be the path of a traction table"),
+], ids=["missing", "bad-file", "wrong-type"])
+def test_a_bad_table_in_a_parameter_file_is_one_line(tmp_path, params, value, match):
+    from empact.params import load_params
+
+    (tmp_path / "bad.csv").write_text("r_g,nu,mu\n1,0,0\n1,0.02,0.09\n1,0.01,0.1\n")
+    path = _params_with_table(tmp_path, params, value)
+    with pytest.raises(ParameterError) as err:
+        load_params(path)
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith(f"{path}: traction.table = ") and \
+        re.search(match, msg), msg
+
+
+def test_a_table_round_trips_through_the_file_and_leaves_the_default_alone(tmp_path, params):
+    """`dumps_params` writes the table's (resolved) path as ``traction.table`` and
+    `load_params` reads it back to an equal set; the shipped set names no table and its text
+    has no ``table`` key."""
+    from empact.params import default_params, dumps_params, load_params
+
+    p = load_params(_params_with_table(tmp_path, params))
+    again = tmp_path / "sub" / "again.toml"
+    again.parent.mkdir()
+    again.write_text(dumps_params(p))
+    q = load_params(again)
+    assert q == p and q.traction_table_file == p.traction_table_file
+    assert default_params().traction_table is None
+    assert "table" not in dumps_params(default_params())
+    assert load_params(None).to_dict() == default_params().to_dict()
+
+
+def test_the_cli_takes_a_table_from_the_parameter_file(tmp_path, params):
+    """``params validate`` accepts the file; ``control simulate --params file.toml`` runs on
+    its table: the metrics equal, exactly, those of ``--traction t.csv`` (the same table by
+    the other road) and differ from the analytic run's."""
+    import json
+
+    from click.testing import CliRunner
+
+    from empact.cli import main
+
+    path = _params_with_table(tmp_path, params)
+    res = CliRunner().invoke(main, ["params", "validate", str(path)])
+    assert res.exit_code == 0, res.output
+    runs = {}
+    for name, extra in (("file", ["--params", str(path)]),
+                        ("option", ["--traction", str(tmp_path / "t.csv")])):
+        res = CliRunner().invoke(main, ["control", "simulate", "--example",
+                                        "slip-load-step-r1", "--json", "--quiet", *extra])
+        assert res.exit_code == 0, res.output
+        runs[name] = json.loads(res.output)
+    assert runs["file"]["metrics"] == runs["option"]["metrics"]
+    assert all(c["met"] for c in runs["file"]["targets"])

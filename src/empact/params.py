@@ -8,7 +8,8 @@ A parameter set has one section per concept::
     [damping.moderate]
     [damping.large]
     [driveline]         inertias and stiffnesses of the test-bench driveline (Fig. 7)
-    [traction]          traction curve mu(nu, r_g) (Fig. 10)
+    [traction]          traction curve mu(nu, r_g) (Fig. 10); ``table = "curves.csv"``:
+                        measured curves instead (path relative to the file)
     [shift]             creep-mode shifting of the belt (Carbone et al. 2007; Ide et al.)
     [thrust_ratio]      torque-dependent equilibrium thrust ratio kappa(tau, r_g)
     [paper_sec21]       stiffnesses of the paper's Sec. 2.1 kinematics (the published variant)
@@ -28,7 +29,7 @@ from __future__ import annotations
 
 import os
 import tomllib
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, field, fields
 from importlib import resources
 from typing import Any, Literal, Mapping, overload
 
@@ -49,7 +50,7 @@ from .operating import (
 from .variator.geometry import VariatorParams, ratio_range
 from .variator.shift_law import ShiftParams
 from .variator.thrust_ratio import ThrustRatioParams
-from .variator.traction import TractionParams
+from .variator.traction import TabulatedTraction, TractionParams, load_traction
 
 __all__ = [
     "ParameterError", "VariatorParams", "ActuationParams", "DampingLevel", "DampingParams",
@@ -264,6 +265,15 @@ class Params:
         ``[sensors]`` tables.
     operating : OperatingPoint
         The default operating point (``[operating]``).
+    traction_table_file : str or None
+        The file of measured traction curves the parameter file names (``[traction] table =
+        "curves.csv"``, resolved relative to that file by `load_params`), or None: the
+        analytic curve of ``[traction]``.  What `to_dict` writes back as ``traction.table``.
+    traction_table : TabulatedTraction or None
+        Those curves, loaded and validated once (from `traction_table_file` when not given):
+        the nonlinear model's default traction (`empact.nonlinear.nonlinear_model`; an
+        explicit ``traction`` option wins).  Not compared: two sets are equal when they name
+        the same file.
     """
 
     variator: VariatorParams
@@ -277,8 +287,11 @@ class Params:
     servo: ServoLimits
     sensors: SensorParams
     operating: OperatingPoint
+    traction_table_file: str | None = None
+    traction_table: TabulatedTraction | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
+        self._load_traction_table()
         if self.shift.k_D * self.shift.F_ref >= 0.9:
             raise ParameterError(
                 f"shift.k_D = {self.shift.k_D:g}: with F_ref = {self.shift.F_ref:g} N the "
@@ -289,12 +302,38 @@ class Params:
                 f"operating.r_g = {self.operating.r_g!r}: outside the geometric ratio range "
                 f"[{lo:.4g}, {hi:.4g}] of this variator")
 
+    def _load_traction_table(self) -> None:
+        """Check the measured traction table's file and load it once (`traction_table`)."""
+        file, table = self.traction_table_file, self.traction_table
+        if table is not None and not isinstance(table, TabulatedTraction):
+            raise ParameterError(f"traction_table = {table!r}: must be a TabulatedTraction "
+                                 "(empact.variator.traction.load_traction)")
+        if file is None:
+            if table is not None:  # given as an object: its source names it
+                object.__setattr__(self, "traction_table_file", table.source)
+            return
+        if not isinstance(file, (str, os.PathLike)):
+            raise ParameterError(f"traction.table = {file!r}: must be the path of a traction "
+                                 "table (a string: .csv or .toml, relative to the parameter "
+                                 "file)")
+        object.__setattr__(self, "traction_table_file", os.fspath(file))
+        if table is None:
+            try:
+                object.__setattr__(self, "traction_table", load_traction(file))
+            except ParameterError as exc:  # (its message starts with the path: said once)
+                why = str(exc).removeprefix(f"{os.path.normpath(file)}: ")
+                raise ParameterError(f"traction.table = {os.fspath(file)!r}: {why}") from None
+
     # -- conversion -----------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """Nested plain dictionary, as written to TOML (variables of the operating point that
-        are not given are left out)."""
-        d = asdict(self)
+        are not given are left out; a measured traction table as its file,
+        ``traction.table``)."""
+        d = {f.name: asdict(getattr(self, f.name)) for f in fields(self)
+             if not f.name.startswith("traction_table")}
         d["operating"] = self.operating.to_dict()
+        if self.traction_table_file is not None:
+            d["traction"]["table"] = self.traction_table_file
         return d
 
     @classmethod
@@ -326,9 +365,13 @@ class Params:
             levels = {name: DampingLevel(**damping[name]) for name in DAMPING_LEVELS}
             for name in _OPTIONAL_SECTIONS:  # every key has a default
                 merged.setdefault(name, {})
+            file = merged["traction"].pop("table", None)
+            # the base's table is reused, not read again, while the file stays the same
+            table = base.traction_table if base is not None \
+                and file == base.traction_table_file else None
             sections = {name: kind(**merged[name]) for name, kind in _SECTIONS.items()}
             return cls(damping=DampingParams(**levels, omega_pulley=damping["omega_pulley"]),
-                       **sections)
+                       **sections, traction_table_file=file, traction_table=table)
         except KeyError as exc:
             raise ParameterError(f"{source}: missing section or key {exc.args[0]!r}") from None
         except TypeError as exc:  # missing fields of a section
@@ -427,6 +470,7 @@ def _schema() -> dict[str, Any]:
     """Nested dict of the allowed keys (values None) of a parameter file."""
     names = lambda kind: {f.name: None for f in fields(kind)}  # noqa: E731
     schema: dict[str, Any] = {name: names(kind) for name, kind in _SECTIONS.items()}
+    schema["traction"]["table"] = None  # a file of measured curves (`Params.traction_table`)
     schema["damping"] = {"omega_pulley": None,
                          **{lvl: names(DampingLevel) for lvl in DAMPING_LEVELS}}
     return schema
@@ -594,6 +638,8 @@ def load_params(path: str | os.PathLike[str] | None = None) -> Params:
     path : str or path-like, optional
         A TOML parameter file with any subset of the shipped keys (``[section] key = value``,
         SI units); the other keys keep their shipped values. `None`: the shipped set.
+        ``[traction] table = "curves.csv"`` names measured traction curves (a path relative
+        to this file; `Params.traction_table`).
 
     Returns
     -------
@@ -614,7 +660,12 @@ def load_params(path: str | os.PathLike[str] | None = None) -> Params:
     """
     if path is None:
         return default_params()
-    return Params.from_dict(read_toml(path), base=default_params(), source=str(path))
+    data = read_toml(path)
+    section = data.get("traction")
+    if isinstance(section, dict) and isinstance(section.get("table"), str):
+        section["table"] = os.path.abspath(os.path.join(os.path.dirname(path),
+                                                        section["table"]))
+    return Params.from_dict(data, base=default_params(), source=str(path))
 
 
 def dumps_params(params: Params, header: str = "") -> str:

@@ -525,15 +525,16 @@ def operating_values(params: Params, option: str, values: Any, *, trim: bool = F
     """Values of one operating-point option (``ratio``, ``slip``, ``clamp``, ``speed``,
     ``tau``, ``load-torque``), checked under the option's name (``--slip = 0.5: ...``).
 
-    The slip must lie in the traction curve's valid range (`traction`, default the analytic
-    curve of `params`); with `trim` (a point the nonlinear model is trimmed at) the clamping
-    force must be positive.
+    The slip must lie in the traction curve's valid range (`traction`, default the table
+    `params` names, else its analytic curve); with `trim` (a point the nonlinear model is
+    trimmed at) the clamping force must be positive.
     """
     name = f"--{option}"
     if option == "ratio":
         return check_ratio(check_values(name, values, 0.0, lo_open=True), params.variator, name)
     if option == "slip":
-        tr = traction_from_params(params) if traction is None else traction
+        tr = traction if traction is not None else params.traction_table \
+            if params.traction_table is not None else traction_from_params(params)
         lo, hi = tr.nu_range
         return check_values(name, values, lo, hi,
                             note="a fraction: 0.01 is 1 %; the traction curve's valid range")

@@ -105,7 +105,9 @@ def op_options(fn: Callable) -> Callable:
 def _setup(params_file: str | None, traction_table: TractionModel | None) \
         -> tuple[Params, TractionModel]:
     params = get_params(params_file)
-    tr = traction_table if traction_table is not None else traction_from_params(params)
+    tr = traction_table if traction_table is not None \
+        else params.traction_table if params.traction_table is not None \
+        else traction_from_params(params)
     return params, tr
 
 

@@ -219,8 +219,9 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
         (`Controller`, default the scenario's own)
     sweep : where the runs are computed (`empact.sweep.SweepOptions`; default in process)
     traction : measured traction curves of the machine (`empact.variator.traction.
-        TabulatedTraction`; the plant and closed-loop analyses; default the analytic curve of
-        each run's ``[traction]``, which a spread may vary; the table is not varied)
+        TabulatedTraction`; the plant and closed-loop analyses; default the table the
+        parameter file names, `Params.traction_table`, else the analytic curve of each run's
+        ``[traction]``, which a spread may vary; the table is not varied)
 
     Returns
     -------
@@ -244,6 +245,7 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
     if analysis == "closed-loop" and controller is None and scenario is not None:
         controller = resolve_controller(scenario.controller.file)
     # the controller knows the nominal machine; each run's differs
+    traction = traction if traction is not None else params.traction_table  # the file's
     if traction is not None and scenario is not None:
         scenario = scenario.with_options(traction=traction)
     context = AnalysisContext(analysis, scenario, controller,

@@ -102,7 +102,7 @@ within about 1 %.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property, lru_cache
 
 import numpy as np
@@ -593,7 +593,10 @@ def nonlinear_model(params: Params, options: ModelOptions | None = None, **kwarg
     params : Params
     options : ModelOptions, optional
         All choices at once; or give them as keywords (``damping="none"``, ``belt="locked"``,
-        ...; see `ModelOptions`).  Unknown keywords are an error.
+        ...; see `ModelOptions`).  Unknown keywords are an error.  Without a ``traction``
+        option the measured curves the parameter file names (`Params.traction_table`) are
+        the traction law, else the magic formula of ``[traction]``; an explicit option (the
+        CLI's ``--traction``, a scenario's ``[model] traction``) wins.
     **kwargs
         The `ModelOptions` fields as keywords (instead of `options`).
 
@@ -613,8 +616,10 @@ def nonlinear_model(params: Params, options: ModelOptions | None = None, **kwarg
     """
     if options is not None and kwargs:
         raise ValueError("give either options or keyword options, not both")
-    return EmpactModel(params, options if options is not None
-                       else ModelOptions.from_mapping(kwargs))
+    opts = options if options is not None else ModelOptions.from_mapping(kwargs)
+    if opts.traction is None and params.traction_table is not None:
+        opts = replace(opts, traction=params.traction_table)
+    return EmpactModel(params, opts)
 
 
 @lru_cache(maxsize=8)

@@ -638,6 +638,7 @@ def check_references(scenario: Scenario, params: Params) -> None:
     if slip is None:
         return
     tr = scenario.options.traction if scenario.options.traction is not None \
+        else params.traction_table if params.traction_table is not None \
         else traction_from_params(params)
     lo, hi = tr.nu_range
     key = f"references.{slip}"
