@@ -218,10 +218,11 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
         and controller
         (`Controller`, default the scenario's own)
     sweep : where the runs are computed (`empact.sweep.SweepOptions`; default in process)
-    traction : measured traction curves of the machine (`empact.variator.traction.
-        TabulatedTraction`; the plant and closed-loop analyses; default the table the
-        parameter file names, `Params.traction_table`, else the analytic curve of each run's
-        ``[traction]``, which a spread may vary; the table is not varied)
+    traction : measured traction curves of the machine (a
+        `empact.variator.traction.TabulatedTraction`; the plant and closed-loop analyses;
+        default the table the parameter file names, `Params.traction_table`, else the
+        analytic curve of each run's ``[traction]``, which a spread may vary; the table is not
+        varied)
 
     Returns
     -------

@@ -69,8 +69,9 @@ class ModelOptions:
         A measured map ``kappa*(tau, r_g)`` (`empact.variator.thrust_ratio.load_thrust_ratio`);
         default the analytic one of ``[thrust_ratio]``.
     creep_map : CreepMap, optional
-        A measured shift-speed map ``K_c(r_g, F_s)`` (`empact.variator.shift_law.
-        load_creep_map`); default the analytic creep coefficient of ``[shift]``.
+        A measured shift-speed map ``K_c(r_g, F_s)``
+        (`empact.variator.shift_law.load_creep_map`); default the analytic creep coefficient
+        of ``[shift]``.
     traction : TabulatedTraction, optional
         Measured traction curves ``mu(nu, r_g)`` (`empact.variator.traction.load_traction`;
         a path is loaded): the kernel evaluates their interpolant (PCHIP in slip, linear in

@@ -13,8 +13,8 @@ compiled nonlinear kernel (`empact.nonlinear._kernel`) and the sampled loop law'
   evaluate elementwise on numpy arrays, which is how the NumPy API calls them (without
   loading numba: ``empact params`` and the linear analyses stay numba-free);
 * the branching ones (`secondary_radius`, `knots_at`, `table_at`) are scalar; the NumPy API
-  holds the same rule with `lerp` on a vectorised search (`empact.variator._tables.
-  interp_knots`), tested equal to the compiled law.
+  holds the same rule with `lerp` on a vectorised search
+  (`empact.variator._tables.interp_knots`), tested equal to the compiled law.
 
 Equation numbers are the paper's (`empact.variator.geometry`).  SI units.
 """

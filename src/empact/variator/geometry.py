@@ -178,9 +178,9 @@ def radii(r_g: ArrayLike, L_belt: float, a: float, *, tol: float = 1e-13,
 def secondary_radius(r_g: float, L_belt: float, a: float, guess: float | None = None,
                      tol: float = 1e-13) -> float:
     """`radii`'s ``R_s`` [m] for one ratio in plain floats (a sampled controller calls it at
-    every sample): the same Newton steps, compiled (`empact.variator._laws.
-    secondary_radius`), started at `guess` (the last sample's radius) or at the exact
-    solution for ``phi = 0``."""
+    every sample): the same Newton steps, compiled
+    (`empact.variator._laws.secondary_radius`), started at `guess` (the last sample's
+    radius) or at the exact solution for ``phi = 0``."""
     R_s = _compiled.secondary_radius(float(r_g), float(L_belt), float(a),
                                      math.nan if guess is None else float(guess), float(tol))
     if R_s != R_s:
