@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._deprecate import warn_renamed
+from ._lazy import lazy_module
 from ._section import Section, param
 from ._validate import check_values
 from .errors import ParameterError
@@ -24,7 +25,9 @@ from .variator.geometry import VariatorParams, variator_state
 from .variator.traction import TractionParams, traction_from_params
 
 __all__ = ["OPERATING_VARIABLES", "OperatingPoint", "ResolvedPoint", "check_clamping",
-           "check_one_slip"]
+           "check_one_slip", "curve_peak"]
+
+optimize = lazy_module("scipy.optimize")
 
 
 class _Machine(Protocol):
@@ -336,21 +339,44 @@ def _mu_max(traction: Any, r_g: float) -> float:
     """Peak traction coefficient of a curve at `r_g` (its ``mu_max`` where it has one)."""
     if hasattr(traction, "mu_max"):
         return float(traction.mu_max(r_g))
-    return _peak(traction, r_g)[1]
+    return curve_peak(traction, r_g)[1]
 
 
-def _peak(traction: Any, r_g: float) -> tuple[float, float]:
+def curve_peak(traction: Any, r_g: float, refine: bool = False) -> tuple[float, float]:
+    """The peak of a traction curve at one ratio: the best of 4001 slips evenly spaced over
+    its non-negative valid range, refined on request by a bounded scalar search between that
+    slip's neighbours (to 1e-12 in slip; the curve is unimodal in slip).
+
+    Parameters
+    ----------
+    traction : TractionModel
+        The curve (``mu(nu, r_g)`` and ``nu_range``), analytic or tabulated.
+    r_g : float
+        Geometric ratio [-].
+    refine : bool, optional
+        Refine the grid's best slip (default False: the grid point).
+
+    Returns
+    -------
+    nu_peak, mu_peak : float
+        Slip [-] at the peak and the traction coefficient [-] there.
+    """
     lo, hi = max(traction.nu_range[0], 0.0), traction.nu_range[1]
     nu = np.linspace(lo, hi, 4001)
     mu = traction.mu(nu, r_g)
     k = int(np.argmax(mu))
-    return float(nu[k]), float(mu[k])
+    a, b = nu[max(k - 1, 0)], nu[min(k + 1, nu.size - 1)]
+    if not refine or a == b:
+        return float(nu[k]), float(mu[k])
+    best = optimize.minimize_scalar(lambda x: -float(traction.mu(x, r_g)), bounds=(a, b),
+                                    method="bounded", options={"xatol": 1e-12})
+    return float(best.x), -float(best.fun)
 
 
 def _slip_at(traction: Any, r_g: float, mu: float, name: str, value: float) -> float:
     """The slip on the rising branch of the traction curve where it reaches `mu` (bisection
     to 1e-15), or a one-line error naming the variable that asked for it."""
-    nu_pk, mu_pk = _peak(traction, r_g)
+    nu_pk, mu_pk = curve_peak(traction, r_g)
     if abs(mu) > mu_pk:
         raise ParameterError(f"operating point: {name} = {value:g} needs mu = {abs(mu):.4g}, "
                              f"above the traction peak {mu_pk:.4g} at r_g = {r_g:g}")

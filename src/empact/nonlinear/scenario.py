@@ -100,10 +100,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._deprecate import REMOVAL, warn_renamed
-from .._lazy import lazy_module
 from .._validate import check_choice, check_number, check_values
 from ..errors import ParameterError
 from ..hardware import SensorParams, ServoLimits
+from ..operating import curve_peak
 from ..params import OPERATING_VARIABLES, OperatingPoint, Params, check_clamping, read_toml
 from ..variator.geometry import check_ratio
 from ..variator.traction import traction_from_params
@@ -115,7 +115,6 @@ __all__ = ["Scenario", "ControllerSpec", "load_scenario", "scenario_from_dict", 
            "check_references", "check_reference_names",
            "CLAMPING", "METHODS", "DEFAULT_METHOD"]
 
-optimize = lazy_module("scipy.optimize")
 
 
 #: integration methods (``[solver] method``, `empact.nonlinear.simulation.simulate`'s
@@ -652,23 +651,9 @@ def check_references(scenario: Scenario, params: Params) -> None:
     pairs = [(nu, float(np.interp(t, ratio[:, 0], ratio[:, 1]))) for t, nu in table] + \
         [(float(np.interp(t, table[:, 0], table[:, 1])), r) for t, r in ratio]
     for nu, r in pairs:
-        nu_pk = min(_peak_slip(tr, r), hi)
+        nu_pk = min(curve_peak(tr, r, refine=True)[0], hi)
         check_number(key, nu, 0.0, nu_pk, lo_open=True, hi_open=True, where=src,
                      note=f"a slip on the rising branch of the traction curve at r_g = {r:g}")
-
-
-def _peak_slip(traction: Any, r_g: float) -> float:
-    """The slip [-] at the peak of `traction` at ratio `r_g` (a grid search refined by a
-    bounded scalar search to 1e-12; the curve is unimodal in slip)."""
-    lo, hi = max(traction.nu_range[0], 0.0), traction.nu_range[1]
-    nu = np.linspace(lo, hi, 4001)
-    k = int(np.argmax(traction.mu(nu, r_g)))
-    a, b = nu[max(k - 1, 0)], nu[min(k + 1, nu.size - 1)]
-    if a == b:
-        return float(a)
-    best = optimize.minimize_scalar(lambda x: -float(traction.mu(x, r_g)), bounds=(a, b),
-                                    method="bounded", options={"xatol": 1e-12})
-    return float(best.x)
 
 
 def input_names(options: ModelOptions) -> tuple[str, ...]:
