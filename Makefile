@@ -16,7 +16,7 @@ DOCS_OUT ?= docs/_build/html
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install -e '.[test,dask,lint,docs]' > $(VENV)/install.log 2>&1 \
+	$(BIN)/python -m pip install -e '.[test,dask,lint,docs,fmi]' > $(VENV)/install.log 2>&1 \
 	  || { cat $(VENV)/install.log; exit 1; }
 	@if grep -iE "warning|deprecat|!!" $(VENV)/install.log \
 	     | grep -vE "^WARNING: Location '[^']*' is ignored"; then \
