@@ -62,7 +62,7 @@ from pythonfmu.enums import Fmi2Status
 from ._io import atomic_file
 from ._validate import check_choice, check_int, check_number
 from .control.controller import Controller, load_controller
-from .control.law import SHIPPED_LOOP, LoopConfig, LoopLaw, RAW_SIGNALS
+from .control.law import RAW_SIGNALS, SHIPPED_LOOP, LoopConfig, LoopLaw
 from .errors import ParameterError
 from .nonlinear.equilibrium import trim
 from .nonlinear.model import (
@@ -700,7 +700,7 @@ class EmpactSlave(Fmi2Slave):
         self.unit.restore(state["unit"])
 
 
-_SLAVE_SCRIPT = f'''"""The FMU's slave class (written by empact fmu export; runs with empact installed)."""
+_SLAVE_SCRIPT = f'''"""The FMU's slave class (written by empact fmu export)."""
 from empact.fmu import EmpactSlave
 
 

@@ -5,8 +5,15 @@ from typing import Any
 
 import click
 
-from ._common import ErrorGroup, InputError, OutputFile, force_option, get_params, \
-    operating_point, params_option
+from ._common import (
+    ErrorGroup,
+    InputError,
+    OutputFile,
+    force_option,
+    get_params,
+    operating_point,
+    params_option,
+)
 from .nonlinear import _add, model_options_for
 
 __all__ = ["fmu_group"]
