@@ -41,7 +41,9 @@ from __future__ import annotations
 import json
 import math
 import shutil
+import sys
 import tempfile
+import uuid
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -93,9 +95,6 @@ REFERENCE_INPUTS = ("r_g_ref", "tau_ref")
 _SPEC = "empact_fmu.json"
 _PARAMS = "params.toml"
 _CONTROLLER = "controller.json"
-_SCRIPT = "empact_cvt_fmu.py"
-#: closed loop without a stop time: the loop law's tables cover this long [s]
-DEFAULT_LOOP_DURATION = 60.0
 
 
 @dataclass(frozen=True)
@@ -121,6 +120,9 @@ class FmuConfig:
         stops the run [rad/s] (`empact.nonlinear.simulation.simulate`).
     max_steps : int
         The integrator's step budget over a run.
+    duration : float
+        Closed loop: the longest run [s] (the loop law's per-sample tables of references and
+        sensor noise are made for it; pythonfmu's binary does not pass the stop time).
     """
 
     params: Params
@@ -133,6 +135,7 @@ class FmuConfig:
     max_step: float = 0.01
     omega_min: float = 1.0
     max_steps: int = 2_000_000
+    duration: float = 60.0
 
     def __post_init__(self) -> None:
         for key in self.options:
@@ -146,6 +149,7 @@ class FmuConfig:
         check_number("omega_min", self.omega_min, 0.0, unit="rad/s")
         check_int("max_steps", self.max_steps, 1, 10**9)
         check_number("rate", self.rate, 1.0, 1e5, unit="Hz")
+        check_number("duration", self.duration, 0.0, 3600.0, lo_open=True, unit="s")
         if self.point is None:
             object.__setattr__(self, "point", self.params.operating)
 
@@ -325,7 +329,7 @@ class CoSimulation:
     def initialize(self, start: float = 0.0, stop: float | None = None) -> None:
         """Start the run at `start` [s]: with changed parameters the model is rebuilt and the
         start trimmed again; closed loop, the law's tables are sized for ``stop - start``
-        (`DEFAULT_LOOP_DURATION` without a stop time).
+        (the exported `FmuConfig.duration` without a stop time).
 
         Parameters
         ----------
@@ -357,7 +361,7 @@ class CoSimulation:
         self._k = 0
         if self.closed:
             span = (stop - start) if stop is not None and stop > start else \
-                DEFAULT_LOOP_DURATION
+                self.config.duration
             self.law = self._make_law(span)
             self._set_free()
         else:
@@ -549,7 +553,7 @@ class CoSimulation:
                 "controller": controller_file is not None,
                 "solver": {"rate": c.rate, "method": c.method, "rtol": c.rtol,
                            "max_step": c.max_step, "omega_min": c.omega_min,
-                           "max_steps": c.max_steps}}
+                           "max_steps": c.max_steps, "duration": c.duration}}
         (folder / _SPEC).write_text(json.dumps(spec, indent=1))
         files.append(folder / _SPEC)
         return files
@@ -583,6 +587,8 @@ class _Real(Real):
         return node
 
 
+#: the slave modules' namespaces, once per instance made in this process (`EmpactSlave`)
+_NAMESPACES: list[Any] = []
 _CAUSALITY = {"parameter": Fmi2Causality.parameter, "input": Fmi2Causality.input,
               "output": Fmi2Causality.output}
 
@@ -603,6 +609,12 @@ class EmpactSlave(Fmi2Slave):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
+        # pythonfmu 0.7's binary releases a reference to the slave module's namespace that
+        # it does not own at every instance it makes (``findClass``: ``Py_DECREF`` of the
+        # borrowed ``PyModule_GetDict``): the third instance of an FMU in one process found
+        # the namespace freed ("module has no attribute 'EmpactCVT'", or a crash); one
+        # reference kept per instance balances it
+        _NAMESPACES.append(vars(sys.modules[type(self).__module__]))
         self.unit = CoSimulation.from_folder(self.resources)
         step = 1.0 / self.unit.config.rate if self.unit.closed else 1e-3
         self.default_experiment = DefaultExperiment(0.0, 1.0, step)
@@ -648,8 +660,8 @@ class EmpactSlave(Fmi2Slave):
                 SubElement(initial, "Unknown", {"index": str(i + 1)})
         return root
 
-    def setup_experiment(self, start_time: float, stop_time: float | None,
-                         tolerance: float | None) -> None:
+    def setup_experiment(self, start_time: float, stop_time: float | None = None,
+                         tolerance: float | None = None) -> None:
         """Keep the experiment's start and stop time.
 
         Parameters
@@ -665,7 +677,7 @@ class EmpactSlave(Fmi2Slave):
 
     def exit_initialization_mode(self) -> None:
         """Build and trim the start (`CoSimulation.initialize`); an error is logged."""
-        start, stop = getattr(self, "_times", (0.0, None))
+        start, stop = getattr(self, "_times", (0.0, None))  # (pythonfmu passes no stop)
         try:
             self.unit.initialize(start, stop)
         except Exception as exc:
@@ -706,6 +718,10 @@ from empact.fmu import EmpactSlave
 
 class {MODEL_IDENTIFIER}(EmpactSlave):
     """empact's nonlinear CVT (its configuration: empact_fmu.json beside this file)."""
+
+
+# a reference to this namespace for as long as the process runs (see EmpactSlave)
+_NAMESPACE = [globals()]
 '''
 
 
@@ -713,7 +729,7 @@ def export_fmu(path: str | Path, params: Params, *, options: Mapping[str, Any] |
                point: OperatingPoint | None = None,
                controller: str | Path | None = None, rate: float = 1000.0,
                method: str = DEFAULT_METHOD, rtol: float = 1e-4, max_step: float = 0.01,
-               omega_min: float = 1.0) -> Path:
+               omega_min: float = 1.0, duration: float = 60.0) -> Path:
     """Write an FMI 2.0 co-simulation FMU of the nonlinear machine (open loop, or with the
     loop law of a controller file); everything is checked before the file is written,
     atomically.
@@ -738,6 +754,8 @@ def export_fmu(path: str | Path, params: Params, *, options: Mapping[str, Any] |
         The integrator (`empact.nonlinear.simulation.METHODS`).
     rtol, max_step, omega_min : float
         As `empact.nonlinear.simulation.simulate`'s.
+    duration : float
+        Closed loop: the longest run [s] (`FmuConfig.duration`).
 
     Returns
     -------
@@ -754,11 +772,13 @@ def export_fmu(path: str | Path, params: Params, *, options: Mapping[str, Any] |
         raise ParameterError(f"{path}: an FMU file ends in .fmu")
     ctrl = load_controller(controller) if controller is not None else None
     unit = CoSimulation(FmuConfig(params, dict(options or {}), point, ctrl, rate, method,
-                                  rtol, max_step, omega_min))
+                                  rtol, max_step, omega_min, duration=duration))
     with tempfile.TemporaryDirectory(prefix="empact-fmu-") as tmp:
         folder = Path(tmp)
         files = unit.write_folder(folder, controller)
-        script = folder / "script" / _SCRIPT
+        # a module name of its own for each FMU: an importer that loads two of them in one
+        # process imports each slave from its own resources (pythonfmu imports it by name)
+        script = folder / "script" / f"empact_fmu_{uuid.uuid4().hex}.py"
         script.parent.mkdir()
         script.write_text(_SLAVE_SCRIPT)
         with atomic_file(path) as dest:

@@ -33,6 +33,8 @@ def fmu_group() -> None:
                    "also the servo torques T_mp, T_ms).")
 @click.option("--rate", type=float, default=1000.0, show_default=True,
               help="The loop law's sample rate [Hz] (with --controller).")
+@click.option("--duration", type=float, default=60.0, show_default=True,
+              help="With --controller: the longest run [s] (the loop law's tables).")
 @click.option("--ratio", "r_g", type=float, default=None,
               help="Starting ratio r_g [-] (default: the parameter file's [operating]).")
 @click.option("--slip", "nu", type=float, default=None, help="Starting slip nu [-].")
@@ -52,7 +54,7 @@ def fmu_group() -> None:
 @_add(model_options_for("speed"))
 @params_option
 @force_option
-def export_cmd(out: str, controller: str | None, rate: float, r_g: float | None,
+def export_cmd(out: str, controller: str | None, rate: float, duration: float, r_g: float | None,
                nu: float | None, tau: float | None, F_s: float | None, T_l: float | None,
                omega_p: float | None, method: str, rtol: float, max_step: float, damping: str,
                drive: str, load: str, kinematics: str, shift_law: str, thrust_ratio: str | None,
@@ -78,5 +80,6 @@ def export_cmd(out: str, controller: str | None, rate: float, r_g: float | None,
     if traction_table is not None:
         options["traction"] = traction_table
     path = export_fmu(out, params, options=options, point=point, controller=controller,
-                      rate=rate, method=method, rtol=rtol, max_step=max_step)
+                      rate=rate, method=method, rtol=rtol, max_step=max_step,
+                      duration=duration)
     click.echo(str(path))
