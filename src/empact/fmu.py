@@ -81,8 +81,8 @@ from .operating import OperatingPoint
 from .params import Params, dumps_params, load_params
 from .variator.traction import TabulatedTraction, load_traction
 
-__all__ = ["export_fmu", "FmuConfig", "CoSimulation", "EmpactSlave", "FmuVariable",
-           "MODEL_IDENTIFIER", "PARAMETER_SECTIONS", "EXPORTED_OPTIONS"]
+__all__ = ["export_fmu", "FmuConfig", "CoSimulation", "FmuVariable", "MODEL_IDENTIFIER",
+           "PARAMETER_SECTIONS", "EXPORTED_OPTIONS", "REFERENCE_INPUTS"]
 
 #: the FMU's model identifier (its binary's name and the slave class)
 MODEL_IDENTIFIER = "EmpactCVT"
@@ -244,7 +244,8 @@ class CoSimulation:
         else:
             self._free = [0, 1, 2, 3]
         self.inputs.update({m.inputs[j]: float(self.op.u[j]) for j in self._free})
-        self.start, self.stop = 0.0, None
+        self.start: float = 0.0
+        self.stop: float | None = None
         self.stepper = Stepper(m, self.op.x, self.op.u, rtol=config.rtol,
                                max_step=config.max_step, omega_min=config.omega_min,
                                max_steps=config.max_steps, method=config.method)
