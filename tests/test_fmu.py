@@ -251,7 +251,7 @@ def test_export_bad_input_is_one_line_and_writes_nothing(tmp_path, monkeypatch):
         (["--params", str(bad)], "J_p"),
         (["--rate", "0", "--controller", PI], "rate"),
         (["--controller", "missing.json"], "missing.json"),
-        (["--thrust-ratio", "map.csv"], "--thrust-ratio"),
+        (["--thrust-ratio", "map.csv"], "map.csv"),
         (["--tau", "1.5"], "--tau"),
         (["--method", "euler"], "euler"),
     ]
@@ -263,3 +263,31 @@ def test_export_bad_input_is_one_line_and_writes_nothing(tmp_path, monkeypatch):
     res = CliRunner().invoke(main, ["fmu", "export", "--out", "m.txt"])
     assert res.exit_code == 2 and ".fmu" in res.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml"]
+
+
+def test_a_measured_traction_table_travels_in_the_fmu(tmp_path):
+    """``--traction curves.csv``: the FMU carries the table, and its unit starts from the
+    trim of the model on that table (bitwise the native trim)."""
+    from empact.variator.traction import load_traction, traction_from_params
+
+    params = empact.load_params()
+    magic = traction_from_params(params)  # the shipped curve sampled, as a measured table
+    nu = np.concatenate([[0.0], np.linspace(0.002, 0.2, 100)])
+    rows = [f"{r:g},{n:.10g},{float(magic.mu(n, r)):.12g}" for r in (0.5, 1.0, 2.0)
+            for n in nu]
+    csv = tmp_path / "curves.csv"
+    csv.write_text("r_g,nu,mu\n" + "\n".join(rows) + "\n")
+    table = load_traction(csv)
+    res = CliRunner().invoke(main, ["fmu", "export", "--out", str(tmp_path / "t.fmu"),
+                                       "--traction", str(csv)])
+    assert res.exit_code == 0, res.output
+    folder = tmp_path / "x"
+    with zipfile.ZipFile(tmp_path / "t.fmu") as z:
+        z.extractall(folder)
+        assert z.read("resources/traction.csv") == csv.read_bytes()
+    unit = CoSimulation.from_folder(folder / "resources")
+    assert unit.model.options.traction is not None
+    point = params.operating
+    model = empact.nonlinear_model(params, drive="speed", traction=table,
+                                   reference_ratio=point.r_g)
+    assert np.array_equal(unit.op.x, empact.trim(model, point).x)

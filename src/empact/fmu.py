@@ -79,7 +79,9 @@ from .nonlinear.scenario import DEFAULT_METHOD, METHODS
 from .nonlinear.simulation import Stepper
 from .operating import OperatingPoint
 from .params import Params, dumps_params, load_params
-from .variator.traction import TabulatedTraction, load_traction
+from .variator.shift_law import load_creep_map
+from .variator.thrust_ratio import load_thrust_ratio
+from .variator.traction import load_traction
 
 __all__ = ["export_fmu", "FmuConfig", "CoSimulation", "FmuVariable", "MODEL_IDENTIFIER",
            "PARAMETER_SECTIONS", "EXPORTED_OPTIONS", "REFERENCE_INPUTS"]
@@ -89,7 +91,12 @@ MODEL_IDENTIFIER = "EmpactCVT"
 #: the parameter blocks whose fields are the FMU's parameters
 PARAMETER_SECTIONS = ("variator", "actuation", "driveline", "traction", "shift")
 #: the model options an FMU is exported with (`ModelOptions`)
-EXPORTED_OPTIONS = ("drive", "load", "damping", "kinematics", "shift_law", "traction")
+EXPORTED_OPTIONS = ("drive", "load", "damping", "kinematics", "shift_law", "traction",
+                    "thrust_ratio", "creep_map")
+#: the measured tables among them, each with its reader (copied into the FMU)
+_TABLES: dict[str, Callable[[Path], Any]] = {"traction": load_traction,
+                                             "thrust_ratio": load_thrust_ratio,
+                                             "creep_map": load_creep_map}
 #: the closed loop's reference inputs (ratio, and the slip set-point by its torque ratio)
 REFERENCE_INPUTS = ("r_g_ref", "tau_ref")
 _SPEC = "empact_fmu.json"
@@ -106,7 +113,7 @@ class FmuConfig:
     params : Params
         The parameter set.
     options : dict
-        Model options (`EXPORTED_OPTIONS`; a ``traction`` a `TabulatedTraction`).
+        Model options (`EXPORTED_OPTIONS`; a measured table as its reader returns it).
     point : OperatingPoint
         The starting point (trimmed at initialisation).
     controller : Controller or None
@@ -507,8 +514,9 @@ class CoSimulation:
         folder = Path(folder)
         spec = json.loads((folder / _SPEC).read_text())
         options = dict(spec["options"])
-        if "traction" in options:
-            options["traction"] = load_traction(folder / options["traction"])
+        for key, read in _TABLES.items():
+            if key in options:
+                options[key] = read(folder / options[key])
         point = OperatingPoint(**spec["point"])
         ctrl = load_controller(folder / _CONTROLLER) if spec["controller"] else None
         return cls(FmuConfig(load_params(folder / _PARAMS), options, point, ctrl,
@@ -533,15 +541,17 @@ class CoSimulation:
         params = c.params
         options = dict(c.options)
         files = []
-        table: TabulatedTraction | None = options.get("traction") or params.traction_table
+        if options.get("traction") is None and params.traction_table is not None:
+            options["traction"] = params.traction_table  # the file's table, as an option
         data = params.to_dict()
         data.get("traction", {}).pop("table", None)
-        if table is not None:
-            src = Path(table.source)
-            name = "traction" + src.suffix
-            shutil.copyfile(src, folder / name)
-            files.append(folder / name)
-            options["traction"] = name
+        for key in _TABLES:
+            if options.get(key) is not None:
+                src = Path(options[key].source)
+                name = key + src.suffix
+                shutil.copyfile(src, folder / name)
+                files.append(folder / name)
+                options[key] = name
         (folder / _PARAMS).write_text(dumps_params(Params.from_dict(data),
                                                    "parameters of the FMU (empact fmu export)"))
         files.append(folder / _PARAMS)
@@ -743,7 +753,8 @@ def export_fmu(path: str | Path, params: Params, *, options: Mapping[str, Any] |
         The parameter set.
     options : mapping, optional
         Model options (`EXPORTED_OPTIONS`: ``drive``, ``load``, ``damping``, ``kinematics``,
-        ``shift_law``, ``traction`` a `TabulatedTraction`).
+        ``shift_law``; the measured ``traction``, ``thrust_ratio``, ``creep_map`` as their
+        readers return them, copied into the FMU from their files).
     point : OperatingPoint, optional
         The starting point (default ``params.operating``).
     controller : str or Path, optional

@@ -7,14 +7,13 @@ import click
 
 from ._common import (
     ErrorGroup,
-    InputError,
     OutputFile,
     force_option,
     get_params,
     operating_point,
     params_option,
 )
-from .nonlinear import _add, model_options_for
+from .nonlinear import _add, _options, model_options_for
 
 __all__ = ["fmu_group"]
 
@@ -68,17 +67,11 @@ def export_cmd(out: str, controller: str | None, rate: float, duration: float, r
     """
     from ..fmu import export_fmu
 
-    for option, value in (("--thrust-ratio", thrust_ratio), ("--creep-map", creep_map)):
-        if value is not None:
-            raise InputError(f"{option}: not exported to an FMU (the FMU takes --traction, "
-                             "--damping, --kinematics, --shift-law, --drive, --load)")
     params = get_params(params_file)
     point = operating_point(params, trim=True, traction=traction_table, ratio=r_g, slip=nu,
                             tau=tau, clamp=F_s, load_torque=T_l, speed=omega_p)
-    options: dict[str, Any] = {"drive": drive, "load": load, "damping": damping,
-                               "kinematics": kinematics, "shift_law": shift_law}
-    if traction_table is not None:
-        options["traction"] = traction_table
+    options = _options(drive, load, damping, kinematics, shift_law, thrust_ratio, creep_map,
+                       traction_table)
     path = export_fmu(out, params, options=options, point=point, controller=controller,
                       rate=rate, method=method, rtol=rtol, max_step=max_step,
                       duration=duration)
