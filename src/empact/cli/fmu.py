@@ -5,6 +5,7 @@ from typing import Any
 
 import click
 
+from .._validate import check_number
 from ._common import (
     ErrorGroup,
     OutputFile,
@@ -67,6 +68,11 @@ def export_cmd(out: str, controller: str | None, rate: float, duration: float, r
     """
     from ..fmu import export_fmu
 
+    # the API's ranges (`empact.fmu.FmuConfig`), checked under the options' names
+    check_number("--rate", rate, 1.0, 1e5, unit="Hz")
+    check_number("--duration", duration, 0.0, 3600.0, lo_open=True, unit="s")
+    check_number("--rtol", rtol, 1e-12, 0.1)
+    check_number("--max-step", max_step, 0.0, 10.0, lo_open=True, unit="s")
     params = get_params(params_file)
     point = operating_point(params, trim=True, traction=traction_table, ratio=r_g, slip=nu,
                             tau=tau, clamp=F_s, load_torque=T_l, speed=omega_p)
