@@ -257,6 +257,7 @@ class CoSimulation:
                                max_step=config.max_step, omega_min=config.omega_min,
                                max_steps=config.max_steps, method=config.method)
         self.law: LoopLaw | None = None
+        self._k = 0  # the law's samples taken
         self._y = self.stepper.outputs()
         if self.closed:  # the law builds (controller against the loop) before any export
             self._make_law(2.0 / config.rate)
