@@ -43,6 +43,7 @@ PAGES = {
     "sweep": ("empact.sweep: in process or on Dask", ["empact.sweep"]),
     "lti": ("empact.lti: frequency responses, zeros, root loci", ["empact.lti"]),
     "export": ("empact.export: .mat and .npz", ["empact.export"]),
+    "fmu": ("empact.fmu: the machine as an FMU (FMI 2.0)", ["empact.fmu"]),
     "plotting": ("empact.plotting: figures from result objects", ["empact.plotting"]),
     "reproduction": ("empact.reproduction: the paper's claims, checked",
                      ["empact.reproduction.claims", "empact.reproduction.linear",

@@ -464,6 +464,14 @@ BAD_INPUT = [
     (["modes", "gearbox"], "invalid value for"),
     (["frf", "actuation", "--n", "1e8"], "'1e8' is not a valid integer"),
     (["slip", "poles", "--bogus"], "no such option"),
+    # the FMU export
+    (["fmu", "export", "--out", "m.txt"], "--out m.txt: file suffix '.txt' must be one of .fmu"),
+    (["fmu", "export", "--out", "m.fmu", "--rtol", "nan"], "--rtol = nan: must be a finite"),
+    (["fmu", "export", "--out", "m.fmu", "--duration", "0"], "--duration = 0: allowed range"),
+    (["fmu", "export", "--out", "m.fmu", "--tau", "2"], "--tau = 2: allowed range"),
+    (["fmu", "export", "--out", "m.fmu", "--controller", "no.json"], "no.json: no such "
+     "controller file"),
+    (["fmu", "export", "--out", "m.fmu", "--params", "neg.toml"], "driveline.J_p = -1"),
     # parameter files
     (["params", "validate", "missing.toml"], "missing.toml: no such parameter file"),
     (["params", "validate", "neg.toml"], "neg.toml: driveline.J_p = -1: allowed range"),

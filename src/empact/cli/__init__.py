@@ -41,6 +41,8 @@ COMMANDS = {
                "Plant family: the exact plant over a grid of operating points."),
     "control": ("empact.cli.control:control_group",
                 "Slip and ratio control: design, robustness, closed loop."),
+    "fmu": ("empact.cli.fmu:fmu_group",
+            "The machine as an FMU (FMI 2.0 co-simulation): export."),
     "montecarlo": ("empact.cli.montecarlo:montecarlo_cmd",
                    "Monte Carlo over parameter spread (in process or on Dask)."),
 }

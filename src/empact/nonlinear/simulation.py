@@ -40,7 +40,7 @@ from .model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinea
 from .scenario import DEFAULT_METHOD, METHODS, Scenario
 
 __all__ = ["SimulationResult", "SampledController", "CompiledSampledController", "SampledLoop",
-           "simulate", "run_scenario",
+           "Stepper", "simulate", "run_scenario",
            "scenario_model", "scenario_signals", "csv_text", "write_csv", "state_tolerances",
            "STATUS", "METHODS", "DEFAULT_METHOD"]
 
@@ -309,6 +309,147 @@ class CompiledSampledController(SampledController, Protocol):
             The counters and the time after the range, with the integrator's status and
             the last sample run: ``(status, t, h, filled, n_steps, n_rej, k)``.
         """
+
+
+class Stepper:
+    """The simulator stepped from one communication point to the next with the inputs held
+    over each step (zero-order hold): what a co-simulation unit's step does
+    (`empact.fmu`).
+
+    The integrator continues across the points as in the sampled loop of `simulate`: the
+    state, the proposed step size and the Jacobian carry over, only the varying columns of
+    the Jacobian are re-evaluated after the first call, and every call ends on its point.
+    So a run of steps ``t_0 < t_1 < ...`` is bitwise `simulate` with a sampled controller
+    of that period (the inputs it does not drive with their breakpoints on the points).
+
+    Parameters
+    ----------
+    model : EmpactModel
+        The model stepped.
+    x0 : ndarray, shape (n,)
+        The initial state (e.g. ``trim(...).x``).
+    u0 : ndarray, shape (4,)
+        The initial inputs (``model.inputs``; SI); `u` holds them, the caller changes it
+        between steps.
+    t0 : float
+        The initial time [s].
+    rtol, max_step, omega_min, max_steps, method
+        As `simulate`'s.
+
+    Attributes
+    ----------
+    x : ndarray, shape (n,)
+        The state at `t` (updated in place).
+    u : ndarray, shape (4,)
+        The inputs held over the next step (set them before `advance`).
+    t : float
+        The time [s] the integration stands at.
+    message : str
+        Why the last `advance` stopped (empty while the run goes on).
+    """
+
+    def __init__(self, model: EmpactModel, x0: NDArray, u0: NDArray, *, t0: float = 0.0,
+                 rtol: float = 1e-4, max_step: float = 0.01, omega_min: float = 1.0,
+                 max_steps: int = 2_000_000, method: str = DEFAULT_METHOD) -> None:
+        self.model = model
+        self._step = _integrator(method)
+        self.x = np.array(x0, dtype=float)
+        if self.x.shape != (model.n,):
+            raise ValueError(f"x0 has shape {self.x.shape}: expected ({model.n},)")
+        self.u = np.array(u0, dtype=float)
+        if self.u.shape != (4,):
+            raise ValueError(f"u0 has shape {self.u.shape}: expected (4,)")
+        self.t = float(t0)
+        self.max_step = float(max_step)
+        self.h = min(1e-5, self.max_step)
+        self.omega_min = float(omega_min)
+        self.max_steps = int(max_steps)
+        self.n_steps = 0
+        self.n_rejected = 0
+        self.message = ""
+        self._rel, self._atol = state_tolerances(model, rtol)
+        self._cols = K.varying_columns(model.ix)
+        self.J = np.zeros((model.n, model.n))
+        self._full = True
+        self._sig_t = np.zeros((4, 2))
+        self._sig_v = np.zeros((4, 2))
+        self._sig_n = np.ones(4, dtype=np.int64)
+        self._none = np.empty(0)
+        self._X = np.empty((0, model.n))
+        self._Y = np.empty((0, len(model.outputs)))
+        self._dx = np.empty(model.n)
+
+    def outputs(self) -> NDArray[np.float64]:
+        """The model's outputs at `x` under the inputs `u`.
+
+        Returns
+        -------
+        ndarray, shape (len(model.outputs),)
+            The outputs (`empact.nonlinear.OUTPUT_UNITS`).
+        """
+        y = np.empty(len(self.model.outputs))
+        K._eval(self.x, self.u, self.model.p, self.model.ix, self._dx, y)
+        return y
+
+    def advance(self, t_end: float) -> int:
+        """Integrate to `t_end` with the inputs `u` held.
+
+        Parameters
+        ----------
+        t_end : float
+            The next communication point [s] (at or after `t`).
+
+        Returns
+        -------
+        int
+            The integrator's status (`STATUS`: 0 reached `t_end`; otherwise the run stopped
+            at `t`, `message` says why).
+        """
+        if t_end < self.t:
+            raise ValueError(f"t_end = {t_end:g} s: before the current time {self.t:g} s")
+        self._sig_v[:, 0] = self.u
+        status, t, h, _, ns, nr = self._step(
+            self.x, self.t, float(t_end), self.h, self._none, self.model.p, self.model.ix,
+            self._sig_t, self._sig_v, self._sig_n, self._none, self._rel, self._atol, 1e-14,
+            self.max_step, self.omega_min, self.max_steps - self.n_steps, self._X, self._Y,
+            self._cols, self.J, self._full)
+        self._full = False
+        self.t, self.h = float(t), float(h)
+        self.n_steps += ns
+        self.n_rejected += nr
+        if status != 0:
+            state = ", ".join(f"{s} = {v:.6g}" for s, v in zip(self.model.states, self.x))
+            self.message = f"stopped at t = {self.t:.6g} s: {STATUS[status]}; state: {state}"
+        return int(status)
+
+    def snapshot(self) -> dict[str, Any]:
+        """Everything `advance` continues from, as plain JSON types (floats round-trip
+        exactly through JSON).
+
+        Returns
+        -------
+        dict
+            ``x``, ``u``, ``J`` (lists), ``t``, ``h`` [s], the step counters and whether the
+            next call evaluates the whole Jacobian.
+        """
+        return {"x": self.x.tolist(), "u": self.u.tolist(), "J": self.J.tolist(),
+                "t": self.t, "h": self.h, "n_steps": self.n_steps,
+                "n_rejected": self.n_rejected, "full": self._full, "message": self.message}
+
+    def restore(self, snap: Mapping[str, Any]) -> None:
+        """Back to a `snapshot`.
+
+        Parameters
+        ----------
+        snap : mapping
+            What `snapshot` returned (of a stepper of the same model).
+        """
+        self.x[:] = snap["x"]
+        self.u[:] = snap["u"]
+        self.J[:] = np.asarray(snap["J"], float)
+        self.t, self.h = float(snap["t"]), float(snap["h"])
+        self.n_steps, self.n_rejected = int(snap["n_steps"]), int(snap["n_rejected"])
+        self._full, self.message = bool(snap["full"]), str(snap["message"])
 
 
 def _signal_table(model: EmpactModel, signals: Mapping[str, NDArray], u0: NDArray,
