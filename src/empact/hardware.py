@@ -1,5 +1,6 @@
 """The machine's servo drives and sensors as a controller sees them: torque and speed limits of
-the two servos, and the instruments the loop measures with.
+the two servos, their electrical and transmission losses, and the instruments the loop
+measures with.
 
 Two parameter sections (``[servo]``, ``[sensors]`` of a parameter file; a closed-loop
 scenario's ``[limits]`` and ``[sensors]`` tables override them key by key):
@@ -8,7 +9,15 @@ scenario's ``[limits]`` and ``[sensors]`` tables override them key by key):
     ``T_mp_max``, ``T_ms_max`` [N m]: the largest torque each servo drive delivers (its
     current limit); ``omega_mp_max``, ``omega_ms_max`` [rad/s]: the largest speed (above
     ``1 - SPEED_BAND`` of it the torque that would drive the servo faster falls linearly to
-    zero, a drive's speed limiter).
+    zero, a drive's speed limiter).  The same section gives the servos' losses
+    (`empact.actuation_energy` bills them): ``k_m_mp``, ``k_m_ms`` [N m/sqrt(W)] motor
+    constants (copper loss ``(T / k_m)^2``), ``eta_drive`` [-] the drives' (inverters')
+    efficiency, ``overload`` [-] peak over continuous torque (the continuous torque is
+    ``T_*_max / overload``: one source of the torque ratings), ``omega_hold`` [rad/s] the
+    speed below which a servo counts as holding, and the transmissions: the worm's lead
+    angle ``worm_lead`` [rad] and friction coefficient ``worm_mu`` [-], the chain's and the
+    epicyclic sets' efficiencies ``eta_chain``, ``eta_epicyclic`` [-], the screws' mean
+    diameter ``screw_d`` [m] and friction coefficient ``screw_mu`` [-].
 ``[sensors]``
     ``delay`` [samples]: every measurement reaches the controller this many samples late;
     ``speed_counts`` [counts/rev] and ``speed_window`` [s]: the primary and secondary shaft
@@ -20,6 +29,7 @@ scenario's ``[limits]`` and ``[sensors]`` tables override them key by key):
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from ._section import Section, param
@@ -48,6 +58,31 @@ class ServoLimits(Section):
     omega_ms_max : float
         Largest secondary servo speed [rad/s], in (0, 1e5] (default 630), limited the same
         way.
+    k_m_mp, k_m_ms : float
+        Motor constants of the primary and secondary servo [N m/sqrt(W)], in (0, 100]
+        (defaults 0.2 and 0.6): ``k_t / sqrt(R)`` of a datasheet's torque constant and
+        winding resistance (the same convention for both); the copper loss at torque ``T``
+        is ``(T / k_m)^2`` [W].
+    eta_drive : float
+        Efficiency of each servo drive (inverter) [-], in (0, 1] (default 0.95).
+    overload : float
+        Peak over continuous (standstill) torque of each servo [-], in [1, 20] (default 3):
+        the continuous torques are ``T_mp_max / overload`` and ``T_ms_max / overload``.
+    omega_hold : float
+        Servo speed below which a servo counts as holding [rad/s], in [0, 1e3] (default 0:
+        only a servo at rest, as in a trim).
+    worm_lead : float
+        Lead angle of the worm [rad], in (0, pi/2) (default atan(3/10), 16.7 deg).
+    worm_mu : float
+        Friction coefficient of the worm mesh [-], in [0, 1) (default 0.05).
+    eta_chain, eta_epicyclic : float
+        Efficiency of the chain and of each epicyclic set [-], forward and backward, in
+        (0, 1] (defaults 0.98, 0.98).
+    screw_d : float
+        Mean diameter of the screws [m], in (0, 1] (default 0.06); with the pitch ``s`` it
+        gives the screws' lead angle ``atan(2 s / screw_d)``.
+    screw_mu : float
+        Friction coefficient of the screws [-], in [0, 1) (default 0.005, a ball screw's).
     """
 
     _name = "servo"
@@ -58,6 +93,28 @@ class ServoLimits(Section):
                                 default=630.0)
     omega_ms_max: float = param("rad/s", "largest secondary servo speed", 0.0, 1e5,
                                 default=630.0)
+    k_m_mp: float = param("N m/sqrt(W)", "motor constant of the primary servo (copper loss "
+                          "(T / k_m)^2)", 0.0, 100.0, default=0.2)
+    k_m_ms: float = param("N m/sqrt(W)", "motor constant of the secondary servo (copper loss "
+                          "(T / k_m)^2)", 0.0, 100.0, default=0.6)
+    eta_drive: float = param("-", "efficiency of each servo drive (inverter)", 0.0, 1.0,
+                             default=0.95)
+    overload: float = param("-", "peak over continuous torque of each servo (continuous "
+                            "torque T_max / overload)", 1.0, 20.0, lo_open=False, default=3.0)
+    omega_hold: float = param("rad/s", "servo speed below which a servo counts as holding",
+                              0.0, 1e3, lo_open=False, default=0.0)
+    worm_lead: float = param("rad", "lead angle of the worm", 0.0, math.pi / 2, hi_open=True,
+                             default=math.atan(0.3))
+    worm_mu: float = param("-", "friction coefficient of the worm mesh", 0.0, 1.0,
+                           lo_open=False, hi_open=True, default=0.05)
+    eta_chain: float = param("-", "efficiency of the chain (forward and backward)", 0.0, 1.0,
+                             default=0.98)
+    eta_epicyclic: float = param("-", "efficiency of each epicyclic set (forward and "
+                                 "backward)", 0.0, 1.0, default=0.98)
+    screw_d: float = param("m", "mean diameter of the screws (lead angle atan(2 s / "
+                           "screw_d))", 0.0, 1.0, default=0.06)
+    screw_mu: float = param("-", "friction coefficient of the screws", 0.0, 1.0,
+                            lo_open=False, hi_open=True, default=0.005)
 
 
 @dataclass(frozen=True)
