@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._results import Result, plain
-from ._validate import check_choice
+from ._validate import check_choice, fmt
 from .actuation_energy import PUMP_TERMS, SERVO_TERMS, hydraulic_power, servo_power
 from .errors import ParameterError
 from .params import Params
@@ -277,17 +277,17 @@ def efficiency_map(params: Params, T_in: ArrayLike, omega_in: ArrayLike, r_g: Ar
     for name, unit in (("T_in", "N m"), ("omega_in", "rad/s")):
         bad = axes[name][~(axes[name] > 0)]
         if bad.size:
-            raise ParameterError(f"{name} = {bad[0]!r}: must be > 0 [{unit}]")
+            raise ParameterError(f"{name} = {fmt(float(bad[0]))}: must be > 0 [{unit}]")
     check_ratio(axes["r_g"], params.variator, "r_g")
     if F_s is not None:
         axes["F_s"] = np.atleast_1d(np.asarray(F_s, float))
         bad = axes["F_s"][~(axes["F_s"] > 0)]
         if bad.size:
-            raise ParameterError(f"F_s = {bad[0]!r}: must be > 0 [N]")
+            raise ParameterError(f"F_s = {fmt(float(bad[0]))}: must be > 0 [N]")
     if tau is None:
         tau = params.operating.tau if params.operating.tau is not None else 0.9
     if not 0 < tau < 1:
-        raise ParameterError(f"tau = {tau!r}: the slip set-point must be in (0, 1)")
+        raise ParameterError(f"tau = {fmt(tau)}: the slip set-point must be in (0, 1)")
     model = nonlinear_model(params) if model is None else model
     mesh = [a.ravel() for a in np.meshgrid(*axes.values(), indexing="ij")]
     T, w, r = mesh[0], mesh[1], mesh[2]

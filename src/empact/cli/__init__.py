@@ -43,6 +43,8 @@ COMMANDS = {
                 "Slip and ratio control: design, robustness, closed loop."),
     "montecarlo": ("empact.cli.montecarlo:montecarlo_cmd",
                    "Monte Carlo over parameter spread (in process or on Dask)."),
+    "efficiency": ("empact.cli.efficiency:efficiency_cmd",
+                   "Variator and total efficiency by clamping strategy (steady state)."),
 }
 
 
