@@ -145,3 +145,36 @@ def test_the_new_parameters_are_checked_and_sourced():
         info = infos[name]
         assert info.source, name
         assert info.band[0] <= info.value <= info.band[1], name
+
+
+def test_a_simulation_billed_by_term():
+    """servo-torque-steps (0.5 s): each energy is the trapezoidal integral of its power term
+    (1e-12), the servos' electrical energy their sum; the run starts holding, so its mean
+    electrical power is at least the secondary servo's copper loss at its smallest torque
+    magnitude; the hydraulic reference's pump runs at V omega p / eta_hm over the run."""
+    from empact.actuation_energy import actuation_energy
+    from empact.nonlinear.scenario import example_path, load_scenario
+    from empact.nonlinear.simulation import run_scenario
+
+    p = default_params()
+    res = run_scenario(load_scenario(example_path("servo-torque-steps")), p)
+    assert res.complete
+    e = actuation_energy(res, p)
+    t = res.t
+    terms = servo_power(p, res.output("T_mp_act"), res.output("T_ms_act"),
+                        res.output("omega_mp"), res.output("omega_ms"))
+    for k, v in terms.items():
+        assert e.energy[k] == pytest.approx(np.trapezoid(v, t), rel=1e-12, abs=1e-12), k
+    assert e.energy["servo_electrical"] == pytest.approx(sum(e.energy[k] for k in terms),
+                                                         rel=1e-12)
+    assert e.duration == pytest.approx(0.5, rel=1e-9)
+    T_ms_min = np.abs(res.output("T_ms_act")).min()
+    assert e.mean_power["servo_electrical"] > (T_ms_min / p.servo.k_m_ms) ** 2
+    assert all(e.energy[f"{k}_{s}"] >= 0 for k in ("gear", "copper", "drive")
+               for s in ("mp", "ms"))
+    h = p.hydraulic
+    line = line_pressure(h, res.output("F_p"), res.output("F_s"))
+    shaft = h.displacement * h.pump_ratio * res.output("omega_p") * line / h.eta_hm
+    assert e.hydraulic["pump"] == pytest.approx(np.trapezoid(shaft, t), rel=1e-9)
+    assert e.continuous_torque["ms"] == pytest.approx(p.servo.T_ms_max / p.servo.overload,
+                                                      rel=1e-12)
