@@ -153,3 +153,51 @@ def test_cli_bad_input_one_line_exit_2(args, match):
     assert res.exit_code == 2, res.output
     lines = res.output.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and match in lines[0], res.output
+
+
+def test_run_energy_closes_on_the_variator():
+    """A run's variator input minus output energy equals its losses' energy (each the
+    trapezoidal integral of its power: 1e-9 of the input energy), and the servos' and the
+    pump's energies are those of empact.actuation_energy."""
+    from empact.actuation_energy import actuation_energy
+    from empact.efficiency import run_energy
+    from empact.nonlinear.scenario import example_path, load_scenario
+    from empact.nonlinear.simulation import run_scenario
+
+    p = default_params()
+    res = run_scenario(load_scenario(example_path("servo-torque-steps")), p)
+    e = run_energy(res, p)
+    assert e["variator_in"] > 0
+    assert e["variator_in"] - e["variator_out"] == pytest.approx(
+        sum(e["losses"].values()), rel=0, abs=1e-9 * e["variator_in"])
+    act = actuation_energy(res, p)
+    assert e["servo_electrical"] == pytest.approx(act.energy["servo_electrical"], rel=1e-12)
+    assert e["pump"] == pytest.approx(act.hydraulic["pump"], rel=1e-12)
+
+
+def test_saving_table_in_energy():
+    """control.clamping_saving's rows gain the energy terms: total = variator losses +
+    actuation (1e-12), the hydraulic reference row beside the ratio-blind one (same motion,
+    the pump as actuation), saving_energy = 1 - slip control's total / the row's."""
+    from empact.control.closed_loop import control_example_path, run_closed_loop
+    from empact.nonlinear.scenario import load_scenario
+    from empact.reproduction.control import HYDRAULIC_ROW, _saving
+
+    p = default_params()
+    n = "slip-small-step-r1"
+    sc = {n: load_scenario(control_example_path(n))}
+    rows = _saving(p, sc, {n: run_closed_loop(sc[n], p)}, [n])
+    assert [r["strategy"] for r in rows] == ["slip control (tau = 0.9)",
+                                            "safety factor 1.3, ratio-blind mu", HYDRAULIC_ROW,
+                                            "safety factor 1.3, ratio-aware mu"]
+    slip = rows[0]
+    for r in rows:
+        assert r["total"] == pytest.approx(r["variator_losses_total"] + r["actuation"],
+                                           rel=1e-12)
+        assert r["variator_losses_total"] == pytest.approx(sum(r["variator_losses"].values()),
+                                                           rel=1e-12)
+        assert r["saving_energy"] == pytest.approx(1 - slip["total"] / r["total"], rel=1e-12,
+                                                   abs=1e-15)
+        assert r["actuation"] > 0 and r["pump"] > 0
+    assert rows[2]["actuation"] == rows[1]["pump"]
+    assert rows[2]["mean_clamping_force"] == rows[1]["mean_clamping_force"]

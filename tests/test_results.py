@@ -17,8 +17,8 @@ import pytest
 
 import empact
 from empact._results import TableResult
-from empact.actuation_energy import ActuationEnergy, Transmissions
 from empact._section import Section
+from empact.actuation_energy import ActuationEnergy, Transmissions
 from empact.control.closed_loop import ClosedLoopResult, TargetCheck, resolve_controller
 from empact.control.family import FamilyRoots, PlantFamily
 from empact.control.loop import DiskMarginMap, LoopModel, LoopPrediction, LoopShapes

@@ -31,21 +31,28 @@ strategy's, and the strategy only chooses the actuation.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._results import Result, plain
 from ._validate import check_choice, fmt
-from .actuation_energy import PUMP_TERMS, SERVO_TERMS, hydraulic_power, servo_power
+from .actuation_energy import (
+    PUMP_TERMS,
+    SERVO_TERMS,
+    actuation_energy,
+    hydraulic_power,
+    servo_power,
+)
 from .errors import ParameterError
 from .params import Params
 from .variator.geometry import check_ratio, ratio_range, secondary_radius
 
 __all__ = ["STRATEGIES", "SAFETY_FACTOR", "EfficiencyMap", "efficiency_map",
-           "strategy_clamping"]
+           "strategy_clamping", "run_energy"]
 
 #: the clamping strategies (module notes)
 STRATEGIES = ("sf1.3", "sf1.3-aware", "slip", "hydraulic")
@@ -339,3 +346,52 @@ def _strategy_points(params: Params, model: Any, trim_grid: Any, strategy: str, 
             "actuation": act, "efficiency": P_out / P_in,
             "total_efficiency": P_out / (P_in + P_act), "ok": g.ok.copy(),
             "reason": g.reason}
+
+
+class _Outputs(Mapping[str, NDArray]):
+    """A run's signals by name (`SimulationResult.output`), read when asked for."""
+
+    def __init__(self, result: Any) -> None:
+        self._result = result
+
+    def __getitem__(self, name: str) -> NDArray:
+        return self._result.output(name)
+
+    def __iter__(self) -> Any:
+        return iter(self._result.outputs)
+
+    def __len__(self) -> int:
+        return len(self._result.outputs)
+
+
+def run_energy(result: Any, params: Params,
+               kinematics: str = "equal-translation") -> dict[str, Any]:
+    """A simulation's energies by term [J]: the variator's input and output at its shafts, its
+    losses by term, the servos' electrical energy (`empact.actuation_energy.actuation_energy`,
+    billed quasi-statically) and the hydraulic reference's pump energy on the same motion.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        A run of the nonlinear model.
+    params : Params
+        The parameter set whose ``[servo]`` and ``[hydraulic]`` bill the run.
+    kinematics : str, optional
+        The run's model option ``kinematics`` (default the model's default).
+
+    Returns
+    -------
+    dict
+        ``duration`` [s]; ``variator_in``, ``variator_out``, ``variator_losses`` [J] and
+        ``losses`` (the variator's losses by term [J]); ``servo_electrical`` and ``pump``
+        [J]; ``actuation`` (the `ActuationEnergy`).
+    """
+    t = np.asarray(result.t, float)
+    P_in, P_out, losses = _variator_powers(_Outputs(result))
+    integral = lambda v: float(np.trapezoid(v, t)) if t.size > 1 else 0.0  # noqa: E731
+    act = actuation_energy(result, params, kinematics)
+    terms = {k: integral(v) for k, v in losses.items()}
+    return {"duration": act.duration, "variator_in": integral(P_in),
+            "variator_out": integral(P_out), "variator_losses": sum(terms.values()),
+            "losses": terms, "servo_electrical": act.energy["servo_electrical"],
+            "pump": act.hydraulic["pump"], "actuation": act}
