@@ -275,7 +275,8 @@ def efficiency_map(params: Params, T_in: ArrayLike, omega_in: ArrayLike, r_g: Ar
     from .nonlinear.equilibrium import trim_grid
     from .nonlinear.model import nonlinear_model
 
-    strategies = tuple(check_choice("strategy", s, STRATEGIES) for s in strategies)
+    strategies = tuple(dict.fromkeys(check_choice("strategy", s, STRATEGIES)
+                                     for s in strategies))
     if not strategies:
         raise ParameterError("strategies: give at least one of " + ", ".join(STRATEGIES))
     axes = {"T_in": np.atleast_1d(np.asarray(T_in, float)),
@@ -335,6 +336,11 @@ def _strategy_points(params: Params, model: Any, trim_grid: Any, strategy: str, 
         if np.all(np.abs(miss) <= 1e-12 * np.abs(T)):
             break
         T_l = T_l + miss / r
+    ok, reason = g.ok.copy(), list(g.reason)
+    for k in np.flatnonzero(ok & (np.abs(miss) > 1e-12 * np.abs(T))):
+        ok[k] = False
+        reason[k] = (f"the input torque {T[k]:g} N m not met within 1e-12 (reached "
+                     f"{T_got[k]:.12g} N m)")
     if strategy == "hydraulic":
         act = hydraulic_power(params.hydraulic, y["F_p"], y["F_s"], y["omega_p"])
     else:
@@ -344,8 +350,7 @@ def _strategy_points(params: Params, model: Any, trim_grid: Any, strategy: str, 
             "F_p": y["F_p"], "tau": y["tau"], "nu": y["nu"], "T_mp": y["T_mp_act"],
             "T_ms": y["T_ms_act"], "P_in": P_in, "P_out": P_out, "losses": losses,
             "actuation": act, "efficiency": P_out / P_in,
-            "total_efficiency": P_out / (P_in + P_act), "ok": g.ok.copy(),
-            "reason": g.reason}
+            "total_efficiency": P_out / (P_in + P_act), "ok": ok, "reason": tuple(reason)}
 
 
 class _Outputs(Mapping[str, NDArray]):
