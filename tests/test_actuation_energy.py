@@ -9,7 +9,6 @@ from numpy.testing import assert_allclose
 from empact.actuation_energy import (
     PRESSURE_ANGLE,
     SERVO_TERMS,
-    HydraulicParams,
     hydraulic_power,
     line_pressure,
     motor_power,
@@ -18,6 +17,7 @@ from empact.actuation_energy import (
     transmissions,
 )
 from empact.errors import ParameterError
+from empact.hardware import HydraulicParams
 from empact.params import default_params, describe_parameters
 
 

@@ -39,7 +39,7 @@ Servos (``[servo]``, `empact.hardware.ServoLimits`)
     transmission (no friction torque acts on its shafts, no stick-slip), so a run's motion is
     that of the lossless machine and only its energy bill includes the friction.
 
-Hydraulic reference (``[hydraulic]``, `HydraulicParams`)
+Hydraulic reference (``[hydraulic]``, `empact.hardware.HydraulicParams`)
     The same variator clamped and shifted by oil pressure, as production pushbelt CVTs are
     (Veenhuizen, Bonsen, Klaassen et al., SAE 04CVT-49, 2004): an engine-driven fixed
     displacement pump at ``pump_ratio`` times the primary speed, the line pressure the larger
@@ -54,22 +54,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._results import Result
-from ._section import Section, param
+from .hardware import HydraulicParams
+from .nonlinear.model import sheave_sense
+from .nonlinear.simulation import SimulationResult
+from .params import Params
 
-if TYPE_CHECKING:  # pragma: no cover
-    from .nonlinear.simulation import SimulationResult
-    from .params import Params
-
-__all__ = ["PRESSURE_ANGLE", "SERVO_TERMS", "PUMP_TERMS", "HydraulicParams",
-           "thread_efficiency", "Transmissions", "transmissions", "motor_power",
-           "servo_power", "line_pressure", "hydraulic_power", "ActuationEnergy",
-           "actuation_energy"]
+__all__ = ["PRESSURE_ANGLE", "SERVO_TERMS", "PUMP_TERMS", "thread_efficiency",
+           "Transmissions", "transmissions", "motor_power", "servo_power", "line_pressure",
+           "hydraulic_power", "ActuationEnergy", "actuation_energy"]
 
 #: normal pressure angle of the worm's thread [rad] (20 deg, the standard pressure angle of
 #: ISO 54 / DIN 3975 worm gearing)
@@ -78,49 +76,6 @@ PRESSURE_ANGLE = math.radians(20.0)
 SERVO_TERMS = ("mechanical", "gear", "copper", "drive")
 #: the hydraulic reference's power terms [W] (their sum is the pump's shaft power)
 PUMP_TERMS = ("pump_friction", "pump_leakage", "leakage", "shift", "relief")
-
-
-@dataclass(frozen=True)
-class HydraulicParams(Section):
-    """A hydraulic actuation of the same variator (the reference a conventional pushbelt CVT
-    gives), ``[hydraulic]`` of a parameter file.
-
-    Attributes
-    ----------
-    displacement : float
-        Pump displacement [m^3/rad], in (0, 1e-3] (default 19 cc/rev, SAE 04CVT-49).
-    pump_ratio : float
-        Pump speed over primary (engine) speed [-], in (0, 10] (default 1).
-    eta_vol : float
-        Volumetric efficiency of the pump [-], in (0, 1] (default 0.9).
-    eta_hm : float
-        Hydromechanical efficiency of the pump [-], in (0, 1] (default 0.85).
-    c_leak : float
-        Leakage of the valves and rotating seals per line pressure [m^3/(s Pa)], in [0,
-        1e-8] (default 1.7e-11: 2 l/min at 20 bar).
-    A_p, A_s : float
-        Piston areas of the primary and secondary cylinders [m^2], in (0, 0.1] (default
-        6.2e-3: 31 kN at 50 bar).
-    p_margin : float
-        Line pressure above the larger cylinder's need [Pa], in [0, 1e7] (default 2 bar).
-    """
-
-    _name = "hydraulic"
-
-    displacement: float = param("m^3/rad", "pump displacement", 0.0, 1e-3,
-                                default=19e-6 / (2 * math.pi))
-    pump_ratio: float = param("-", "pump speed over primary (engine) speed", 0.0, 10.0,
-                              default=1.0)
-    eta_vol: float = param("-", "volumetric efficiency of the pump", 0.0, 1.0, default=0.9)
-    eta_hm: float = param("-", "hydromechanical efficiency of the pump", 0.0, 1.0,
-                          default=0.85)
-    c_leak: float = param("m^3/(s Pa)", "leakage of the valves and seals per line pressure",
-                          0.0, 1e-8, lo_open=False, default=1.7e-11)
-    A_p: float = param("m^2", "piston area of the primary cylinder", 0.0, 0.1, default=6.2e-3)
-    A_s: float = param("m^2", "piston area of the secondary cylinder", 0.0, 0.1,
-                       default=6.2e-3)
-    p_margin: float = param("Pa", "line pressure above the larger cylinder's need", 0.0, 1e7,
-                            lo_open=False, default=2e5)
 
 
 def thread_efficiency(lead: ArrayLike, mu: ArrayLike,
@@ -287,7 +242,7 @@ def line_pressure(hydraulic: HydraulicParams, F_p: ArrayLike,
     Parameters
     ----------
     hydraulic : HydraulicParams
-        The ``[hydraulic]`` section.
+        The ``[hydraulic]`` section (`empact.hardware.HydraulicParams`).
     F_p, F_s : array_like
         Primary and secondary pulley (clamping) forces [N] (negative taken as 0).
 
@@ -311,7 +266,7 @@ def hydraulic_power(hydraulic: HydraulicParams, F_p: ArrayLike, F_s: ArrayLike,
     Parameters
     ----------
     hydraulic : HydraulicParams
-        The ``[hydraulic]`` section.
+        The ``[hydraulic]`` section (`empact.hardware.HydraulicParams`).
     F_p, F_s : array_like
         Primary and secondary pulley forces [N].
     omega_p : array_like
@@ -401,8 +356,6 @@ def actuation_energy(result: SimulationResult, params: Params,
     ActuationEnergy
         Energies by term [J], mean powers [W], the servos' RMS and continuous torques [N m].
     """
-    from .nonlinear.model import sheave_sense
-
     t = np.asarray(result.t, float)
     T_mp, T_ms = result.output("T_mp_act"), result.output("T_ms_act")
     servo = servo_power(params, T_mp, T_ms, result.output("omega_mp"),

@@ -48,6 +48,9 @@ from .actuation_energy import (
     servo_power,
 )
 from .errors import ParameterError
+from .nonlinear.equilibrium import trim_grid
+from .nonlinear.model import EmpactModel, nonlinear_model
+from .nonlinear.simulation import SimulationResult
 from .params import Params
 from .variator.geometry import check_ratio, ratio_range, secondary_radius
 
@@ -78,7 +81,7 @@ def _variator_powers(y: Mapping[str, NDArray]) -> tuple[NDArray, NDArray, dict[s
     return P_in, P_out, {"P_loss_slip": T_b * (r * w_p - w_s)}
 
 
-def strategy_clamping(model: Any, strategy: str, T_l: ArrayLike, r_g: ArrayLike,
+def strategy_clamping(model: EmpactModel, strategy: str, T_l: ArrayLike, r_g: ArrayLike,
                       safety_factor: float = SAFETY_FACTOR) -> NDArray[np.float64]:
     """The clamping force [N] of a safety-factor strategy at load torque `T_l` and ratio
     `r_g`: ``SF |T_l| cos(beta) / (2 mu_design R_s(r_g))`` (module notes).
@@ -104,6 +107,7 @@ def strategy_clamping(model: Any, strategy: str, T_l: ArrayLike, r_g: ArrayLike,
     """
     v = model.params.variator
     T, r = np.broadcast_arrays(np.asarray(T_l, float), np.asarray(r_g, float))
+    mu_d: Any
     if strategy == "sf1.3-aware":
         mu_d = model.mu_max(r)
     elif strategy in ("sf1.3", "hydraulic"):
@@ -236,7 +240,8 @@ class EfficiencyMap(Result):
 
 def efficiency_map(params: Params, T_in: ArrayLike, omega_in: ArrayLike, r_g: ArrayLike, *,
                    strategies: Sequence[str] = STRATEGIES, F_s: ArrayLike | None = None,
-                   tau: float | None = None, model: Any = None) -> EfficiencyMap:
+                   tau: float | None = None,
+                   model: EmpactModel | None = None) -> EfficiencyMap:
     """Steady-state efficiency of the variator and its actuation over input torque, input
     speed and ratio (and clamping force), by strategy (module notes).
 
@@ -272,9 +277,6 @@ def efficiency_map(params: Params, T_in: ArrayLike, omega_in: ArrayLike, r_g: Ar
         For a strategy not in `STRATEGIES`, a torque, speed or clamping force not positive, a
         ratio out of range or a set-point outside (0, 1) (before any trim).
     """
-    from .nonlinear.equilibrium import trim_grid
-    from .nonlinear.model import nonlinear_model
-
     strategies = tuple(dict.fromkeys(check_choice("strategy", s, STRATEGIES)
                                      for s in strategies))
     if not strategies:
@@ -300,7 +302,7 @@ def efficiency_map(params: Params, T_in: ArrayLike, omega_in: ArrayLike, r_g: Ar
     mesh = [a.ravel() for a in np.meshgrid(*axes.values(), indexing="ij")]
     T, w, r = mesh[0], mesh[1], mesh[2]
     F_fix = mesh[3] if F_s is not None else None
-    blocks = [_strategy_points(params, model, trim_grid, s, T, w, r, F_fix, tau)
+    blocks = [_strategy_points(params, model, s, T, w, r, F_fix, tau)
               for s in strategies]
     cat = {k: np.concatenate([b[k] for b in blocks]) for k in blocks[0]
            if k not in ("losses", "actuation", "reason")}
@@ -315,7 +317,7 @@ def efficiency_map(params: Params, T_in: ArrayLike, omega_in: ArrayLike, r_g: Ar
                          axes=axes, strategies=strategies, **cat)
 
 
-def _strategy_points(params: Params, model: Any, trim_grid: Any, strategy: str, T: NDArray,
+def _strategy_points(params: Params, model: EmpactModel, strategy: str, T: NDArray,
                      w: NDArray, r: NDArray, F_fix: NDArray | None,
                      tau: float) -> dict[str, Any]:
     """One strategy's points: the load torque that gives the input torque `T` (a fixed point:
@@ -329,6 +331,7 @@ def _strategy_points(params: Params, model: Any, trim_grid: Any, strategy: str, 
             g = trim_grid(model, r, w, tau=np.full(T.size, tau), T_l=T_l)
         else:
             g = trim_grid(model, r, w, F_s=strategy_clamping(model, strategy, T_l, r), T_l=T_l)
+        assert g.y is not None  # (trim_grid always gives the outputs)
         y = {n: g.y[:, k] for k, n in enumerate(model.outputs)}
         P_in, P_out, losses = _variator_powers(y)
         T_got = P_in / w
@@ -356,7 +359,7 @@ def _strategy_points(params: Params, model: Any, trim_grid: Any, strategy: str, 
 class _Outputs(Mapping[str, NDArray]):
     """A run's signals by name (`SimulationResult.output`), read when asked for."""
 
-    def __init__(self, result: Any) -> None:
+    def __init__(self, result: SimulationResult) -> None:
         self._result = result
 
     def __getitem__(self, name: str) -> NDArray:
@@ -369,7 +372,7 @@ class _Outputs(Mapping[str, NDArray]):
         return len(self._result.outputs)
 
 
-def run_energy(result: Any, params: Params,
+def run_energy(result: SimulationResult, params: Params,
                kinematics: str = "equal-translation") -> dict[str, Any]:
     """A simulation's energies by term [J]: the variator's input and output at its shafts, its
     losses by term, the servos' electrical energy (`empact.actuation_energy.actuation_energy`,

@@ -1,9 +1,10 @@
 """The machine's servo drives and sensors as a controller sees them: torque and speed limits of
 the two servos, their electrical and transmission losses, and the instruments the loop
-measures with.
+measures with; and the hydraulic actuation the machine is compared with.
 
-Two parameter sections (``[servo]``, ``[sensors]`` of a parameter file; a closed-loop
-scenario's ``[limits]`` and ``[sensors]`` tables override them key by key):
+Three parameter sections (``[servo]``, ``[sensors]`` of a parameter file; a closed-loop
+scenario's ``[limits]`` and ``[sensors]`` tables override them key by key; ``[hydraulic]``,
+`HydraulicParams`, billed by `empact.actuation_energy`):
 
 ``[servo]``
     ``T_mp_max``, ``T_ms_max`` [N m]: the largest torque each servo drive delivers (its
@@ -35,7 +36,7 @@ from dataclasses import dataclass
 from ._section import Section, param
 from .errors import ParameterError
 
-__all__ = ["ServoLimits", "SensorParams", "SPEED_BAND"]
+__all__ = ["ServoLimits", "SensorParams", "HydraulicParams", "SPEED_BAND"]
 
 #: the share of the speed range over which a drive's speed limiter takes the torque to zero
 SPEED_BAND = 0.05
@@ -161,3 +162,46 @@ class SensorParams(Section):
         if self.delay != int(self.delay):
             raise ParameterError(f"sensors.delay = {self.delay!r}: must be a whole number of "
                                  "samples (0-100)")
+
+
+@dataclass(frozen=True)
+class HydraulicParams(Section):
+    """A hydraulic actuation of the same variator (the reference a conventional pushbelt CVT
+    gives), ``[hydraulic]`` of a parameter file.
+
+    Attributes
+    ----------
+    displacement : float
+        Pump displacement [m^3/rad], in (0, 1e-3] (default 19 cc/rev, SAE 04CVT-49).
+    pump_ratio : float
+        Pump speed over primary (engine) speed [-], in (0, 10] (default 1).
+    eta_vol : float
+        Volumetric efficiency of the pump [-], in (0, 1] (default 0.9).
+    eta_hm : float
+        Hydromechanical efficiency of the pump [-], in (0, 1] (default 0.85).
+    c_leak : float
+        Leakage of the valves and rotating seals per line pressure [m^3/(s Pa)], in [0,
+        1e-8] (default 1.7e-11: 2 l/min at 20 bar).
+    A_p, A_s : float
+        Piston areas of the primary and secondary cylinders [m^2], in (0, 0.1] (default
+        6.2e-3: 31 kN at 50 bar).
+    p_margin : float
+        Line pressure above the larger cylinder's need [Pa], in [0, 1e7] (default 2 bar).
+    """
+
+    _name = "hydraulic"
+
+    displacement: float = param("m^3/rad", "pump displacement", 0.0, 1e-3,
+                                default=19e-6 / (2 * math.pi))
+    pump_ratio: float = param("-", "pump speed over primary (engine) speed", 0.0, 10.0,
+                              default=1.0)
+    eta_vol: float = param("-", "volumetric efficiency of the pump", 0.0, 1.0, default=0.9)
+    eta_hm: float = param("-", "hydromechanical efficiency of the pump", 0.0, 1.0,
+                          default=0.85)
+    c_leak: float = param("m^3/(s Pa)", "leakage of the valves and seals per line pressure",
+                          0.0, 1e-8, lo_open=False, default=1.7e-11)
+    A_p: float = param("m^2", "piston area of the primary cylinder", 0.0, 0.1, default=6.2e-3)
+    A_s: float = param("m^2", "piston area of the secondary cylinder", 0.0, 0.1,
+                       default=6.2e-3)
+    p_margin: float = param("Pa", "line pressure above the larger cylinder's need", 0.0, 1e7,
+                            lo_open=False, default=2e5)

@@ -16,7 +16,7 @@ A parameter set has one section per concept::
     [servo]             torque and speed limits of the servo drives, their motor constants,
                         drives and transmissions (`empact.hardware`)
     [hydraulic]         a hydraulic actuation of the same variator, the reference to compare
-                        with (`empact.actuation_energy`)
+                        with (`empact.hardware`, billed by `empact.actuation_energy`)
     [sensors]           the closed loop's instruments: delay, encoders, noise
     [operating]         the default operating point (r_g, nu, F_s, omega_p), used by every
                         analysis that is not given one (slip model, trim, plants, NMP, Fig. 2)
@@ -41,9 +41,8 @@ import tomli_w
 from ._io import atomic_write_text
 from ._section import Section, param
 from ._validate import check_choice, check_number
-from .actuation_energy import HydraulicParams
 from .errors import ParameterError
-from .hardware import SensorParams, ServoLimits
+from .hardware import HydraulicParams, SensorParams, ServoLimits
 from .operating import (
     OPERATING_VARIABLES,
     OperatingPoint,
