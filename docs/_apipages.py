@@ -40,6 +40,8 @@ PAGES = {
     "montecarlo": ("empact.montecarlo: parameter spreads and studies",
                    ["empact.montecarlo.spread", "empact.montecarlo.analyses",
                     "empact.montecarlo.study"]),
+    "energy": ("Energy: actuation losses, the hydraulic reference, efficiency maps",
+               ["empact.actuation_energy", "empact.efficiency"]),
     "sweep": ("empact.sweep: in process or on Dask", ["empact.sweep"]),
     "lti": ("empact.lti: frequency responses, zeros, root loci", ["empact.lti"]),
     "export": ("empact.export: .mat and .npz", ["empact.export"]),

@@ -303,6 +303,7 @@ JSON_COMMANDS = [
     ("slip", "frf", "--n", "5"), ("slip", "zeros", "--ratio", "0.5,1"),
     ("slip", "map", "--slip", "0.01:0.05:3", "--ratio", "0.5:2:3"), ("slip", "traction"),
     ("linearize",), ("nmp", "--ratios", "0.5"),
+    ("efficiency", "--torque", "50", "--ratio", "1", "--strategy", "slip,hydraulic"),
 ]
 # keys that are counts, indices, flags or free text rather than quantities with a unit
 UNITLESS = {"n_rhp", "n_rhp_real", "zeros_at_origin", "n_averages", "order", "stable",
@@ -615,6 +616,9 @@ BAD_INPUT = [
     (["linearize", "--format", "mat"], "--format mat needs --out FILE"),
     (["linearize", "--out", "p.xyz"], "--out p.xyz: file suffix '.xyz' must be one of"),
     (["nmp", "--ratios", "a,b"], "--ratios 'a,b': must be comma-separated numbers"),
+    (["efficiency", "--strategy", "sf2"], "--strategy = 'sf2': must be one of"),
+    (["efficiency", "--speed", "0"], "--speed = 0"),
+    (["efficiency", "--json-out", "out.json"], "--json-out out.json: exists; give --force"),
     (["nmp", "--fmax", "-1"], "--fmax = -1: allowed range is (0, 100000]"),
     (["nmp", "--ratios", "9"], "--ratios = 9: outside the geometric ratio range"),
     (["nmp", "--speed", "-300"], "--speed = -300"),

@@ -38,7 +38,7 @@ def _mutate(rng, base: dict) -> str:
         node = doc
         for p in path[:-1]:
             node = node[p]
-        old = node[path[-1]]
+        old = node.get(path[-1], 1.0)  # (an earlier mutation may have removed it: kind 12)
         if isinstance(old, bool) or not isinstance(old, (int, float)):
             old = 1.0  # (an earlier mutation of this file made it text, a list, a table)
         kind = rng.integers(14)

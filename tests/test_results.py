@@ -18,11 +18,13 @@ import pytest
 import empact
 from empact._results import TableResult
 from empact._section import Section
+from empact.actuation_energy import ActuationEnergy, Transmissions
 from empact.control.closed_loop import ClosedLoopResult, TargetCheck, resolve_controller
 from empact.control.family import FamilyRoots, PlantFamily
 from empact.control.loop import DiskMarginMap, LoopModel, LoopPrediction, LoopShapes
 from empact.control.robustness import RobustnessMap
 from empact.control.shifting import ShiftEnvelope
+from empact.efficiency import EfficiencyMap
 from empact.experiments.plant_id import PlantIdentification, StepExperiment
 from empact.experiments.rig import RigRecord, RigSettings
 from empact.identification.frf_estimation import FRFEstimate
@@ -96,8 +98,28 @@ def _realization():
 
 
 #: class -> builder of a small instance, and the fields (or keys) whose arrays round-trip
+def _efficiency_map():
+    n = 2
+    f = {k: _r(n) for k in ("T_in", "omega_in", "r_g", "F_s", "F_p", "tau", "nu", "T_mp",
+                            "T_ms", "P_in", "P_out", "efficiency", "total_efficiency")}
+    names = [f"{t}_{s}" for s in ("mp", "ms") for t in ("mechanical", "gear", "copper",
+                                                         "drive")]
+    return EfficiencyMap(strategy=("slip", "slip"), losses={"P_loss_slip": _r(n)},
+                         actuation={k: _r(n) for k in names}, ok=np.array([True, False]),
+                         reason=("", "no trim"), strategies=("slip",),
+                         axes={"T_in": np.array([50.0]), "omega_in": np.array([300.0]),
+                               "r_g": np.array([0.5, 1.0])}, **f)
+
+
 BUILDERS = {
     SimulationResult: (_sim, ("t", "x", "y", "u")),
+    EfficiencyMap: (_efficiency_map, ("axes", "strategies")),
+    Transmissions: (lambda: Transmissions((0.8, 0.7), (0.9, 0.8), 0.02, (0.7, 0.5),
+                                          (0.8, 0.6), False, 0.05), ("worm", "primary")),
+    ActuationEnergy: (lambda: ActuationEnergy(1.0, {"copper_ms": 10.0}, {"pump": 100.0},
+                                              {"pump": 100.0}, {"mp": 0.1, "ms": 8.0},
+                                              {"mp": 1.0, "ms": 5.0}, False),
+                      ("energy", "hydraulic")),
     TrimResult: (_trim, ("r_g", "F_s", "tau")),
     ClosedLoopResult: (lambda: ClosedLoopResult(
         _sim(), {"r_g": np.ones(5), "nu": np.full(5, 0.01)}, _trim(),

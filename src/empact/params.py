@@ -13,7 +13,10 @@ A parameter set has one section per concept::
     [shift]             creep-mode shifting of the belt (Carbone et al. 2007; Ide et al.)
     [thrust_ratio]      torque-dependent equilibrium thrust ratio kappa(tau, r_g)
     [paper_sec21]       stiffnesses of the paper's Sec. 2.1 kinematics (the published variant)
-    [servo]             torque and speed limits of the servo drives (`empact.hardware`)
+    [servo]             torque and speed limits of the servo drives, their motor constants,
+                        drives and transmissions (`empact.hardware`)
+    [hydraulic]         a hydraulic actuation of the same variator, the reference to compare
+                        with (`empact.hardware`, billed by `empact.actuation_energy`)
     [sensors]           the closed loop's instruments: delay, encoders, noise
     [operating]         the default operating point (r_g, nu, F_s, omega_p), used by every
                         analysis that is not given one (slip model, trim, plants, NMP, Fig. 2)
@@ -39,7 +42,7 @@ from ._io import atomic_write_text
 from ._section import Section, param
 from ._validate import check_choice, check_number
 from .errors import ParameterError
-from .hardware import SensorParams, ServoLimits
+from .hardware import HydraulicParams, SensorParams, ServoLimits
 from .operating import (
     OPERATING_VARIABLES,
     OperatingPoint,
@@ -55,7 +58,7 @@ from .variator.traction import TabulatedTraction, TractionParams, load_traction
 __all__ = [
     "ParameterError", "VariatorParams", "ActuationParams", "DampingLevel", "DampingParams",
     "DrivelineParams", "TractionParams", "ShiftParams", "ThrustRatioParams", "Sec21Stiffness",
-    "OperatingPoint", "ResolvedPoint", "Params", "default_params",
+    "OperatingPoint", "ResolvedPoint", "HydraulicParams", "Params", "default_params",
     "load_params", "save_params", "dumps_params", "read_toml", "DAMPING_LEVELS",
     "OPERATING_VARIABLES", "ParameterInfo", "describe_parameters", "parameter_sources",
     "check_clamping", "check_one_slip",
@@ -245,10 +248,10 @@ _SECTIONS = {
     "variator": VariatorParams, "actuation": ActuationParams, "driveline": DrivelineParams,
     "traction": TractionParams, "shift": ShiftParams, "thrust_ratio": ThrustRatioParams,
     "paper_sec21": Sec21Stiffness, "servo": ServoLimits, "sensors": SensorParams,
-    "operating": OperatingPoint,
+    "hydraulic": HydraulicParams, "operating": OperatingPoint,
 }
 #: sections whose every key has a default (a file may leave them out)
-_OPTIONAL_SECTIONS = ("servo", "sensors")
+_OPTIONAL_SECTIONS = ("servo", "sensors", "hydraulic")
 
 
 @dataclass(frozen=True)
@@ -263,6 +266,8 @@ class Params:
     thrust_ratio, paper_sec21, servo, sensors : Section
         The same, for the ``[thrust_ratio]``, ``[paper_sec21]``, ``[servo]`` and
         ``[sensors]`` tables.
+    hydraulic : HydraulicParams
+        The hydraulic reference actuation (``[hydraulic]``; every key has a default).
     operating : OperatingPoint
         The default operating point (``[operating]``).
     traction_table_file : str or None
@@ -287,6 +292,7 @@ class Params:
     servo: ServoLimits
     sensors: SensorParams
     operating: OperatingPoint
+    hydraulic: HydraulicParams = HydraulicParams()
     traction_table_file: str | None = None
     traction_table: TabulatedTraction | None = field(default=None, compare=False, repr=False)
 
@@ -607,7 +613,8 @@ def describe_parameters(params: Params | None = None) -> list[ParameterInfo]:
     out = []
     blocks: list[tuple[str, Any]] = []
     for name in ("variator", "actuation", "damping", "driveline", "traction", "shift",
-                 "thrust_ratio", "paper_sec21", "servo", "sensors", "operating"):
+                 "thrust_ratio", "paper_sec21", "servo", "sensors", "hydraulic",
+                 "operating"):
         block = getattr(params, name)
         if name == "damping":
             blocks += [(f"damping.{lvl}", getattr(block, lvl)) for lvl in DAMPING_LEVELS]

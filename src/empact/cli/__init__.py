@@ -45,6 +45,8 @@ COMMANDS = {
             "The machine as an FMU (FMI 2.0 co-simulation): export."),
     "montecarlo": ("empact.cli.montecarlo:montecarlo_cmd",
                    "Monte Carlo over parameter spread (in process or on Dask)."),
+    "efficiency": ("empact.cli.efficiency:efficiency_cmd",
+                   "Variator and total efficiency by clamping strategy (steady state)."),
 }
 
 

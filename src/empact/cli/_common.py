@@ -96,7 +96,7 @@ COMPILING = ("compiling the model (a first run: numba compiles it once, 10 to 30
 
 #: the commands that run the compiled nonlinear model (by their last name)
 MODEL_COMMANDS = {"simulate", "linearize", "nmp", "identify", "rig", "reproduce", "plants",
-                  "montecarlo", "design"}
+                  "montecarlo", "design", "efficiency"}
 
 _announced: Any = None  # a flag shared with forked workers (they compile too)
 
@@ -277,6 +277,8 @@ UNITS = {
     "mean_losses": "W", "shape": "-", "points": "-", "trimmed": "-",
     "f_slow_hz": "Hz", "zeta_slow": "-", "n_rhp_zeros": "-", "rhp_zero_hz": "Hz", "runs": "-",
     "succeeded": "-", "failures": "-",
+    "T_in": "N m", "omega_in": "rad/s", "P_in": "W", "P_out": "W", "losses": "W",
+    "actuation": "W", "efficiency": "-", "total_efficiency": "-",
 }
 
 

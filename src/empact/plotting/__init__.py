@@ -20,6 +20,8 @@ control
 variator
     The machine sheet: traction curves with their torque reserve, the ratio's static
     stability map.
+efficiency
+    Efficiency maps of the clamping strategies, efficiency over clamping force.
 
 Each submodule is imported when one of its names is first used (``from empact.plotting import
 plot_bode`` loads the Bode plot's module, not the control plots' simulation stack).
@@ -43,6 +45,7 @@ _CATALOGUE = {
     "plot_robustness_maps": "control", "plot_closed_loop": "control",
     "plot_shift_envelope": "control",
     "plot_traction_reserve": "variator", "plot_ratio_stability": "variator",
+    "plot_efficiency_map": "efficiency",
 }
 
 __all__ = list(_CATALOGUE)

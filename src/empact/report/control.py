@@ -162,6 +162,9 @@ def studies(ctx: Context, res: rep.StudiesSection) -> str:
             mc_rows.append([name, mc.units.get(name, "-"), q[0], q[1], q[2]])
     saving_rows = [[r["scenario"], r["strategy"], r["mean_clamping_force"] / 1e3,
                     r["mean_losses"], 100 * r["saving"] if r["saving"] else "",
+                    "; ".join(f"{k} {v:.0f}" for k, v in r["variator_losses"].items()),
+                    r["actuation"], r["total"],
+                    100 * r["saving_energy"] if r["saving_energy"] else "",
                     _fmt(r["macro_slip"])] for r in res.saving]
     return (
         "<p>The shipped controller and loop of the previous section on three questions: "
@@ -180,9 +183,15 @@ def studies(ctx: Context, res: rep.StudiesSection) -> str:
                     "fractions)")
         + ctx.table("control_saving", ["scenario", "strategy", "mean F_s [kN]",
                                        "mean losses [W]", "saving in F_s [%]",
+                                       "variator losses by term [W]", "actuation [W]",
+                                       "total [W]", "saving in energy [%]",
                                        "macro slip"], saving_rows,
                     "The saving the paper is for: mean clamping force and variator losses "
-                    "(slip power plus servo power) against a safety factor of 1.3. The loss "
-                    "model has no clamping-dependent friction: slip control at tau = 0.9 "
-                    "slips more, and its slip power is larger")
+                    "(slip power plus servo power) against a safety factor of 1.3, and in "
+                    "energy: the variator's losses by term, the actuation's electrical power "
+                    "(servos with copper, drive and transmission losses, "
+                    "empact.actuation_energy) or, for the hydraulic reference on the "
+                    "ratio-blind run's motion, the pump's shaft power, their total and the "
+                    "saving of slip control's total against each row's (mean powers over "
+                    "the run)")
         + ctx.claims(res.claims))
