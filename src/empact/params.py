@@ -512,21 +512,12 @@ def read_toml(path: str | os.PathLike[str], what: str = "parameter") -> dict[str
     Raises
     ------
     ParameterError
-        When the file is missing, a folder, not UTF-8, not valid TOML or unreadable.
+        When the file is missing, a folder, a FIFO or device, too large, not UTF-8, not valid
+        TOML, nested too deep or unreadable (`empact._io.parse_toml`).
     """
-    try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: no such {what} file") from None
-    except IsADirectoryError:
-        raise ParameterError(f"{path}: is a folder, not a {what} file") from None
-    except UnicodeDecodeError:
-        raise ParameterError(f"{path}: not a text file (TOML must be UTF-8)") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"{path}: not valid TOML ({exc})") from None
-    except OSError as exc:
-        raise ParameterError(f"{path}: cannot be read ({exc.strerror})") from None
+    from ._io import parse_toml
+
+    return parse_toml(path, what)
 
 
 _DEFAULT: Params | None = None

@@ -20,6 +20,7 @@ from typing import Sequence
 
 import numpy as np
 
+from .._io import read_input_text
 from ..errors import DataError
 
 __all__ = ["load_records", "sample_rate", "column_name", "header_cell"]
@@ -87,19 +88,7 @@ def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
         `min_rows` rows, a binary or non-UTF-8 file.
     """
     path = Path(path)
-    try:
-        with path.open(newline="", encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except FileNotFoundError:
-        raise DataError(f"{path}: no such data file") from None
-    except IsADirectoryError:
-        raise DataError(f"{path}: is a folder, not a data file") from None
-    except UnicodeDecodeError:
-        raise DataError(f"{path}: not a UTF-8 text (CSV) file") from None
-    except OSError as exc:
-        raise DataError(f"{path}: cannot be read ({exc.strerror})") from None
-    if "\x00" in text:
-        raise DataError(f"{path}: a binary file, not CSV text")
+    text = read_input_text(path, "data (CSV)", error=DataError)
     lines = [ln for ln in text.splitlines() if ln.strip()]
     while lines and lines[0].lstrip().startswith("#"):
         lines.pop(0)
