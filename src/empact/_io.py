@@ -3,8 +3,9 @@
 Every output of empact is written to a temporary path beside its destination and moved into
 place only when complete, so a failure or an interrupt never leaves a partial file.  Files are
 created with the permissions of an ordinary file (``0666`` less the umask, usually ``0644``)
-and folders likewise (``0777`` less the umask), not the ``0600`` / ``0700`` of `tempfile`.  A temporary name is never longer than the
-file system allows (`temp_prefix`), so a name that fits fits its temporary too.
+and folders likewise (``0777`` less the umask), not the ``0600`` / ``0700`` of `tempfile`.
+A temporary name is never longer than the file system allows (`temp_prefix`), so a name that
+fits fits its temporary too.
 
 Every input file is read through `check_input` (a regular file: not a folder, FIFO, device or
 socket, which would hang or never end; not larger than its kind allows) and, for text,
@@ -218,8 +219,8 @@ def parse_json(path: str | os.PathLike[str], what: str, *,
     text = read_input_text(p, what, error=error)
     try:
         doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise error(f"{p}: not a {what} file (not JSON text: line {exc.lineno})") from None
+    except json.JSONDecodeError:
+        raise error(f"{p}: not a {what} file (not JSON text)") from None
     except RecursionError:
         raise error(f"{p}: nested deeper than {MAX_DEPTH} levels; not a {what} file") from None
     return _check_depth(doc, p, what, error)

@@ -2,16 +2,24 @@
 lines (the first after 1 s, then at most one every 10 s, and the final state) with no
 carriage returns or escapes: work that ends within a second writes none.  A bar
 left by an exception (a Ctrl-C, an error) writes no final state: the error line is the last
-word."""
+word.
+
+`working` is the indicator of work that has no steps to count (a command without a bar of its
+own): ``linearize: working, 00:03 elapsed``, by the same rules (after a second, then every
+10 s as lines; redrawn each second on a terminal), ended by the first real bar."""
 from __future__ import annotations
 
 import sys
 import threading
-from typing import Any, Iterable
+from contextlib import contextmanager
+from typing import Any, Iterable, Iterator
 
 from tqdm import tqdm
 
-__all__ = ["progress"]
+__all__ = ["progress", "working", "WORKING_FORMAT"]
+
+#: the line of `working` (``desc: working, 00:03 elapsed``)
+WORKING_FORMAT = "{desc}: working, {elapsed} elapsed"
 
 
 class _Lines:
@@ -121,6 +129,7 @@ def progress(iterable: Iterable[Any] | None = None, *, total: int | None = None,
     """
     if not enabled:  # no tqdm at all: it would make a multiprocessing lock (a semaphore
         return _Off(iterable)  # that a worker killed by a Ctrl-C leaves to the tracker)
+    _end_working()  # a bar of the work's own replaces the indicator
     stream = sys.stderr
     if getattr(stream, "isatty", lambda: False)():
         return _Bar(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
@@ -128,3 +137,71 @@ def progress(iterable: Iterable[Any] | None = None, *, total: int | None = None,
     return _LineBar(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
                     file=_Lines(stream), leave=True, mininterval=10.0, ascii=True, ncols=80,
                     delay=delay)
+
+
+#: the `working` indicator now shown (at most one) and its ticker's stop event
+_WORKING: list[tuple[Any, threading.Event]] = []
+
+
+def _end_working() -> None:
+    while _WORKING:
+        bar, stop = _WORKING.pop()
+        stop.set()
+        bar.leave = False  # the indicator leaves no final line
+        bar.close()
+
+
+@contextmanager
+def working(desc: str, *, enabled: bool = True, delay: float = LINE_DELAY) -> Iterator[None]:
+    """Show that work is going on, on stderr, while the block runs: nothing for work that ends
+    within `delay` seconds; then ``desc: working, MM:SS elapsed`` (as lines off a terminal:
+    the first after `delay`, then one every 10 s; redrawn each second on a terminal, and only
+    when stdout is not that terminal too, whose output it would garble).  A `progress` bar
+    started inside the block ends the indicator; it leaves no final line.
+
+    Parameters
+    ----------
+    desc : str
+        What works (the command's name).
+    enabled : bool
+        False: show nothing (``--quiet``).
+    delay : float
+        Seconds before the first line [s].
+
+    Yields
+    ------
+    None
+    """
+    tty = getattr(sys.stderr, "isatty", lambda: False)()
+    if not enabled or _WORKING or (tty and getattr(sys.stdout, "isatty", lambda: False)()):
+        yield
+        return
+    if tty:
+        bar: Any = _Bar(total=None, desc=desc, file=sys.stderr, leave=False,
+                        bar_format=WORKING_FORMAT, delay=delay)
+        every = 1.0
+    else:
+        bar = _LineBar(total=None, desc=desc, file=_Lines(sys.stderr), leave=False,
+                       bar_format=WORKING_FORMAT, ascii=True, ncols=80, delay=delay,
+                       mininterval=10.0)
+        every = 10.0
+    stop = threading.Event()
+
+    def tick() -> None:  # (a line bar writes its first line itself, after `delay`)
+        if stop.wait(delay):
+            return
+        if tty:
+            bar.refresh()
+        while not stop.wait(every):
+            bar.refresh()
+
+    ticker = threading.Thread(target=tick, daemon=True)
+    _WORKING.append((bar, stop))
+    ticker.start()
+    try:
+        yield
+    finally:
+        if any(b is bar for b, _ in _WORKING):
+            _WORKING.remove((bar, stop))
+            stop.set()
+            bar.close()

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import functools
 import importlib
+import inspect
 import json
 import os
 import stat
@@ -234,14 +235,23 @@ def _checked(cmd: click.Command | None) -> click.Command | None:
     if cmd is None or cmd.callback is None or getattr(cmd.callback, "_outputs_checked", False):
         return cmd
     body = cmd.callback
+    takes_quiet = "quiet" in inspect.signature(body).parameters
+    if not any(p.name == "quiet" for p in cmd.params):  # --quiet on every command
+        cmd.params.append(click.Option(["--quiet"], is_flag=True,
+                                       help="Nothing on stderr but errors (no progress)."))
 
     @functools.wraps(body)
     def run(*args: Any, **kwargs: Any) -> Any:
         ctx = click.get_current_context()
         check_outputs(ctx)
-        if ctx.command.name in MODEL_COMMANDS and not ctx.params.get("quiet"):
+        quiet = bool(kwargs.get("quiet")) if takes_quiet else bool(kwargs.pop("quiet", False))
+        if ctx.command.name in MODEL_COMMANDS and not quiet:
             announce_compilation()
-        return body(*args, **kwargs)
+        from .._progress import working
+
+        name = ctx.command_path.split(" ", 1)[-1]
+        with working(name, enabled=not quiet):  # until a bar of the command's own starts
+            return body(*args, **kwargs)
 
     run._outputs_checked = True  # type: ignore[attr-defined]
     cmd.callback = run
