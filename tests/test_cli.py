@@ -11,6 +11,7 @@ import pytest
 import scipy.signal as sig
 from click.testing import CliRunner
 from numpy.testing import assert_allclose
+from test_outputs import COMMANDS as COMMAND_TREE
 
 from empact import paper
 from empact.cli import COMMANDS, main
@@ -139,12 +140,14 @@ def test_cli_simulate_linearize_nmp(tmp_path):
               "--quiet", "--duration", "0.01", "--formats", "png,svg")
     assert res.exit_code == 0, res.output
     assert sorted(p.suffix for p in (tmp_path / "vec").iterdir()) == [".csv", ".png", ".svg"]
-    # the simulation's CSV reads back as records (comment line, units in the header)
-    res = run("frf-estimate", sim / "servo-torque-steps.csv", "--input", "T_ms", "--output",
-              "theta_ms", "--time", "time", "--nperseg", "64", "--json")
+    # the simulation's CSV reads back as records (comment line, units in the header, each a
+    # unit `load_records` converts); two signals that vary in 10 ms (T_ms is constant there:
+    # a dead channel, refused since issue 35)
+    res = run("frf-estimate", sim / "servo-torque-steps.csv", "--input", "omega_ms",
+              "--output", "omega_mp", "--time", "time", "--nperseg", "64", "--json")
     assert res.exit_code == 0, res.output
     res = run("linearize", "--ratio", "0.5", "--slip", "0.004", "--clamp", "1e4", "--speed",
-              "300")
+              "300", "--json")
     assert res.exit_code == 0, res.output
     data = json.loads(res.stdout)
     assert data["schema"] == {"name": "empact.linearize", "version": 1}
@@ -158,10 +161,22 @@ def test_cli_simulate_linearize_nmp(tmp_path):
     assert np.array(data["A"]).shape == (19, 19) and data["states"][-1] == "z_d"
     # tol 1e-12 rel: the requested ratio (the parameter file's 0.5), which trim holds
     assert data["operating_point"]["r_g"] == pytest.approx(0.5, rel=1e-12)
-    res = run("linearize", "--drive", "torque")
+    res = run("linearize", "--drive", "torque", "--json")
     assert len(json.loads(res.stdout)["states"]) == 18
-    res = run("linearize", "--load", "speed")
+    res = run("linearize", "--load", "speed", "--json")
     assert json.loads(res.stdout)["inputs"] == ["T_mp", "T_ms", "omega_l_ref"]
+    # without --json or --out: a summary (it printed 696 lines of JSON): the point, the
+    # signals with units, the 19 poles (pairs once), no matrix
+    res = run("linearize", "--ratio", "0.5", "--slip", "0.004", "--clamp", "1e4", "--speed",
+              "300", "--quiet")
+    assert res.exit_code == 0, res.output
+    lines = res.stdout.splitlines()
+    assert lines[0].startswith("linear plant at r_g = 0.5 -, nu = 0.004 -") and len(lines) < 30
+    assert lines[2] == "inputs (3): T_mp [N m], T_ms [N m], T_l [N m]"
+    assert lines[3] == "outputs (3): r_g [-], nu [-], nu_r [-]"
+    assert lines[4].startswith("poles (19, ")
+    pole_rows = [ln for ln in lines if "rad/s" in ln and ln.startswith("  ")]
+    assert sum(2 if "+/-" in ln else 1 for ln in pole_rows) == 19
     mat = tmp_path / "plant.mat"
     res = run("linearize", "--ratio", "2", "--slip", "0.004", "--clamp", "1e4", "--speed",
               "300", "--format", "mat", "--out", str(mat))
@@ -311,7 +326,7 @@ UNITLESS = {"n_rhp", "n_rhp_real", "zeros_at_origin", "n_averages", "order", "st
 
 @pytest.mark.parametrize("args", JSON_COMMANDS, ids=[" ".join(a) for a in JSON_COMMANDS])
 def test_json_has_schema_and_units_for_every_quantity(args, tmp_path):
-    res = run(*args, "--json") if args[0] != "linearize" else run(*args)
+    res = run(*args, "--json")
     assert res.exit_code == 0, res.output
     doc = json.loads(res.stdout)
     assert doc["schema"]["version"] == 1 and doc["schema"]["name"].startswith("empact.")
@@ -1094,26 +1109,7 @@ def test_control_simulate_strict_exits_1_on_a_missed_target(example, status):
 
 
 # -- issue 35: every registered command and option, checked by walking them -------------------
-def _all_commands():
-    """(path, command) of every command the groups hand out (new ones included)."""
-    import click
-
-    ctx = click.Context(main)
-    out = []
-
-    def walk(group, path):
-        for name in group.list_commands(ctx):
-            cmd = group.get_command(ctx, name)
-            if isinstance(cmd, click.Group):
-                walk(cmd, path + (name,))
-            else:
-                out.append((path + (name,), cmd))
-
-    walk(main, ())
-    return out
-
-
-ALL_COMMANDS = _all_commands()
+ALL_COMMANDS = COMMAND_TREE  # every command the groups hand out (new ones included)
 
 
 def _options(kind):

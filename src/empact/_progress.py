@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import sys
 import threading
+import time
 from contextlib import contextmanager
 from typing import Any, Iterable, Iterator
 
@@ -139,16 +140,54 @@ def progress(iterable: Iterable[Any] | None = None, *, total: int | None = None,
                     delay=delay)
 
 
-#: the `working` indicator now shown (at most one) and its ticker's stop event
-_WORKING: list[tuple[Any, threading.Event]] = []
+
+class _Working:
+    """The ticker of `working`: a thread that waits `delay`, then makes the bar (only then:
+    tqdm's multiprocessing lock is not made for work that ends sooner) and redraws it every
+    `every` seconds until `end`."""
+
+    def __init__(self, desc: str, tty: bool, delay: float) -> None:
+        self.desc, self.tty, self.delay = desc, tty, delay
+        self.every = 1.0 if tty else 10.0
+        self.t0 = time.time()
+        self.lock, self.stop = threading.Lock(), threading.Event()
+        self.bar: Any = None
+        self.thread = threading.Thread(target=self.run, daemon=True)
+        self.thread.start()
+
+    def run(self) -> None:
+        if self.stop.wait(self.delay):
+            return
+        with self.lock:
+            if self.stop.is_set():
+                return
+            file = sys.stderr if self.tty else _Lines(sys.stderr)
+            # (a delay that never passes: tqdm draws only when told, by refresh)
+            self.bar = _Bar(total=None, desc=self.desc, file=file, leave=False,
+                            bar_format=WORKING_FORMAT, ascii=not self.tty, delay=1e9)
+            self.bar.start_t = self.t0  # elapsed since the work began
+            self.bar.refresh()
+        while not self.stop.wait(self.every):
+            with self.lock:
+                if self.stop.is_set():
+                    return
+                self.bar.refresh()
+
+    def end(self) -> None:
+        with self.lock:
+            self.stop.set()
+            if self.bar is not None:
+                self.bar.leave = False  # the indicator leaves no final line
+                self.bar.close()
+
+
+#: the `working` indicator now running (at most one)
+_WORKING: list[_Working] = []
 
 
 def _end_working() -> None:
     while _WORKING:
-        bar, stop = _WORKING.pop()
-        stop.set()
-        bar.leave = False  # the indicator leaves no final line
-        bar.close()
+        _WORKING.pop().end()
 
 
 @contextmanager
@@ -176,32 +215,11 @@ def working(desc: str, *, enabled: bool = True, delay: float = LINE_DELAY) -> It
     if not enabled or _WORKING or (tty and getattr(sys.stdout, "isatty", lambda: False)()):
         yield
         return
-    if tty:
-        bar: Any = _Bar(total=None, desc=desc, file=sys.stderr, leave=False,
-                        bar_format=WORKING_FORMAT, delay=delay)
-        every = 1.0
-    else:
-        bar = _LineBar(total=None, desc=desc, file=_Lines(sys.stderr), leave=False,
-                       bar_format=WORKING_FORMAT, ascii=True, ncols=80, delay=delay,
-                       mininterval=10.0)
-        every = 10.0
-    stop = threading.Event()
-
-    def tick() -> None:  # (a line bar writes its first line itself, after `delay`)
-        if stop.wait(delay):
-            return
-        if tty:
-            bar.refresh()
-        while not stop.wait(every):
-            bar.refresh()
-
-    ticker = threading.Thread(target=tick, daemon=True)
-    _WORKING.append((bar, stop))
-    ticker.start()
+    w = _Working(desc, tty, delay)
+    _WORKING.append(w)
     try:
         yield
     finally:
-        if any(b is bar for b, _ in _WORKING):
-            _WORKING.remove((bar, stop))
-            stop.set()
-            bar.close()
+        if w in _WORKING:
+            _WORKING.remove(w)
+        w.end()

@@ -226,6 +226,27 @@ def guard_params(cmd: click.Command) -> click.Command:
     return cmd
 
 
+#: the output options whose files no command names itself (`closing_line` does)
+SILENT_OUTPUTS = ("plot", "json_out")
+
+
+def closing_line(ctx: click.Context) -> None:
+    """After a command succeeded: one line on stderr naming the files of its `SILENT_OUTPUTS`
+    options (``written: frf.png, frf.json``); the commands name their other outputs (``--out``)
+    themselves.
+
+    Parameters
+    ----------
+    ctx : click.Context
+        The command's context.
+    """
+    files = [str(ctx.params[p.name]) for p in ctx.command.params
+             if isinstance(p.type, OutputFile) and p.name in SILENT_OUTPUTS
+             and ctx.params.get(p.name or "") and os.path.lexists(str(ctx.params[p.name]))]
+    if files:
+        click.echo(f"written: {', '.join(files)}", err=True)
+
+
 def _checked(cmd: click.Command | None) -> click.Command | None:
     """`cmd` with its parameters guarded (`guard_params`), `check_outputs` run before its
     body, and for a command of the model `announce_compilation` (installed once, on every
@@ -251,7 +272,10 @@ def _checked(cmd: click.Command | None) -> click.Command | None:
 
         name = ctx.command_path.split(" ", 1)[-1]
         with working(name, enabled=not quiet):  # until a bar of the command's own starts
-            return body(*args, **kwargs)
+            result = body(*args, **kwargs)
+        if not quiet:
+            closing_line(ctx)
+        return result
 
     run._outputs_checked = True  # type: ignore[attr-defined]
     cmd.callback = run
