@@ -1215,3 +1215,17 @@ def test_csv_header_units_are_converted(tmp_path):
                   "--json", "--quiet")
         assert res.exit_code == 0, res.output
         assert_allclose(json.loads(res.stdout)["fs_hz"], fs, rtol=1e-12, atol=0)
+
+
+def test_json_lists_of_numbers_on_one_line():
+    """`slip poles --json` over 8 slips: a list of numbers (or of [re, im] pairs) is one line
+    (1992 lines of one number each before issue 35); the document reads back the same."""
+    from empact.cli._common import compact_json
+
+    doc = {"a": [1, 2.5, None], "b": [[1.0, -2.0], [3.0, 4.0]], "c": [{"d": []}, {}], "e": {}}
+    assert json.loads(compact_json(doc)) == doc
+    assert compact_json(doc).splitlines()[1] == ' "a": [1, 2.5, null],'
+    res = run("slip", "poles", "--slip", "0.001,0.002,0.005,0.01,0.02,0.03,0.04,0.05", "--json",
+              "--quiet")
+    assert res.exit_code == 0, res.output
+    assert len(res.stdout.splitlines()) < 200 and len(json.loads(res.stdout)["points"]) == 8
