@@ -965,8 +965,9 @@ def test_bad_input_one_line_exit_2_nothing_written(files, args, match):
     assert _snapshot(files) == before  # nothing written, nothing replaced (a link stays one)
 
 
-#: a progress line (`empact._progress`)
-PROGRESS = re.compile(r"^.+?: +\d+%\|")  # a bar: "desc: 50%|", desc may hold a colon
+#: a progress line (`empact._progress`): a bar ("desc: 50%|", desc may hold a colon) or the
+#: work indicator of a command without one ("linearize: working, 00:01 elapsed")
+PROGRESS = re.compile(r"^.+?: (?: +\d+%\||working, [\d:]+ elapsed$)")
 
 #: what an error line must never show: exception class names, tracebacks, Python and numpy
 #: reprs, numpy's or Python's own messages

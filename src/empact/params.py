@@ -111,7 +111,9 @@ class ActuationParams(Section):
     s: float = param("m/rad", "screw pitch (translation per radian)", 1e-7, 1e-2)
     k_w: float = param("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
     k_c: float = param("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
-    k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3)", 1e2, 1e11)
+    k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3); the actuation "
+                          "model's and the nonlinear model's belt (not driveline.k_belt)",
+                          1e2, 1e11)
     k_tp: float = param("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
     k_ts: float = param("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
 
@@ -212,7 +214,8 @@ class DrivelineParams(Section):
     J_l: float = param("kg m^2", "load motor inertia, q4", 1e-6, 1e3)
     k_tc: float = param("N m/rad", "torque converter lock-up clutch stiffness", 1e-2, 1e8)
     k_belt: float = param("N/m", "pushbelt stiffness as a chain element (elongation R_p q2 - R_s "
-                              "q3)", 1e2, 1e11)
+                              "q3); the linear driveline model's only (the nonlinear model's "
+                              "belt is actuation.k_belt)", 1e2, 1e11)
     k_ds: float = param("N m/rad", "driveshaft stiffness", 1e-2, 1e8)
 
 
@@ -235,7 +238,8 @@ class Sec21Stiffness(Section):
     _name = "paper_sec21"
     k_w: float = param("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
     k_c: float = param("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
-    k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3)", 1e2, 1e11)
+    k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3) of the Sec. 2.1 "
+                          "rows (--kinematics paper-sec2.1)", 1e2, 1e11)
     k_tp: float = param("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
     k_ts: float = param("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
 

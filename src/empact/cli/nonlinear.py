@@ -10,6 +10,7 @@ from .._validate import check_number
 from ..variator.geometry import check_ratio
 from ._common import (
     PLOT_SUFFIXES,
+    UNITS,
     Failed,
     InputError,
     OutputFile,
@@ -247,12 +248,10 @@ def _plant_summary(sys_: Any, units: dict[str, list[str]], point: dict[str, Any]
     """A linear plant in a few lines of text: the point, the states, inputs and outputs with
     their units, the poles [rad/s] (a complex pair once, with its frequency [Hz] and damping
     ratio [-])."""
-    from ..nonlinear.model import OUTPUT_UNITS
-
     def named(names: Any, us: list[str]) -> str:
         return ", ".join(f"{n} [{u}]" for n, u in zip(names, us))
 
-    at = ", ".join(f"{k} = {float(v):.5g} {OUTPUT_UNITS.get(k, '-')}" for k, v in point.items()
+    at = ", ".join(f"{k} = {float(v):.5g} {UNITS[k]}" for k, v in point.items()
                    if k in ("r_g", "nu", "F_s", "omega_p", "T_l", "tau")
                    and isinstance(v, (int, float)))
     poles = np.linalg.eigvals(np.asarray(sys_.A, dtype=float))

@@ -429,9 +429,10 @@ def load_controller(path: str | os.PathLike[str]) -> Controller:
     version = doc["schema"].get("version", 1)
     if isinstance(version, bool) or not isinstance(version, int) or version < 1:
         raise ParameterError(f"{p}: schema version {version!r}: must be a whole number >= 1")
-    if version > SCHEMA["version"]:
+    newest = SCHEMA["version"]
+    if isinstance(newest, int) and version > newest:
         raise ParameterError(f"{p}: controller schema version {version} is newer than this "
-                             f"empact reads (up to {SCHEMA['version']}); update empact")
+                             f"empact reads (up to {newest}); update empact")
     measured = _names(doc, "measured", p, MEASURABLE)
     outputs = _names(doc, "outputs", p, ("T_mp", "T_ms"))
     _units(doc, "inputs_units", [OUTPUT_UNITS.get(m, "-") for m in measured], "measured", p)
