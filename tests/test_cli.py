@@ -1230,3 +1230,20 @@ def test_json_lists_of_numbers_on_one_line():
               "--quiet")
     assert res.exit_code == 0, res.output
     assert len(res.stdout.splitlines()) < 200 and len(json.loads(res.stdout)["points"]) == 8
+
+
+def test_a_closing_line_names_the_files_written(tmp_path, monkeypatch):
+    """`frf --plot`, `modes --json-out` (and every --plot / --json-out) end with one line
+    naming what was written (they printed nothing); --quiet leaves stderr to errors."""
+    monkeypatch.chdir(tmp_path)
+    res = run("frf", "actuation", "--n", "20", "--plot", "f.png")
+    assert res.exit_code == 0, res.output
+    assert res.stderr.splitlines()[-1] == "written: f.png" and res.stdout == ""
+    res = run("frf", "actuation", "--n", "20", "--json-out", "f.json", "--plot", "g.png")
+    assert res.exit_code == 0, res.output
+    assert res.stderr.splitlines()[-1] in ("written: f.json, g.png", "written: g.png, f.json")
+    res = run("modes", "driveline", "--json-out", "m.json")
+    assert res.exit_code == 0, res.output
+    assert res.stderr.splitlines()[-1] == "written: m.json"
+    res = run("modes", "driveline", "--json-out", "q.json", "--quiet")
+    assert res.exit_code == 0 and res.stderr == "" and (tmp_path / "q.json").is_file()
