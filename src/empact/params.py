@@ -35,7 +35,7 @@ from typing import Any, Literal, Mapping, overload
 
 import tomli_w
 
-from ._io import atomic_write_text
+from ._io import atomic_write_text, parse_toml
 from ._section import Section, param
 from ._validate import check_choice, check_number
 from .errors import ParameterError
@@ -519,8 +519,6 @@ def read_toml(path: str | os.PathLike[str], what: str = "parameter") -> dict[str
         When the file is missing, a folder, a FIFO or device, too large, not UTF-8, not valid
         TOML, nested too deep or unreadable (`empact._io.parse_toml`).
     """
-    from ._io import parse_toml
-
     return parse_toml(path, what)
 
 
