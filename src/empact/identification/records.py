@@ -101,7 +101,8 @@ def _si_factor(path: Path, name: str, unit: str | None, quantity: str | None) ->
     if unit is None:
         return 1.0
     if unit not in HEADER_UNITS:
-        known = ", ".join(u for u in HEADER_UNITS if u.isascii())
+        known = ", ".join(u for u, (_, k) in HEADER_UNITS.items()
+                          if u.isascii() and quantity in (None, k))
         raise DataError(f"{path}: column {name!r} has unit [{unit}], which empact does not "
                         f"convert; give one of {known} (or no unit: SI)")
     factor, kind = HEADER_UNITS[unit]
