@@ -140,7 +140,20 @@ def announce_compilation() -> None:
 
 
 def shown_path(value: str, most: int = 60) -> str:
-    """`value` as an error line shows it: a long name shortened to its start and its length."""
+    """`value` as an error line shows it: a long name shortened to its start and its length.
+
+    Parameters
+    ----------
+    value : str
+        A path as given.
+    most : int
+        Longest value shown whole [characters].
+
+    Returns
+    -------
+    str
+        `value`, or its first ``most / 2`` characters and its length.
+    """
     return value if len(value) <= most else f"{value[:most // 2]}...({len(value)} characters)"
 
 
