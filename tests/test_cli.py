@@ -11,6 +11,7 @@ import pytest
 import scipy.signal as sig
 from click.testing import CliRunner
 from numpy.testing import assert_allclose
+from test_outputs import COMMANDS as COMMAND_TREE
 
 from empact import paper
 from empact.cli import COMMANDS, main
@@ -139,12 +140,14 @@ def test_cli_simulate_linearize_nmp(tmp_path):
               "--quiet", "--duration", "0.01", "--formats", "png,svg")
     assert res.exit_code == 0, res.output
     assert sorted(p.suffix for p in (tmp_path / "vec").iterdir()) == [".csv", ".png", ".svg"]
-    # the simulation's CSV reads back as records (comment line, units in the header)
-    res = run("frf-estimate", sim / "servo-torque-steps.csv", "--input", "T_ms", "--output",
-              "theta_ms", "--time", "time", "--nperseg", "64", "--json")
+    # the simulation's CSV reads back as records (comment line, units in the header, each a
+    # unit `load_records` converts); two signals that vary in 10 ms (T_ms is constant there:
+    # a dead channel, refused since issue 35)
+    res = run("frf-estimate", sim / "servo-torque-steps.csv", "--input", "omega_ms",
+              "--output", "omega_mp", "--time", "time", "--nperseg", "64", "--json")
     assert res.exit_code == 0, res.output
     res = run("linearize", "--ratio", "0.5", "--slip", "0.004", "--clamp", "1e4", "--speed",
-              "300")
+              "300", "--json")
     assert res.exit_code == 0, res.output
     data = json.loads(res.stdout)
     assert data["schema"] == {"name": "empact.linearize", "version": 1}
@@ -158,10 +161,22 @@ def test_cli_simulate_linearize_nmp(tmp_path):
     assert np.array(data["A"]).shape == (19, 19) and data["states"][-1] == "z_d"
     # tol 1e-12 rel: the requested ratio (the parameter file's 0.5), which trim holds
     assert data["operating_point"]["r_g"] == pytest.approx(0.5, rel=1e-12)
-    res = run("linearize", "--drive", "torque")
+    res = run("linearize", "--drive", "torque", "--json")
     assert len(json.loads(res.stdout)["states"]) == 18
-    res = run("linearize", "--load", "speed")
+    res = run("linearize", "--load", "speed", "--json")
     assert json.loads(res.stdout)["inputs"] == ["T_mp", "T_ms", "omega_l_ref"]
+    # without --json or --out: a summary (it printed 696 lines of JSON): the point, the
+    # signals with units, the 19 poles (pairs once), no matrix
+    res = run("linearize", "--ratio", "0.5", "--slip", "0.004", "--clamp", "1e4", "--speed",
+              "300", "--quiet")
+    assert res.exit_code == 0, res.output
+    lines = res.stdout.splitlines()
+    assert lines[0].startswith("linear plant at r_g = 0.5 -, nu = 0.004 -") and len(lines) < 30
+    assert lines[2] == "inputs (3): T_mp [N m], T_ms [N m], T_l [N m]"
+    assert lines[3] == "outputs (3): r_g [-], nu [-], nu_r [-]"
+    assert lines[4].startswith("poles (19, ")
+    pole_rows = [ln for ln in lines if "rad/s" in ln and ln.startswith("  ")]
+    assert sum(2 if "+/-" in ln else 1 for ln in pole_rows) == 19
     mat = tmp_path / "plant.mat"
     res = run("linearize", "--ratio", "2", "--slip", "0.004", "--clamp", "1e4", "--speed",
               "300", "--format", "mat", "--out", str(mat))
@@ -312,7 +327,7 @@ UNITLESS = {"n_rhp", "n_rhp_real", "zeros_at_origin", "n_averages", "order", "st
 
 @pytest.mark.parametrize("args", JSON_COMMANDS, ids=[" ".join(a) for a in JSON_COMMANDS])
 def test_json_has_schema_and_units_for_every_quantity(args, tmp_path):
-    res = run(*args, "--json") if args[0] != "linearize" else run(*args)
+    res = run(*args, "--json")
     assert res.exit_code == 0, res.output
     doc = json.loads(res.stdout)
     assert doc["schema"]["version"] == 1 and doc["schema"]["name"].startswith("empact.")
@@ -454,7 +469,38 @@ def files(tmp_path, monkeypatch):
     w("out.json", "mine")
     w("out.png", "mine")
     w("out.csv", "mine")
+    # issue 35: the campaign's classes (OS errors, guarded readers, units, symlinks, ranges)
+    os.mkfifo(tmp_path / "fifo.toml")
+    os.mkfifo(tmp_path / "fifo.json")
+    os.mkfifo(tmp_path / "fifo.csv")
+    w("deep.json", "[" * 100_000 + "]" * 100_000)
+    w("deep.toml", "a = " + "[" * 100_000 + "]" * 100_000 + "\n")
+    w("deep40.json", json.dumps({**pi, "design": json.loads("[" * 40 + "]" * 40)}))
+    w("c99.json", json.dumps({**pi, "schema": {**pi["schema"], "version": 99}}))
+    w("c_units.json", json.dumps({**pi, "outputs_units": ["N m"]}))
+    w("c_rpm.json", json.dumps({**pi, "outputs_units": ["N m", "rpm"]}))
+    os.symlink(tmp_path / "nowhere" / "x.npz", tmp_path / "dang.npz")
+    os.symlink(tmp_path / "nowhere" / "x.csv", tmp_path / "dang.csv")
+    os.symlink(tmp_path / "out.json", tmp_path / "link.json")
+    rows = "".join(f"{i},{np.sin(i)},{np.cos(i)}\n" for i in range(64))
+    w("rec_unit.csv", "time [fortnight],u,y\n" + rows)
+    w("rec_tq.csv", "time [N m],u,y\n" + rows)
+    w("rec_yunit.csv", "time [ms],u [furlong],y\n" + rows)
+    w("rec_dead.csv", "time,u,y\n" + "".join(f"{i / 100},{np.sin(i)},0\n" for i in range(64)))
+    w("rec_flat.csv", "time,u,y\n" + "".join(f"{i / 100},2.5,{np.sin(i)}\n" for i in range(64)))
+    np.savez(tmp_path / "fam_nan.npz", axes=np.array(["r_g"]), axis_r_g=np.array([1.0, 2.0]),
+             A=np.array([[[np.nan]], [[-1.0]]]), B=np.ones((2, 1, 1)), C=np.ones((2, 1, 1)),
+             D=np.zeros((2, 1, 1)), states=np.array(["x"]), inputs=np.array(["T_mp"]),
+             outputs=np.array(["nu"]), ok=np.array([True, True]), reason=np.array(["", ""]))
+    w("t_inf.toml", GOOD_TARGETS.replace("24.6", "inf"))
+    w("t_miss.toml", GOOD_TARGETS.replace("frequency_hz = 24.6\n", ""))
+    w("sc_steps.toml", SCENARIO + "[solver]\nmax_steps = 1.5\n")
+    w("sp_ln100.toml", sp + 'distribution = "lognormal"\nsigma = 100\n')
     return tmp_path
+
+
+#: a file name longer than any file system allows (255 bytes)
+LONG = "x" * 300
 
 
 BAD_INPUT = [
@@ -477,8 +523,8 @@ BAD_INPUT = [
     (["params", "validate", "missing.toml"], "missing.toml: no such parameter file"),
     (["params", "validate", "neg.toml"], "neg.toml: driveline.J_p = -1: allowed range"),
     (["params", "validate", "huge_int.toml"], "huge_int.toml: actuation.k_w = 99999999...(400"),
-    (["params", "validate", "binary.toml"], "binary.toml: not a text file"),
-    (["params", "validate", "latin1.toml"], "latin1.toml: not a text file"),
+    (["params", "validate", "binary.toml"], "binary.toml: a binary file, not a parameter file"),
+    (["params", "validate", "latin1.toml"], "latin1.toml: not a UTF-8 text file"),
     (["params", "validate", "kw.toml"], "kw.toml: actuation.k_w = 1e+300: allowed range"),
     (["params", "validate", "beta.toml"], "beta.toml: variator.beta = 1e-300: allowed range"),
     (["params", "validate", "scaled.toml"], "scaled.toml: actuation.k_tp = 6e+19"),
@@ -528,7 +574,7 @@ BAD_INPUT = [
     (["linearize", "--load-torque", "50"], "also give one of them"),
     (["plants", "--out", "x.txt"], "--out x.txt: file suffix '.txt' must be one of"),
     (["plants", "--clamp", "-3"], "--clamp = -3"),
-    (["plants", "--scheduler", ""], "--scheduler '': give none, local or a scheduler address"),
+    (["plants", "--scheduler", ""], "--scheduler: an empty value"),
     (["plants", "--scheduler", "local", "--workers", "0"], "--workers = 0: must be a whole"),
     (["plants", "--scheduler-timeout", "0"], "--scheduler-timeout = 0: allowed range"),
     (["slip", "map", "--slip", "0.001:0.02:4", "--ratio", "0.5:2:3", "--workers", "0"],
@@ -810,14 +856,117 @@ BAD_INPUT = [
      "t_nofree.toml: missing free (the list of parameters to fit"),
     (["simulate", "--example", "servo-torque-steps", "--duration", "nan"], "--duration = nan"),
     (["modes", "driveline", "--ratio", "inf"], "--ratio = inf: must be a finite number"),
+    # issue 35, OS errors before any work: a name too long, a FIFO or device, a path through a
+    # file (one check of every path option, `check_path`)
+    (["simulate", "--example", "servo-torque-steps", "--out", LONG],
+     "--out xxxxxxxxxxxxxxxxxxxxxxxxxxxxxx...(300 characters): a file name of 300 bytes"),
+    (["linearize", "--out", LONG + ".json"], "a file name of 305 bytes; file names hold at most "
+                                             "255"),
+    (["modes", "driveline", "--json-out", LONG + ".json"], "--json-out xxx"),
+    (["rig", "--out", LONG + ".csv"], "--out xxx"),
+    (["reproduce", "--out", LONG], "a file name of 300 bytes"),
+    (["plants", "--out", LONG + ".npz"], "a file name of 304 bytes"),
+    (["control", "discretize", "pi.json", "--rate", "100", "--out", LONG + ".json"],
+     "a file name of 305 bytes"),
+    (["control", "design", "--out", LONG + ".json"], "a file name of 305 bytes"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--out", LONG], "a file name of 300 bytes"),
+    (["frf", "actuation", "--plot", LONG + ".png"], "--plot xxx"),
+    (["params", "validate", LONG + ".toml"], "...(305 characters): a file name of 305 bytes"),
+    (["simulate", LONG + ".toml"], "a file name of 305 bytes"),
+    (["linearize", "--params", "out.json/p.toml"], "--params out.json/p.toml: a part of the path "
+                                                   "is a file"),
+    (["params", "validate", "fifo.toml"], "fifo.toml: is a FIFO (named pipe), not a file"),
+    (["simulate", "fifo.toml"], "fifo.toml: is a FIFO (named pipe)"),
+    (["modes", "driveline", "--params", "fifo.toml"], "--params fifo.toml: is a FIFO"),
+    (["control", "check", "fifo.json", "--family", "f.npz"], "fifo.json: is a FIFO"),
+    (["frf-estimate", "fifo.csv", "--input", "u", "--output", "y", "--fs", "1"],
+     "fifo.csv: is a FIFO"),
+    (["slip", "poles", "--traction", "fifo.csv"], "--traction fifo.csv: is a FIFO"),
+    (["calibrate", "fifo.toml", "--out", "c.toml"], "fifo.toml: is a FIFO"),
+    (["montecarlo", "--spread", "fifo.toml"], "--spread fifo.toml: is a FIFO"),
+    (["params", "validate", "/dev/null"], "/dev/null: is a device, not a file"),
+    (["modes", "driveline", "--json-out", "/dev/null"], "--json-out /dev/null: is a device"),
+    (["rig", "--out", "fifo.csv", "--force"], "--out fifo.csv: is a FIFO (named pipe), not a"),
+    # one guarded reader: nesting depth, schema versions, units of a controller
+    (["control", "check", "deep.json", "--family", "f.npz"],
+     "deep.json: nested deeper than 32 levels; not a controller file"),
+    (["control", "check", "deep40.json", "--family", "f.npz"], "deep40.json: nested deeper"),
+    (["params", "validate", "deep.toml"], "deep.toml: nested deeper than 32 levels"),
+    (["simulate", "deep.toml"], "deep.toml: nested deeper than 32 levels"),
+    (["control", "check", "c99.json", "--family", "f.npz"],
+     "c99.json: controller schema version 99 is newer than this empact reads (up to 1)"),
+    (["control", "discretize", "c99.json", "--rate", "100", "--out", "d.json"],
+     "controller schema version 99 is newer"),
+    (["control", "check", "c_units.json", "--family", "f.npz"],
+     "c_units.json: outputs_units has 1 units for 2 outputs signals"),
+    (["control", "check", "c_rpm.json", "--family", "f.npz"],
+     "c_rpm.json: outputs_units gives 'rpm' where the signal's unit is 'N m'"),
+    (["control", "check", "pi.json", "--family", "fam_nan.npz"],
+     "fam_nan.npz: A holds a value that is not finite (NaN or infinite) at grid index (0,)"),
+    # an empty option value is an error naming the option (never "not given")
+    (["simulate", "--example", "servo-torque-steps", "--out", ""],
+     "--out: an empty value; give a value or leave the option out"),
+    (["montecarlo", "--out", ""], "--out: an empty value"),
+    (["control", "design", "--nominal", "", "--out", "c.json"], "--nominal: an empty value"),
+    (["slip", "poles", "--traction", ""], "--traction: an empty value"),
+    (["linearize", "--params", " "], "--params: an empty value"),
+    (["params", "validate", ""], "FILE: an empty value"),
+    (["frf-estimate", "rec.csv", "--input", "", "--output", "y", "--fs", "1"],
+     "--input: an empty value"),
+    (["calibrate", "targets.toml", "--out", "c.toml", "--tie", ""], "--tie: an empty value"),
+    # units in CSV headers: converted when known, refused otherwise; dead channels
+    (["frf-estimate", "rec_unit.csv", "--input", "u", "--output", "y", "--time", "time"],
+     "rec_unit.csv: column 'time' has unit [fortnight], which empact does not convert"),
+    (["frf-estimate", "rec_tq.csv", "--input", "u", "--output", "y", "--time", "time"],
+     "rec_tq.csv: column 'time' has unit [N m], a unit of torque; the column is a time (s, "
+     "ms, us, min)"),
+    (["frf-estimate", "rec_yunit.csv", "--input", "u", "--output", "y", "--time", "time"],
+     "column 'u' has unit [furlong]"),
+    (["frf-estimate", "rec_dead.csv", "--input", "u", "--output", "y", "--fs", "100"],
+     "output 'y' is constant (0 in every sample): a dead channel carries no response"),
+    (["frf-estimate", "rec_flat.csv", "--input", "u", "--output", "y", "--fs", "100"],
+     "input 'u' is constant (2.5 in every sample): a dead channel excites nothing"),
+    (["slip", "rootlocus", "--slip", "0.5"], "--slip = 0.5: allowed range is [-0.2, 0.2]"),
+    # a symbolic link, dangling or not, is an existing file (--force replaces the link)
+    (["plants", "--ratio", "1", "--out", "dang.npz"],
+     "--out dang.npz: exists (a symbolic link); give --force to replace it"),
+    (["rig", "--out", "dang.csv"], "--out dang.csv: exists (a symbolic link)"),
+    (["modes", "driveline", "--json-out", "link.json"], "--json-out link.json: exists (a "
+                                                        "symbolic link)"),
+    (["simulate", "--example", "servo-torque-steps", "--out", "dang.npz"],
+     "--out dang.npz: a dangling symbolic link"),
+    # scenario, targets and spread values range-checked when loaded, before any run
+    (["simulate", "sc_steps.toml"],
+     "sc_steps.toml: solver.max_steps = 1.5: must be a whole number in [1, 1000000000]"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--analysis", "closed-loop", "--scenario",
+      "sc_steps.toml"],
+     "solver.max_steps = 1.5"),
+    (["calibrate", "t_inf.toml", "--out", "c.toml"],
+     "t_inf.toml: target 1: frequency_hz = inf: must be a finite number in (0, 1e+06] [Hz]"),
+    (["calibrate", "t_miss.toml", "--out", "c.toml"],
+     "t_miss.toml: target 1: missing frequency_hz (each target needs model, frequency_hz)"),
+    (["montecarlo", "--spread", "sp_ln100.toml"],
+     "lies for the most part (90 % of its quantiles) outside the values actuation.k_w may "
+     "take"),
+    # no library words
+    (["montecarlo", "--spread", "sp_ok.toml", "--scheduler", "tcp:/x"],
+     "--scheduler tcp:/x: give none, local or a scheduler address HOST:PORT"),
+    (["plants", "--ratio", "1", "--scheduler", "host:99999"], "a port from 1 to 65535"),
     (["slip", "poles", "--slip", "0.001,,0.04"], "--slip '0.001,,0.04': not a number"),
     (["slip", "rootlocus", "--cb-max", "inf"], "--cb-max = inf: must be a finite number"),
 ]
 
 
+def _snapshot(folder):
+    """Every entry of `folder` with its modification time and type (a symbolic link as a link,
+    dangling or not)."""
+    return sorted((p.relative_to(folder), p.lstat().st_mtime_ns, stat.S_IFMT(p.lstat().st_mode))
+                  for p in folder.rglob("*"))
+
+
 @pytest.mark.parametrize("args, match", BAD_INPUT, ids=[" ".join(a)[:60] for a, _ in BAD_INPUT])
 def test_bad_input_one_line_exit_2_nothing_written(files, args, match):
-    before = sorted((p.relative_to(files), p.stat().st_mtime_ns) for p in files.rglob("*"))
+    before = _snapshot(files)
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 2, res.output
     # (a progress line shows only after a second of work: a slow machine's, not an error)
@@ -825,12 +974,12 @@ def test_bad_input_one_line_exit_2_nothing_written(files, args, match):
     assert len(lines) == 1 and lines[0].startswith("error: "), res.output
     assert match in lines[0], lines[0]
     assert LEAKS.search(res.output) is None, res.output  # no internals
-    after = sorted((p.relative_to(files), p.stat().st_mtime_ns) for p in files.rglob("*"))
-    assert after == before  # nothing written, nothing replaced
+    assert _snapshot(files) == before  # nothing written, nothing replaced (a link stays one)
 
 
-#: a progress line (`empact._progress`)
-PROGRESS = re.compile(r"^.+?: +\d+%\|")  # a bar: "desc: 50%|", desc may hold a colon
+#: a progress line (`empact._progress`): a bar ("desc: 50%|", desc may hold a colon) or the
+#: work indicator of a command without one ("linearize: working, 00:01 elapsed")
+PROGRESS = re.compile(r"^.+?: (?: +\d+%\||working, [\d:]+ elapsed$)")
 
 #: what an error line must never show: exception class names, tracebacks, Python and numpy
 #: reprs, numpy's or Python's own messages
@@ -854,7 +1003,7 @@ def test_the_leak_scan_sees_leaks():
 def test_bad_input_table_covers_every_command():
     covered = {a[0] for a, _ in BAD_INPUT}
     assert set(COMMANDS) <= covered, set(COMMANDS) - covered
-    assert len(BAD_INPUT) >= 230  # 159 before issue 22
+    assert len(BAD_INPUT) >= 300  # 159 before issue 22, 244 before issue 35
 
 
 def test_failed_calibration_exits_1_and_writes_nothing(tmp_path):
@@ -970,3 +1119,143 @@ def test_control_simulate_strict_exits_1_on_a_missed_target(example, status):
     assert res.exit_code == status, res.output
     if status:
         assert "ratio_rate" in res.output and "MISSED" in res.output.upper()
+
+
+# -- issue 35: every registered command and option, checked by walking them -------------------
+ALL_COMMANDS = COMMAND_TREE  # every command the groups hand out (new ones included)
+
+
+def _options(kind):
+    import click
+
+    rows = []
+    for path, cmd in ALL_COMMANDS:
+        for p in cmd.params:
+            if getattr(p, "is_flag", False) or p.name in ("help", "version"):
+                continue
+            if kind == "path" and not isinstance(p.type, click.Path):
+                continue
+            opt = max(p.opts, key=len) if isinstance(p, click.Option) else None
+            rows.append((path, opt))
+    return rows
+
+
+def test_every_command_takes_quiet():
+    """`--quiet` on every command (7 of 17 refused it before issue 35)."""
+    missing = [" ".join(path) for path, cmd in ALL_COMMANDS
+               if not any(p.name == "quiet" for p in cmd.params)]
+    assert missing == [] and len(ALL_COMMANDS) >= 25
+
+
+@pytest.mark.parametrize("path, option", _options("any"),
+                         ids=[" ".join(p) + f" {o}" for p, o in _options("any")])
+def test_every_option_refuses_an_empty_value(tmp_path, monkeypatch, path, option):
+    """An empty value is an error naming the option (it meant "not given" for `--out ''`,
+    `--nominal ''`, `--traction ''`): one line, exit 2, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    args = [*path, option, ""] if option else [*path, ""]
+    res = CliRunner().invoke(main, args)
+    lines = [ln for ln in res.output.strip().splitlines() if not PROGRESS.match(ln)]
+    assert res.exit_code == 2 and len(lines) == 1 and lines[0].startswith("error: "), \
+        (args, res.output)
+    if option:
+        assert option in lines[0], lines[0]
+    assert LEAKS.search(res.output) is None and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("path, option", _options("path"),
+                         ids=[" ".join(p) + f" {o}" for p, o in _options("path")])
+def test_every_path_option_goes_through_one_check(tmp_path, monkeypatch, path, option):
+    """Every path option and argument: a name too long for the file system (it crashed six
+    commands with OSError) and a FIFO (it hung a reader) are one line and exit 2 before any
+    work."""
+    monkeypatch.chdir(tmp_path)
+    os.mkfifo(tmp_path / "pipe")
+    for value, match in ((LONG, "a file name of 300 bytes; file names hold at most 255"),
+                         ("pipe", "pipe: is a FIFO (named pipe), not a file")):
+        args = [*path, option, value] if option else [*path, value]
+        res = CliRunner().invoke(main, args)
+        lines = [ln for ln in res.output.strip().splitlines() if not PROGRESS.match(ln)]
+        assert res.exit_code == 2 and len(lines) == 1, (args, res.output)
+        assert match in lines[0] and (option is None or option in lines[0]), lines[0]
+        assert [p.name for p in tmp_path.iterdir()] == ["pipe"]
+
+
+def test_a_full_disk_is_refused_before_work(tmp_path, monkeypatch):
+    """An output on a full file system (less than 1 MiB free) is one line, exit 2, before any
+    work; an OS error while writing (a disk that fills up mid-run) is one line, exit 1."""
+    import empact.cli._common as common
+
+    class Full:
+        f_bavail, f_frsize = 10, 4096
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(common.os, "statvfs", lambda path: Full())
+    res = run("modes", "driveline", "--json-out", "m.json")
+    assert res.exit_code == 2, res.output
+    assert res.output.strip() == "error: --json-out m.json: the disk holding . is full (40 KiB " \
+                                 "free)"
+    monkeypatch.undo()
+    monkeypatch.chdir(tmp_path)
+
+    def no_space(path, text):
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(common, "atomic_write_text", no_space)
+    res = run("modes", "driveline", "--json-out", "m.json")
+    assert res.exit_code == 1, res.output
+    assert res.output.strip() == "error: m.json: no space left on device; nothing written"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_group_without_a_subcommand_prints_its_usage():
+    """`empact control` (any group) alone: its usage and commands, as ``--help`` shows them,
+    on stderr, exit 2 (it was folded into one ``error:`` line)."""
+    for group in (["control"], ["slip"], ["params"]):
+        res = CliRunner().invoke(main, group)
+        assert res.exit_code == 2
+        assert res.stderr.startswith(f"Usage: empact {group[0]} ") and "Commands:" in res.stderr
+        assert not res.stdout and "error:" not in res.stderr
+
+
+def test_csv_header_units_are_converted(tmp_path):
+    """`frf-estimate` reads ``time [ms]`` as milliseconds (it ignored the unit: frequencies
+    1000x too low); the sample rate is 1 / (1 ms) = 1000 Hz exactly (uniform samples)."""
+    rows = "".join(f"{i},{np.sin(0.3 * i)},{np.cos(0.3 * i)}\n" for i in range(256))
+    for unit, fs in (("ms", 1000.0), ("s", 1.0), ("min", 1 / 60), ("us", 1e6)):
+        data = write(tmp_path, f"time [{unit}],u,y\n" + rows, f"r_{unit}.csv")
+        res = run("frf-estimate", data, "--input", "u", "--output", "y", "--time", "time",
+                  "--json", "--quiet")
+        assert res.exit_code == 0, res.output
+        assert_allclose(json.loads(res.stdout)["fs_hz"], fs, rtol=1e-12, atol=0)
+
+
+def test_json_lists_of_numbers_on_one_line():
+    """`slip poles --json` over 8 slips: a list of numbers (or of [re, im] pairs) is one line
+    (1992 lines of one number each before issue 35); the document reads back the same."""
+    from empact.cli._common import compact_json
+
+    doc = {"a": [1, 2.5, None], "b": [[1.0, -2.0], [3.0, 4.0]], "c": [{"d": []}, {}], "e": {}}
+    assert json.loads(compact_json(doc)) == doc
+    assert compact_json(doc).splitlines()[1] == ' "a": [1, 2.5, null],'
+    res = run("slip", "poles", "--slip", "0.001,0.002,0.005,0.01,0.02,0.03,0.04,0.05", "--json",
+              "--quiet")
+    assert res.exit_code == 0, res.output
+    assert len(res.stdout.splitlines()) < 200 and len(json.loads(res.stdout)["points"]) == 8
+
+
+def test_a_closing_line_names_the_files_written(tmp_path, monkeypatch):
+    """`frf --plot`, `modes --json-out` (and every --plot / --json-out) end with one line
+    naming what was written (they printed nothing); --quiet leaves stderr to errors."""
+    monkeypatch.chdir(tmp_path)
+    res = run("frf", "actuation", "--n", "20", "--plot", "f.png")
+    assert res.exit_code == 0, res.output
+    assert res.stderr.splitlines()[-1] == "written: f.png" and res.stdout == ""
+    res = run("frf", "actuation", "--n", "20", "--json-out", "f.json", "--plot", "g.png")
+    assert res.exit_code == 0, res.output
+    assert res.stderr.splitlines()[-1] in ("written: f.json, g.png", "written: g.png, f.json")
+    res = run("modes", "driveline", "--json-out", "m.json")
+    assert res.exit_code == 0, res.output
+    assert res.stderr.splitlines()[-1] == "written: m.json"
+    res = run("modes", "driveline", "--json-out", "q.json", "--quiet")
+    assert res.exit_code == 0 and res.stderr == "" and (tmp_path / "q.json").is_file()

@@ -5,6 +5,8 @@ hostile values (NaN, infinities, huge, empty, empty list items, wrong separators
 Whatever the value, a command ends with exit status 0 (the value was fine), 1 (the run did
 not succeed) or 2 with one ``error:`` line naming the option, no internals, and nothing
 written."""
+import os
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -94,3 +96,49 @@ def test_the_fuzzer_reaches_every_option_and_both_outcomes(tmp_path, monkeypatch
     codes = [CliRunner().invoke(main, [*base, option, value]).exit_code
              for base, option, value in CASES[:80] if base[0] in ("modes", "frf", "slip")]
     assert codes.count(0) >= 1 and codes.count(2) >= 20, codes
+
+
+# -- issue 35: hostile paths for every path option and argument (walked, so that new commands
+# and options are fuzzed without a line here) -----------------------------------------------
+from test_cli import ALL_COMMANDS  # noqa: E402 (the walk of test_cli)
+
+PATH_HOSTILE = ["", " ", "x" * 300, "x" * 200 + "/" + "y" * 256 + ".json", "pipe", "/dev/null",
+                "/dev/zero", "plain.txt/sub.json", "dangling", "dangling.json", "\t"]
+
+N_PATH_CASES = 160
+
+
+def _path_cases():
+    import click
+
+    items = [(path, max(p.opts, key=len) if isinstance(p, click.Option) else None)
+             for path, cmd in ALL_COMMANDS for p in cmd.params
+             if isinstance(p.type, click.Path)]
+    rng = np.random.default_rng(20261202)
+    return [(*items[k % len(items)], PATH_HOSTILE[rng.integers(len(PATH_HOSTILE))])
+            for k in range(max(N_PATH_CASES, len(items)))]
+
+
+PATH_CASES = _path_cases()
+
+
+@pytest.mark.parametrize("path, option, value", PATH_CASES,
+                         ids=[f"{' '.join(p)} {o} {v[:10]!r}" for p, o, v in PATH_CASES])
+def test_hostile_paths(tmp_path, monkeypatch, path, option, value):
+    """A path that cannot be a file empact reads or writes (empty, too long, a FIFO, a
+    device, through a file, a dangling link) is refused in one line, exit 2, nothing written,
+    nothing left behind."""
+    monkeypatch.chdir(tmp_path)
+    os.mkfifo(tmp_path / "pipe")
+    (tmp_path / "plain.txt").write_text("mine")
+    os.symlink(tmp_path / "nowhere" / "x", tmp_path / "dangling")
+    os.symlink(tmp_path / "nowhere" / "x.json", tmp_path / "dangling.json")
+    before = sorted(p.name for p in tmp_path.iterdir())
+    args = [*path, option, value] if option else [*path, value]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2, (args, res.output)
+    lines = [ln for ln in res.output.strip().splitlines() if not PROGRESS.match(ln)]
+    assert len(lines) == 1 and lines[0].startswith("error: "), (args, res.output)
+    assert LEAKS.search(res.output) is None, (args, res.output)
+    assert sorted(p.name for p in tmp_path.iterdir()) == before, args
+    assert (tmp_path / "plain.txt").read_text() == "mine"

@@ -274,3 +274,25 @@ def test_frf_unexcited_bins_are_nan_not_errors():
     assert np.max(np.abs(est.H[0, 0, lines] - true) / np.abs(true)) < 1e-6
     with pytest.raises(ValueError, match="no power"):
         estimate_frf(np.zeros(512), y[:512], fs)
+
+
+def test_records_convert_header_units_to_si(tmp_path):
+    """`load_records`: ``[rpm]`` -> rad/s (2 pi / 60), ``[ms]`` -> s, ``[N m]`` unchanged; an
+    unknown unit of a column read is refused, one of a column not read is ignored."""
+    from empact.errors import DataError
+    from empact.identification import load_records
+
+    p = tmp_path / "r.csv"
+    p.write_text("t [ms],w [rpm],T [N m],z [furlong]\n" + "".join(
+        f"{i},{60 * i},{2 * i},1\n" for i in range(20)))
+    rec = load_records(p, ["t", "w", "T"], quantities={"t": "time"})
+    k = np.arange(20.0)
+    np.testing.assert_allclose(rec["t"], k * 1e-3, rtol=1e-15, atol=0)
+    np.testing.assert_allclose(rec["w"], k * 2 * np.pi, rtol=1e-15, atol=0)
+    np.testing.assert_array_equal(rec["T"], 2 * k)
+    with pytest.raises(DataError, match=r"column 'z' has unit \[furlong\], which empact does "
+                                        r"not convert"):
+        load_records(p, ["z"])
+    with pytest.raises(DataError, match=r"column 'w' has unit \[rpm\], a unit of angular "
+                                        r"speed; the column is a time"):
+        load_records(p, ["w"], quantities={"w": "time"})

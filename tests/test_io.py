@@ -99,3 +99,74 @@ def test_a_first_run_says_that_the_model_compiles(capsys):
                                                         "return_type": None}):
             pass
     assert capsys.readouterr().err == _common.COMPILING + "\n"
+
+
+# -- issue 35: guarded input files, temporary names that fit, the work indicator --------------
+def test_guarded_reader_refuses_what_would_hang_or_overflow(tmp_path):
+    """`check_input` / `parse_json` / `parse_toml`: a FIFO is refused without opening it
+    (opening one blocks), a file above its size limit, non-UTF-8 text, and nesting deeper
+    than `MAX_DEPTH` (100 000 levels raised RecursionError before); each one line naming the
+    file."""
+    from empact._io import MAX_DEPTH, check_input, parse_json, parse_toml, read_input_text
+    from empact.errors import ParameterError
+
+    os.mkfifo(tmp_path / "pipe")
+    with pytest.raises(ParameterError, match=r"pipe: is a FIFO \(named pipe\), not a table "
+                                             r"file$"):
+        check_input(tmp_path / "pipe", "table")
+    big = tmp_path / "big.csv"
+    big.write_text("x" * 3000)
+    with pytest.raises(ParameterError, match=r"big.csv: 0 MiB; a data file may hold at most 0 "
+                                             r"MiB$"):
+        check_input(big, "data", max_bytes=2048)
+    (tmp_path / "l1.toml").write_bytes("a = 'r\xe9glage'\n".encode("latin-1"))
+    with pytest.raises(ParameterError, match=r"l1.toml: not a UTF-8 text file"):
+        read_input_text(tmp_path / "l1.toml", "parameter")
+    for depth, fails in ((MAX_DEPTH, False), (MAX_DEPTH + 1, True), (100_000, True)):
+        (tmp_path / "d.json").write_text("[" * depth + "]" * depth)
+        (tmp_path / "d.toml").write_text("a = " + "[" * (depth - 1) + "]" * (depth - 1) + "\n")
+        for parse, name in ((parse_json, "d.json"), (parse_toml, "d.toml")):
+            if fails:
+                with pytest.raises(ParameterError, match=f"{name}: nested deeper than "
+                                                         f"{MAX_DEPTH} levels"):
+                    parse(tmp_path / name, "test")
+            else:
+                parse(tmp_path / name, "test")
+
+
+def test_temporary_names_fit_the_file_system(tmp_path):
+    """A destination whose name is within the 255-byte limit gets a temporary name within it
+    too (a 250-byte name failed with 'File name too long' in the temporary's longer name)."""
+    dest = tmp_path / ("y" * 245 + ".json")
+    atomic_write_text(dest, "{}")
+    assert dest.read_text() == "{}" and sorted(p.name for p in tmp_path.iterdir()) == [dest.name]
+    folder = tmp_path / ("z" * 255)
+    with atomic_folder(folder) as tmp:
+        (tmp / "a.txt").write_text("a")
+    assert (folder / "a.txt").read_text() == "a"
+
+
+def test_working_indicator_off_a_terminal(capsys):
+    """`working`: nothing for a block shorter than its delay; a line ``desc: working, 00:00
+    elapsed`` after it; ended (no more lines, no final line) by a real progress bar."""
+    import time
+
+    from empact._progress import progress, working
+
+    with working("quick", delay=5.0):
+        pass
+    assert capsys.readouterr().err == ""
+    with working("slow", delay=0.05):
+        time.sleep(0.4)
+    err = capsys.readouterr().err.splitlines()
+    assert err == ["slow: working, 00:00 elapsed"], err
+    with working("outer", delay=0.05):
+        time.sleep(0.3)
+        with progress(total=2, desc="inner", unit="step", delay=0) as bar:
+            bar.update(2)
+        time.sleep(0.2)
+    err = capsys.readouterr().err.splitlines()
+    assert err[0] == "outer: working, 00:00 elapsed" and all("outer" not in e for e in err[1:])
+    with working("off", delay=0.0, enabled=False):
+        time.sleep(0.1)
+    assert capsys.readouterr().err == ""

@@ -60,7 +60,7 @@ def test_variator_consistency(tmp_path):
     ('free = ["driveline.k_tc"]\n[[target]]\nmodel="driveline"\nratio=1.0\nmode=0\n'
      'frequency_hz=1.0\n', "mode"),
     ('free = ["driveline.k_tc"]\n[[target]]\nmodel="driveline"\nratio=1.0\nmode=2\n'
-     'frequency_hz=-1.0\n', "frequency_hz = -1.0"),
+     'frequency_hz=-1.0\n', "frequency_hz = -1: allowed range is \\(0, 1e\\+06\\] \\[Hz\\]"),
 ])
 def test_bad_targets_are_refused(tmp_path, text, match):
     from empact.linear.calibration import load_targets

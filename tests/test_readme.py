@@ -32,3 +32,20 @@ def test_the_readme_tour_runs_as_written(readme_tour):
     print(f"README tour: {len(records)} steps in {total:.1f} s; slowest: "
           + ", ".join(f"{r['seconds']:.1f} s {' '.join(r['step'].split()[1:3])}"
                       for r in sorted(records, key=lambda r: -r["seconds"])[:6]))
+
+
+@pytest.mark.timeout(400)
+def test_the_matlab_snippet_reads_fields_the_tour_writes(readme_tour):
+    """Every ``s.<field>`` of the README's MATLAB snippet is a variable of the family the tour
+    writes, in the .mat layout (`PlantFamily._layout`, what `save_family` writes): it read
+    ``s.grid_nu`` of a family whose axes are r_g and tau (issue 35)."""
+    import re
+
+    from empact.control.family import load_family
+
+    text = README.read_text()
+    snippet = re.search(r"```matlab\n(.*?)```", text, re.S).group(1)
+    fields = set(re.findall(r"\bs\.(\w+)", snippet))
+    _, folder = readme_tour.result()
+    layout = load_family(folder / "family.npz")._layout()
+    assert fields and fields <= set(layout), fields - set(layout)

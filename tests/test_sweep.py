@@ -380,3 +380,25 @@ def test_a_chunk_runs_on_one_blas_thread_and_new_libraries_are_seen(monkeypatch)
     assert sweep._thread_pools() is first
     monkeypatch.setitem(sys.modules, "_empact_test_new_module", types.ModuleType("x"))
     assert sweep._thread_pools() is not first
+
+
+def test_local_cluster_leaves_nothing_in_the_temporary_folder(tmp_path, monkeypatch):
+    """Issue 35, item 4: a local Dask cluster's scratch space (worker folders and Dask's
+    ``dask-scratch-space/global.lock``, ``purge.lock``, which its default left in the system's
+    temporary folder) lives in a folder of the run, removed when the cluster closes."""
+    import tempfile
+
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    monkeypatch.setattr(tempfile, "tempdir", None)  # re-read TMPDIR
+    assert run_chunks(abs, [-1, -2], SweepOptions(scheduler="local", workers=1)) == [1, 2]
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("address", ["tcp:/x", "tcp://host", "host:0", "host:99999", "a b:1",
+                                     "tcp://host:x"])
+def test_scheduler_address_checked_before_connecting(address):
+    """A malformed address is one line (it leaked "invalid literal for int() with base 10")."""
+    with pytest.raises(SweepError, match=r"give none, local or a scheduler address HOST:PORT"):
+        SweepOptions(scheduler=address)
+    for good in ("tcp://127.0.0.1:8786", "localhost:8786", "tls://[::1]:8786"):
+        assert SweepOptions(scheduler=good).scheduler == good

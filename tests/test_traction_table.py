@@ -308,9 +308,9 @@ def test_the_model_commands_take_a_table(tmp_path, params):
     from empact.nonlinear.scenario import load_scenario
 
     table = _write_sampled(tmp_path / "table.csv", params)
-    res = CliRunner().invoke(main, ["linearize", "--traction", str(table)])
+    res = CliRunner().invoke(main, ["linearize", "--traction", str(table), "--json"])
     assert res.exit_code == 0, res.output
-    doc, _ = json.JSONDecoder().raw_decode(res.output)  # (stderr may follow: compiling)
+    doc = json.loads(res.stdout)
     assert doc["model_options"]["traction"] == str(table)
     fam = tmp_path / "fam.npz"
     res = CliRunner().invoke(main, ["plants", "--ratio", "0.5,1,2", "--tau", "0.9",
@@ -427,7 +427,7 @@ def test_a_parameter_file_names_a_table_the_model_uses(tmp_path, params, monkeyp
 
 
 @pytest.mark.parametrize("value, match", [
-    ('"missing.csv"', r"missing\.csv': no such traction table$"),
+    ('"missing.csv"', r"missing\.csv': no such traction table file$"),
     ('"bad.csv"', r"nu must increase"),
     ("3", r"must be the path of a traction table"),
 ], ids=["missing", "bad-file", "wrong-type"])

@@ -53,7 +53,8 @@ def test_control_simulate_gives_slips_as_fractions(tmp_path, params):
 
 
 def test_control_simulate_text_keeps_percent(monkeypatch):
-    """For people: the slips in percentage points and %, the other metrics with units."""
+    """For people: the slips in percentage points and %, the other metrics with units, a
+    dimensionless number as [-] (issue 35: 7 metrics showed no unit)."""
 
     class Run:
         metrics = {"complete": True, "message": "completed", "slip_error": 0.0005,
@@ -67,9 +68,11 @@ def test_control_simulate_text_keeps_percent(monkeypatch):
     res = CliRunner().invoke(main, ["control", "simulate", "--example", "slip-load-step-r1"])
     assert res.exit_code == 0, res.output
     lines = res.output.splitlines()
-    assert "slip_error             0.05 percentage points" in lines
-    assert "peak_slip              1.5 %" in lines
-    assert "mean_clamping_force    9000 N" in lines
+    assert "slip_error             0.05 [percentage points]" in lines
+    assert "peak_slip              1.5 [%]" in lines
+    assert "mean_clamping_force    9000 [N]" in lines
+    assert "ratio_error            0.002 [-]" in lines
+    assert "macro_slip             False" in lines  # a verdict, not a number
 
 
 def test_montecarlo_closed_loop_outputs_are_fractions(monkeypatch, params):

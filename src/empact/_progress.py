@@ -2,16 +2,25 @@
 lines (the first after 1 s, then at most one every 10 s, and the final state) with no
 carriage returns or escapes: work that ends within a second writes none.  A bar
 left by an exception (a Ctrl-C, an error) writes no final state: the error line is the last
-word."""
+word.
+
+`working` is the indicator of work that has no steps to count (a command without a bar of its
+own): ``linearize: working, 00:03 elapsed``, by the same rules (after a second, then every
+10 s as lines; redrawn each second on a terminal), ended by the first real bar."""
 from __future__ import annotations
 
 import sys
 import threading
-from typing import Any, Iterable
+import time
+from contextlib import contextmanager
+from typing import Any, Iterable, Iterator
 
 from tqdm import tqdm
 
-__all__ = ["progress"]
+__all__ = ["progress", "working", "WORKING_FORMAT"]
+
+#: the line of `working` (``desc: working, 00:03 elapsed``)
+WORKING_FORMAT = "{desc}: working, {elapsed} elapsed"
 
 
 class _Lines:
@@ -121,6 +130,7 @@ def progress(iterable: Iterable[Any] | None = None, *, total: int | None = None,
     """
     if not enabled:  # no tqdm at all: it would make a multiprocessing lock (a semaphore
         return _Off(iterable)  # that a worker killed by a Ctrl-C leaves to the tracker)
+    _end_working()  # a bar of the work's own replaces the indicator
     stream = sys.stderr
     if getattr(stream, "isatty", lambda: False)():
         return _Bar(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
@@ -128,3 +138,88 @@ def progress(iterable: Iterable[Any] | None = None, *, total: int | None = None,
     return _LineBar(iterable, total=total, desc=desc, unit=unit, disable=not enabled,
                     file=_Lines(stream), leave=True, mininterval=10.0, ascii=True, ncols=80,
                     delay=delay)
+
+
+
+class _Working:
+    """The ticker of `working`: a thread that waits `delay`, then makes the bar (only then:
+    tqdm's multiprocessing lock is not made for work that ends sooner) and redraws it every
+    `every` seconds until `end`."""
+
+    def __init__(self, desc: str, tty: bool, delay: float) -> None:
+        self.desc, self.tty, self.delay = desc, tty, delay
+        self.every = 1.0 if tty else 10.0
+        self.t0 = time.time()
+        self.lock, self.stop = threading.Lock(), threading.Event()
+        self.bar: Any = None
+        self.thread = threading.Thread(target=self.run, daemon=True)
+        self.thread.start()
+
+    def run(self) -> None:
+        if self.stop.wait(self.delay):
+            return
+        with self.lock:
+            if self.stop.is_set():
+                return
+            file = sys.stderr if self.tty else _Lines(sys.stderr)
+            # (a delay that never passes: tqdm draws only when told, by refresh)
+            self.bar = _Bar(total=None, desc=self.desc, file=file, leave=False,
+                            bar_format=WORKING_FORMAT, ascii=not self.tty, delay=1e9)
+            self.bar.start_t = self.t0  # elapsed since the work began
+            self.bar.refresh()
+        while not self.stop.wait(self.every):
+            with self.lock:
+                if self.stop.is_set():
+                    return
+                self.bar.refresh()
+
+    def end(self) -> None:
+        with self.lock:
+            self.stop.set()
+            if self.bar is not None:
+                self.bar.leave = False  # the indicator leaves no final line
+                self.bar.close()
+
+
+#: the `working` indicator now running (at most one)
+_WORKING: list[_Working] = []
+
+
+def _end_working() -> None:
+    while _WORKING:
+        _WORKING.pop().end()
+
+
+@contextmanager
+def working(desc: str, *, enabled: bool = True, delay: float = LINE_DELAY) -> Iterator[None]:
+    """Show that work is going on, on stderr, while the block runs: nothing for work that ends
+    within `delay` seconds; then ``desc: working, MM:SS elapsed`` (as lines off a terminal:
+    the first after `delay`, then one every 10 s; redrawn each second on a terminal, and only
+    when stdout is not that terminal too, whose output it would garble).  A `progress` bar
+    started inside the block ends the indicator; it leaves no final line.
+
+    Parameters
+    ----------
+    desc : str
+        What works (the command's name).
+    enabled : bool
+        False: show nothing (``--quiet``).
+    delay : float
+        Seconds before the first line [s].
+
+    Yields
+    ------
+    None
+    """
+    tty = getattr(sys.stderr, "isatty", lambda: False)()
+    if not enabled or _WORKING or (tty and getattr(sys.stdout, "isatty", lambda: False)()):
+        yield
+        return
+    w = _Working(desc, tty, delay)
+    _WORKING.append(w)
+    try:
+        yield
+    finally:
+        if w in _WORKING:
+            _WORKING.remove(w)
+        w.end()

@@ -20,7 +20,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ._io import atomic_file, atomic_write_text
+from ._io import atomic_file, atomic_write_text, check_input
 from ._lazy import lazy_module
 from ._validate import check_choice
 from .errors import ParameterError
@@ -28,6 +28,9 @@ from .errors import ParameterError
 sio = lazy_module("scipy.io")
 
 __all__ = ["FORMATS", "system_dict", "save_system", "format_of", "jsonable", "read_npz"]
+
+#: largest ``.npz`` archive read (`read_npz`) [bytes]
+MAX_ARCHIVE_BYTES = 4 * 2**30
 
 #: File formats of `save_system`.
 FORMATS = ("json", "mat", "npz")
@@ -207,10 +210,7 @@ def read_npz(path: str | os.PathLike[str], what: str, required: Sequence[str],
     """
     p = Path(path)
     how = f"; {hint}" if hint else ""
-    if not p.exists():
-        raise ParameterError(f"{p}: no such {what} file")
-    if p.is_dir():
-        raise ParameterError(f"{p}: is a folder, not a {what} file")
+    check_input(p, what, max_bytes=MAX_ARCHIVE_BYTES)
     try:
         with np.load(p, allow_pickle=False) as z:
             arrays = {name: z[name] for name in z.files}

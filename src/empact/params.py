@@ -38,7 +38,7 @@ from typing import Any, Literal, Mapping, overload
 
 import tomli_w
 
-from ._io import atomic_write_text
+from ._io import atomic_write_text, parse_toml
 from ._section import Section, param
 from ._validate import check_choice, check_number
 from .errors import ParameterError
@@ -114,7 +114,9 @@ class ActuationParams(Section):
     s: float = param("m/rad", "screw pitch (translation per radian)", 1e-7, 1e-2)
     k_w: float = param("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
     k_c: float = param("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
-    k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3)", 1e2, 1e11)
+    k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3); the actuation "
+                          "model's and the nonlinear model's belt (not driveline.k_belt)",
+                          1e2, 1e11)
     k_tp: float = param("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
     k_ts: float = param("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
 
@@ -215,7 +217,8 @@ class DrivelineParams(Section):
     J_l: float = param("kg m^2", "load motor inertia, q4", 1e-6, 1e3)
     k_tc: float = param("N m/rad", "torque converter lock-up clutch stiffness", 1e-2, 1e8)
     k_belt: float = param("N/m", "pushbelt stiffness as a chain element (elongation R_p q2 - R_s "
-                              "q3)", 1e2, 1e11)
+                              "q3); the linear driveline model's only (the nonlinear model's "
+                              "belt is actuation.k_belt)", 1e2, 1e11)
     k_ds: float = param("N m/rad", "driveshaft stiffness", 1e-2, 1e8)
 
 
@@ -238,7 +241,8 @@ class Sec21Stiffness(Section):
     _name = "paper_sec21"
     k_w: float = param("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
     k_c: float = param("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
-    k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3)", 1e2, 1e11)
+    k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3) of the Sec. 2.1 "
+                          "rows (--kinematics paper-sec2.1)", 1e2, 1e11)
     k_tp: float = param("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
     k_ts: float = param("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
 
@@ -518,21 +522,10 @@ def read_toml(path: str | os.PathLike[str], what: str = "parameter") -> dict[str
     Raises
     ------
     ParameterError
-        When the file is missing, a folder, not UTF-8, not valid TOML or unreadable.
+        When the file is missing, a folder, a FIFO or device, too large, not UTF-8, not valid
+        TOML, nested too deep or unreadable (`empact._io.parse_toml`).
     """
-    try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: no such {what} file") from None
-    except IsADirectoryError:
-        raise ParameterError(f"{path}: is a folder, not a {what} file") from None
-    except UnicodeDecodeError:
-        raise ParameterError(f"{path}: not a text file (TOML must be UTF-8)") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"{path}: not valid TOML ({exc})") from None
-    except OSError as exc:
-        raise ParameterError(f"{path}: cannot be read ({exc.strerror})") from None
+    return parse_toml(path, what)
 
 
 _DEFAULT: Params | None = None

@@ -31,7 +31,10 @@ import asyncio
 import importlib
 import math
 import os
+import re
+import shutil
 import sys
+import tempfile
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
@@ -43,7 +46,7 @@ from ._validate import check_int, check_number
 from .errors import ParameterError
 
 __all__ = ["SweepError", "SweepOptions", "run_chunks", "plan_chunks", "chunk_count",
-           "chunk_slices"]
+           "chunk_slices", "check_address"]
 
 
 class SweepError(ParameterError):
@@ -78,6 +81,8 @@ class SweepOptions:
         if not s:
             raise SweepError("--scheduler '': give none, local or a scheduler address")
         object.__setattr__(self, "scheduler", s)
+        if s not in ("none", "local"):
+            check_address(s)
         if self.workers is not None:
             object.__setattr__(self, "workers", check_int("workers", self.workers, 1, 256))
         object.__setattr__(self, "timeout", check_number("timeout", self.timeout, 0.1, 3600.0,
@@ -90,6 +95,37 @@ class SweepOptions:
         if self.scheduler == "none":
             return 1
         return self.workers or os.cpu_count() or 1
+
+
+#: a scheduler address: an optional protocol, a host name or [IPv6] address, a port
+_ADDRESS = re.compile(r"^(?:(?P<proto>[a-z][a-z0-9+.-]*)://)?(?P<host>\[[0-9A-Fa-f:.]+\]|"
+                      r"[A-Za-z0-9_.-]+):(?P<port>[0-9]{1,5})$")
+
+
+def check_address(address: str) -> str:
+    """A Dask scheduler address, ``[tcp://]host:port`` (``tls://``, ``ucx://`` and an
+    ``[IPv6]`` host too), checked before any connection: one line otherwise.
+
+    Parameters
+    ----------
+    address : str
+        The address as given to ``--scheduler``.
+
+    Returns
+    -------
+    str
+        `address`.
+
+    Raises
+    ------
+    SweepError
+        When `address` is not of that form or its port is not 1 to 65535.
+    """
+    m = _ADDRESS.match(address)
+    if m is None or not 1 <= int(m["port"]) <= 65535:
+        raise SweepError(f"--scheduler {address}: give none, local or a scheduler address "
+                         "HOST:PORT (tcp://host:8786, a port from 1 to 65535)")
+    return address
 
 
 def chunk_count(n_items: int, seconds_per_item: float, workers: int = 1,
@@ -247,18 +283,30 @@ def _client(opts: SweepOptions):
     if opts.scheduler == "local":
         workers = opts.parallelism
         cluster = None
+        # Dask's scratch space (worker folders, its lock files) goes into a folder of this
+        # run, removed when the cluster closes (`_run_dask`): nothing is left in the system's
+        # temporary folder (Dask's default leaves dask-scratch-space/*.lock there)
+        scratch = tempfile.mkdtemp(prefix="empact-dask-")
         try:
             # the worker processes ignore Ctrl-C, which at a terminal reaches them too (each
             # would print a traceback): this process stops the sweep and closes the cluster
-            with importlib.import_module("dask").config.set(LOCAL_CONFIG), sigint_held():
+            with importlib.import_module("dask").config.set(
+                    {**LOCAL_CONFIG, "temporary-directory": scratch}), sigint_held():
                 cluster = distributed.LocalCluster(
                     n_workers=workers, threads_per_worker=1, processes=True,
-                    dashboard_address=":0", silence_logs=50, preload=["empact._parallel"])
+                    dashboard_address=":0", silence_logs=50, preload=["empact._parallel"],
+                    local_directory=scratch)
         except BaseException:
             if cluster is not None:  # a Ctrl-C while it started: delivered once it is up
                 cluster.close()
+            shutil.rmtree(scratch, ignore_errors=True)
             raise
-        return distributed.Client(cluster), cluster
+        cluster._empact_scratch = scratch
+        try:
+            return distributed.Client(cluster), cluster
+        except BaseException:
+            _close_cluster(cluster)
+            raise
     address = opts.scheduler if "://" in opts.scheduler else f"tcp://{opts.scheduler}"
     try:
         return distributed.Client(address, timeout=f"{opts.timeout}s"), None
@@ -294,7 +342,17 @@ def _run_dask(fn, chunks, opts: SweepOptions, desc: str) -> list[Any]:
     finally:
         client.close()
         if cluster is not None:
-            cluster.close()
+            _close_cluster(cluster)
+
+
+def _close_cluster(cluster: Any) -> None:
+    """Close a local cluster `_client` started and remove its scratch folder."""
+    scratch = getattr(cluster, "_empact_scratch", None)
+    try:
+        cluster.close()
+    finally:
+        if scratch:
+            shutil.rmtree(scratch, ignore_errors=True)
 
 
 async def _close_all(workers: list[Any], timeout: float) -> None:

@@ -6,16 +6,25 @@ Exit status: 0 success; 2 bad input (one line ``error: ...`` on stderr, nothing 
 that misses its targets), with one line saying why; 130 interrupted (Ctrl-C: one line
 ``error: interrupted``, nothing written).
 
-Output files are declared with the `OutputFile` type; before a command's body runs, one
-check (`check_outputs`) refuses any of them that exists (unless ``--force``), has the wrong
-suffix, or names the same file as another output of the command.
+Every option and argument of every command the groups hand out is guarded while it is parsed
+(`guard_params`, installed by `_checked`): an empty value is an error naming the option, and
+the value of every path option goes through one check (`check_path`) that turns what the
+system would refuse later (a name too long, a FIFO or device, a folder that cannot be
+searched) into one line.  Output files are declared with the `OutputFile` type; before a
+command's body runs, one check (`check_outputs`) refuses any of them that exists (a symbolic
+link too, dangling or not) unless ``--force``, has the wrong suffix, is not a regular file,
+cannot be created (no permission, a read-only or full file system), or names the same file as
+another output of the command.  A new command or option gets these checks without a line of
+its own (tests/test_cli.py walks every registered command and option).
 """
 from __future__ import annotations
 
 import functools
 import importlib
+import inspect
 import json
 import os
+import stat
 import sys
 import tempfile
 from pathlib import Path
@@ -24,7 +33,7 @@ from typing import Any, Callable, Mapping, Sequence
 import click
 import numpy as np
 
-from .._io import atomic_write_text
+from .._io import NAME_MAX, atomic_write_text, file_kind
 from .._validate import check_choice, check_int, check_number, check_values
 from ..errors import ParameterError
 from ..export import jsonable as to_jsonable
@@ -39,7 +48,8 @@ __all__ = ["sweep_options", "sweep_from_options",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
            "OutputFile", "check_outputs", "quiet_option", "Interrupted",
            "EXIT_INTERRUPTED", "parse_list", "formats_option", "parse_choices", "schema_version",
-           "traction_option",
+           "traction_option", "check_path", "compact_json", "closing_line", "guard_params",
+           "shown_path", "MIN_FREE_BYTES",
            "announce_compilation", "COMPILING"]
 
 #: suffixes of ``--plot`` files (the figure's format)
@@ -129,21 +139,157 @@ def announce_compilation() -> None:
     event.register("numba:compile", _Notice())
 
 
+def shown_path(value: str, most: int = 60) -> str:
+    """`value` as an error line shows it: a long name shortened to its start and its length.
+
+    Parameters
+    ----------
+    value : str
+        A path as given.
+    most : int
+        Longest value shown whole [characters].
+
+    Returns
+    -------
+    str
+        `value`, or its first ``most / 2`` characters and its length.
+    """
+    return value if len(value) <= most else f"{value[:most // 2]}...({len(value)} characters)"
+
+
+def _is_empty(value: Any) -> bool:
+    if isinstance(value, str):
+        return not value.strip()
+    if isinstance(value, (tuple, list)):
+        return any(isinstance(v, str) and not v.strip() for v in value)
+    return False
+
+
+def check_path(value: str, option: str) -> None:
+    """One check for the value of every path option and argument, input or output, while the
+    command line is parsed: refuse, in one line naming the option, a file name longer than the
+    file system allows, a path the system cannot look at (a component that is a file, no
+    permission to search a folder) and a FIFO, device or socket (reading one blocks or never
+    ends, replacing one is never meant).  A missing file passes (the reader or
+    `check_outputs` says what it needs).
+
+    Parameters
+    ----------
+    value : str
+        The path as given.
+    option : str
+        The option's name, for the message (``--out``); empty for an argument.
+    """
+    what = f"{option} {shown_path(value)}" if option else shown_path(value)
+    for part in Path(value).parts:
+        n = len(part.encode(errors="surrogateescape"))
+        if n > NAME_MAX:
+            raise InputError(f"{what}: a file name of {n} bytes; file names hold at most "
+                             f"{NAME_MAX}")
+    try:
+        st = os.stat(value)
+    except (FileNotFoundError, NotADirectoryError) as exc:
+        if isinstance(exc, NotADirectoryError):
+            raise InputError(f"{what}: a part of the path is a file, not a folder") from None
+        return
+    except OSError as exc:
+        raise InputError(f"{what}: {(exc.strerror or 'cannot be used').lower()}") from None
+    if not (stat.S_ISREG(st.st_mode) or stat.S_ISDIR(st.st_mode)):
+        raise InputError(f"{what}: is {file_kind(st.st_mode)}, not a file; name a regular "
+                         "file")
+
+
+def guard_params(cmd: click.Command) -> click.Command:
+    """Install the parse-time guards on every parameter of `cmd` (once): an empty value
+    (``--out ''``) is an error naming the option, and every `click.Path` value goes through
+    `check_path`; the parameter's own callback runs after them.
+
+    Parameters
+    ----------
+    cmd : click.Command
+        The command (its parameters are changed in place).
+
+    Returns
+    -------
+    click.Command
+        `cmd`.
+    """
+    for param in cmd.params:
+        if getattr(param, "_guarded", False) or getattr(param, "is_flag", False):
+            continue
+        own = param.callback
+        name = max(param.opts, key=len) if isinstance(param, click.Option) else \
+            (param.name or "").upper()
+        is_path = isinstance(param.type, click.Path)
+
+        def guarded(ctx: click.Context, prm: click.Parameter, value: Any, *, _own: Any = own,
+                    _name: str = name, _path: bool = is_path) -> Any:
+            source = ctx.get_parameter_source(prm.name or "")
+            given = source in (click.core.ParameterSource.COMMANDLINE,
+                               click.core.ParameterSource.ENVIRONMENT)
+            if given and _is_empty(value):
+                raise InputError(f"{_name}: an empty value; give a value or leave the option "
+                                 "out")
+            if given and _path and value is not None:
+                for v in value if isinstance(value, (tuple, list)) else (value,):
+                    check_path(str(v), _name if isinstance(prm, click.Option) else "")
+            return _own(ctx, prm, value) if _own is not None else value
+
+        param.callback = guarded
+        param._guarded = True  # type: ignore[attr-defined]
+    return cmd
+
+
+#: the output options whose files no command names itself (`closing_line` does)
+SILENT_OUTPUTS = ("plot", "json_out")
+
+
+def closing_line(ctx: click.Context) -> None:
+    """After a command succeeded: one line on stderr naming the files of its `SILENT_OUTPUTS`
+    options (``written: frf.png, frf.json``); the commands name their other outputs (``--out``)
+    themselves.
+
+    Parameters
+    ----------
+    ctx : click.Context
+        The command's context.
+    """
+    files = [str(ctx.params[p.name]) for p in ctx.command.params
+             if isinstance(p.type, OutputFile) and p.name in SILENT_OUTPUTS
+             and ctx.params.get(p.name or "") and os.path.lexists(str(ctx.params[p.name]))]
+    if files:
+        click.echo(f"written: {', '.join(files)}", err=True)
+
+
 def _checked(cmd: click.Command | None) -> click.Command | None:
-    """`cmd` with `check_outputs` run before its body, and for a command of the model
-    `announce_compilation` (installed once, on every command the groups hand out, so that
-    no command can forget it)."""
+    """`cmd` with its parameters guarded (`guard_params`), `check_outputs` run before its
+    body, and for a command of the model `announce_compilation` (installed once, on every
+    command the groups hand out, so that no command can forget it)."""
+    if cmd is not None:
+        guard_params(cmd)
     if cmd is None or cmd.callback is None or getattr(cmd.callback, "_outputs_checked", False):
         return cmd
     body = cmd.callback
+    takes_quiet = "quiet" in inspect.signature(body).parameters
+    if not any(p.name == "quiet" for p in cmd.params):  # --quiet on every command
+        cmd.params.append(click.Option(["--quiet"], is_flag=True,
+                                       help="Nothing on stderr but errors (no progress)."))
 
     @functools.wraps(body)
     def run(*args: Any, **kwargs: Any) -> Any:
         ctx = click.get_current_context()
         check_outputs(ctx)
-        if ctx.command.name in MODEL_COMMANDS and not ctx.params.get("quiet"):
+        quiet = bool(kwargs.get("quiet")) if takes_quiet else bool(kwargs.pop("quiet", False))
+        if ctx.command.name in MODEL_COMMANDS and not quiet:
             announce_compilation()
-        return body(*args, **kwargs)
+        from .._progress import working
+
+        name = ctx.command_path.split(" ", 1)[-1]
+        with working(name, enabled=not quiet):  # until a bar of the command's own starts
+            result = body(*args, **kwargs)
+        if not quiet:
+            closing_line(ctx)
+        return result
 
     run._outputs_checked = True  # type: ignore[attr-defined]
     cmd.callback = run
@@ -165,6 +311,10 @@ class ErrorGroup(click.Group):
             raise InputError(str(exc) or type(exc).__name__) from None
         except KeyboardInterrupt:
             raise Interrupted() from None
+        except OSError as exc:  # the system refused mid-run (a disk that filled up, ...)
+            where = f"{exc.filename}: " if exc.filename else ""
+            raise Failed(f"{where}{(exc.strerror or 'system error').lower()}; nothing "
+                         "written") from None
 
 
 class LazyGroup(ErrorGroup):
@@ -203,6 +353,9 @@ class LazyGroup(ErrorGroup):
         try:
             rv = super().main(args, prog_name, complete_var, False, **extra)
         except click.UsageError as exc:
+            if isinstance(exc, click.exceptions.NoArgsIsHelpError) and exc.ctx is not None:
+                click.echo(exc.ctx.get_help(), err=True)  # a group alone: its usage
+                sys.exit(2)
             cmd = exc.ctx.command_path if exc.ctx is not None else "empact"
             msg = _one_line(exc.format_message()).rstrip(".")
             click.echo(f"error: {cmd}: {msg[:1].lower()}{msg[1:]} (see '{cmd} --help')",
@@ -282,6 +435,40 @@ UNITS = {
 }
 
 
+def compact_json(doc: Any, indent: str = "") -> str:
+    """JSON text with one key a line, but a list of numbers (or of ``[re, im]`` pairs, or
+    strings) on one line: `json.dumps` with ``indent`` put every number on a line of its own
+    (``slip poles --json``: 1992 lines).
+
+    Parameters
+    ----------
+    doc : object
+        A JSON-able document (`to_jsonable`).
+    indent : str
+        The indent of the line `doc` starts on.
+
+    Returns
+    -------
+    str
+        The JSON text (`json.loads` reads back `doc`).
+    """
+    inner = indent + " "
+    if isinstance(doc, dict):
+        if not doc:
+            return "{}"
+        items = (f"{inner}{json.dumps(str(k))}: {compact_json(v, inner)}"
+                 for k, v in doc.items())
+        return "{\n" + ",\n".join(items) + f"\n{indent}}}"
+    if isinstance(doc, list):
+        def flat(x: Any) -> bool:
+            return not isinstance(x, (dict, list)) or (
+                isinstance(x, list) and all(not isinstance(y, (dict, list)) for y in x))
+        if all(flat(x) for x in doc):
+            return json.dumps(doc, separators=(", ", ": "))
+        return "[\n" + ",\n".join(inner + compact_json(x, inner) for x in doc) + f"\n{indent}]"
+    return json.dumps(doc)
+
+
 def emit_json(data: Mapping[str, Any], schema: str, json_out: str | None = None) -> None:
     """Print (or, with `json_out`, write atomically) one JSON object: ``schema`` (name and
     version), ``units`` of every quantity key present, then `data`."""
@@ -299,7 +486,7 @@ def emit_json(data: Mapping[str, Any], schema: str, json_out: str | None = None)
     collect(data)
     doc = {"schema": {"name": f"empact.{schema}", "version": schema_version(schema)},
            "units": {k: UNITS[k] for k in sorted(keys) if k in UNITS}, **data}
-    text = json.dumps(to_jsonable(doc), indent=1)
+    text = compact_json(to_jsonable(doc))
     if json_out is None:
         click.echo(text)
     else:
@@ -465,14 +652,25 @@ def get_params(path: str | None) -> Params:
     return check_plausible(load_params(path), str(path) if path else "default.toml")
 
 
+#: least free space in an output's file system before a command starts [bytes]
+MIN_FREE_BYTES = 2**20
+
+
 def _probe(folder: Path, what: str) -> None:
-    """Refuse unless a file can be created in `folder`."""
+    """Refuse unless a file can be created in `folder` and its file system has
+    `MIN_FREE_BYTES` free."""
     try:
         fd, tmp = tempfile.mkstemp(dir=folder, prefix=".empact-probe-")
         os.close(fd)
         os.unlink(tmp)
+        fs = os.statvfs(folder)
     except OSError as exc:
-        raise InputError(f"{what}: cannot write in {folder} ({exc.strerror})") from None
+        raise InputError(f"{what}: cannot write in {folder} "
+                         f"({(exc.strerror or 'error').lower()})") from None
+    free = fs.f_bavail * fs.f_frsize
+    if free < MIN_FREE_BYTES:
+        raise InputError(f"{what}: the disk holding {folder} is full ({free // 1024} KiB "
+                         "free)")
 
 
 def output_file(path: str | None, option: str, *, force: bool = False,
@@ -482,12 +680,15 @@ def output_file(path: str | None, option: str, *, force: bool = False,
     if path is None:
         return None
     p = Path(path)
-    what = f"{option} {path}"
+    check_path(path, option)
+    what = f"{option} {shown_path(path)}"
     if suffixes is not None and p.suffix.lstrip(".").lower() not in suffixes:
         raise InputError(f"{what}: file suffix {p.suffix or 'none'!r} must be one of "
                          f"{', '.join('.' + s for s in suffixes)}")
     if p.is_dir():
         raise InputError(f"{what}: is a folder, not a file")
+    if p.is_symlink() and not force:  # dangling or not: replacing it loses the link
+        raise InputError(f"{what}: exists (a symbolic link); give --force to replace it")
     if p.exists() and not force:
         raise InputError(f"{what}: exists; give --force to replace it")
     parent = p.parent if str(p.parent) else Path(".")
@@ -501,9 +702,12 @@ def output_folder(path: str, option: str = "--out", *, force: bool = False) -> P
     """Check an output folder before any work: not the current folder or one of its parents,
     not a file, empty or new unless `force` (then only empact's own files are replaced), and
     in a writable place."""
+    check_path(path, option)
+    what = f"{option} {shown_path(path)}"
+    if Path(path).is_symlink() and not Path(path).exists():
+        raise InputError(f"{what}: a dangling symbolic link; remove it or name a new folder")
     p = Path(path).resolve()
     cwd = Path.cwd().resolve()
-    what = f"{option} {path}"
     if p == cwd or p in cwd.parents:
         raise InputError(f"{what}: the current folder and its parents are never output "
                          "folders; name a new folder")

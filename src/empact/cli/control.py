@@ -437,12 +437,13 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
         emit_json({"scenario": sc.name, "metrics": m,
                    "targets": [{"name": c.name, "met": c.met, "target": c.describe()}
                                for c in checks]}, "control.simulate", json_out)
-    else:  # for people: slips in % and percentage points
+    else:  # for people: slips in % and percentage points; every number with its unit
         for k, v in m.items():
             v, unit = shown_metric(k, v)
             unit = {"pp": "percentage points"}.get(unit, unit) or UNITS.get(k, "")
+            number = isinstance(v, (int, float)) and not isinstance(v, bool)
             shown = f"{v:.6g}" if isinstance(v, float) else str(v)
-            click.echo(f"{k:22s} {shown} {unit if unit != '-' else ''}".rstrip())
+            click.echo(f"{k:22s} {shown} [{unit}]" if number else f"{k:22s} {shown}")
         for c in checks:
             click.echo(f"target: {c.describe()}")
     if not run.result.complete:

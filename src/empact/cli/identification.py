@@ -26,7 +26,8 @@ from .linear import plot_option
 @click.option("--output", "outputs", multiple=True, required=True,
               help="Output column (repeatable).")
 @click.option("--fs", type=float, default=None, help="Sample rate [Hz] (or give --time).")
-@click.option("--time", "time_col", default=None, help="Time column [s], uniformly sampled.")
+@click.option("--time", "time_col", default=None,
+              help="Time column, uniformly sampled ([s] or its header's unit: ms, us, min).")
 @click.option("--method", type=click.Choice(METHODS), default="H1", show_default=True)
 @click.option("--nperseg", type=int, default=None,
               help="Welch segment length [samples] (default: min(n, 1024, max(64, n / 8))).")
@@ -50,7 +51,7 @@ def frf_estimate(data: str, inputs: tuple[str, ...], outputs: tuple[str, ...], f
                              f"the column is already the {first.lstrip('-')}") + "; each "
                              "column is one signal (an input, an output or the time)")
     cols = list(dict.fromkeys(list(inputs) + list(outputs) + ([time_col] if time_col else [])))
-    rec = load_records(data, cols)
+    rec = load_records(data, cols, quantities={time_col: "time"} if time_col else None)
     n = len(next(iter(rec.values())))
     if nperseg is not None:
         nperseg = check_int("--nperseg", nperseg, 8, n)

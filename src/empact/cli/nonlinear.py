@@ -10,6 +10,7 @@ from .._validate import check_number
 from ..variator.geometry import check_ratio
 from ._common import (
     PLOT_SUFFIXES,
+    UNITS,
     Failed,
     InputError,
     OutputFile,
@@ -187,12 +188,14 @@ def _add(options):
               default=None, help="Output file (.json, .mat or .npz; an existing file only with "
                                  "--force).")
 @click.option("--all-io", is_flag=True, help="All inputs and outputs, not only the plant's.")
+@click.option("--json", "as_json", is_flag=True,
+              help="Print the plant as JSON on stdout (default without --out: a summary).")
 @_add(model_options_for("speed"))
 @params_option
 @force_option
-def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, drive, load,
-                  kinematics, shift_law, thrust_ratio, creep_map, traction_table, params_file,
-                  force) -> None:
+def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, as_json, damping, drive,
+                  load, kinematics, shift_law, thrust_ratio, creep_map, traction_table,
+                  params_file, force) -> None:
     """Exact linear plant at an operating point: A, B, C, D.
 
     Inputs T_mp, T_ms (control) and the load T_l (or omega_l_ref with --load speed) as the
@@ -212,6 +215,8 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, dr
 
     if out is None and fmt not in (None, "json"):
         raise InputError(f"--format {fmt} needs --out FILE")
+    if out is not None and as_json:
+        raise InputError("--json prints the plant, --out writes it: give one of them")
     params = get_params(params_file)
     point = operating_point(params, trim=True, traction=traction_table, ratio=r_g, slip=nu,
                             tau=tau, clamp=F_s, load_torque=T_l, speed=omega_p)
@@ -228,12 +233,46 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, damping, dr
              "states": [STATE_UNITS[n] for n in sys_.states]}
     meta = {"operating_point": op.to_dict(), "model_options": _described(opts),
             "control_inputs": list(PLANT_INPUTS), "disturbance_inputs": [dist]}
-    if out is None:
+    if out is None and (as_json or fmt == "json"):
         emit_json(system_dict(sys_, units, meta), "linearize")
+        return
+    if out is None:
+        click.echo(_plant_summary(sys_, units, op.to_dict()))
         return
     save_system(sys_, out, fmt=format_of(out, fmt), schema="empact.linearize", units=units,
                 metadata=meta)
-    click.echo(str(out), err=True)
+    click.echo(f"written: {out}", err=True)
+
+
+def _plant_summary(sys_: Any, units: dict[str, list[str]], point: dict[str, Any]) -> str:
+    """A linear plant in a few lines of text: the point, the states, inputs and outputs with
+    their units, the poles [rad/s] (a complex pair once, with its frequency [Hz] and damping
+    ratio [-])."""
+    def named(names: Any, us: list[str]) -> str:
+        return ", ".join(f"{n} [{u}]" for n, u in zip(names, us))
+
+    at = ", ".join(f"{k} = {float(v):.5g} {UNITS[k]}" for k, v in point.items()
+                   if k in ("r_g", "nu", "F_s", "omega_p", "T_l", "tau")
+                   and isinstance(v, (int, float)))
+    poles = np.linalg.eigvals(np.asarray(sys_.A, dtype=float))
+    rows = []
+    for p in sorted(poles, key=lambda z: (-z.real, abs(z.imag))):
+        if p.imag < 0:
+            continue  # (its conjugate is shown)
+        if p.imag > 0:
+            w = abs(p)
+            rows.append(f"  {p.real:12.5g} +/- {p.imag:.5g}j rad/s  (f = {w / (2 * np.pi):.4g} "
+                        f"Hz, zeta = {-p.real / w:.3g})")
+        else:
+            rows.append(f"  {p.real:12.5g} rad/s")
+    n_rhp = int(np.sum(poles.real > 0))
+    return "\n".join([
+        f"linear plant at {at}",
+        f"states ({len(sys_.states)}): {named(sys_.states, units['states'])}",
+        f"inputs ({len(sys_.inputs)}): {named(sys_.inputs, units['inputs'])}",
+        f"outputs ({len(sys_.outputs)}): {named(sys_.outputs, units['outputs'])}",
+        f"poles ({len(poles)}, {n_rhp} in the right half-plane), slowest first:", *rows,
+        "(--json prints A, B, C, D; --out FILE.json|.mat|.npz writes them)"])
 
 
 @click.command("nmp")

@@ -236,7 +236,7 @@ def rootlocus(ratio, slip, cb_min, cb_max, params_file, as_json, json_out, plot,
     """Root locus over the belt damping c_b from 0 to infinity (Fig. 9)."""
     params = get_params(params_file)
     ratio = float(operating_values(params, "ratio", ratio))
-    slip = check_number("--slip", slip, -1.0, 1.0, lo_open=True, hi_open=True)
+    slip = float(operating_values(params, "slip", slip))  # as every command reads a slip
     cb_min = check_number("--cb-min", cb_min, 0.0, lo_open=True, unit="N m s/rad")
     cb_max = check_number("--cb-max", cb_max, cb_min, 1e12, lo_open=True, unit="N m s/rad",
                           note="above --cb-min")

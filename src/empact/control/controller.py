@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._deprecate import warn_renamed
-from .._io import atomic_file, atomic_write_text
+from .._io import atomic_file, atomic_write_text, parse_json
 from .._lazy import lazy_module
 from .._validate import check_number
 from ..errors import ParameterError
@@ -339,6 +339,23 @@ def _names(doc: Mapping[str, Any], key: str, src: Path, allowed: tuple[str, ...]
     return tuple(names)
 
 
+def _units(doc: Mapping[str, Any], key: str, expected: list[str], of: str, src: Path) -> None:
+    """Check the optional unit list `key` of a controller file: one unit per signal of `of`,
+    each the SI unit empact uses for that signal (a controller is read in SI only)."""
+    units = doc.get(key)
+    if units is None:
+        return
+    if not isinstance(units, list) or not all(isinstance(u, str) for u in units):
+        raise ParameterError(f"{src}: {key} must be a list of unit names, one per {of} signal")
+    if len(units) != len(expected):
+        raise ParameterError(f"{src}: {key} has {len(units)} units for {len(expected)} {of} "
+                             f"signals ({', '.join(expected)})")
+    for u, e in zip(units, expected):
+        if u != e:
+            raise ParameterError(f"{src}: {key} gives {u!r} where the signal's unit is "
+                                 f"{e!r}; a controller file is in SI ({', '.join(expected)})")
+
+
 def _matrix(doc: Mapping[str, Any], key: str, shape: tuple[int, int], what: str,
             src: Path) -> NDArray[np.float64]:
     """Matrix `key` of a controller file: rows of finite JSON numbers, of `shape`."""
@@ -404,18 +421,22 @@ def load_controller(path: str | os.PathLike[str]) -> Controller:
         matrix shapes, ``dt``, ``design``, ``schedule``).
     """
     p = Path(path)
-    if not p.is_file():
-        raise ParameterError(f"{p}: no such controller file")
-    try:
-        doc = json.loads(p.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError):
-        raise ParameterError(f"{p}: not a controller file (not JSON text)") from None
+    doc = parse_json(p, "controller")
     if not isinstance(doc, dict) or not isinstance(doc.get("schema"), dict) \
             or doc["schema"].get("name") != SCHEMA["name"]:
         raise ParameterError(f"{p}: not a controller file (schema {SCHEMA['name']!r} "
                              "expected)")
+    version = doc["schema"].get("version", 1)
+    if isinstance(version, bool) or not isinstance(version, int) or version < 1:
+        raise ParameterError(f"{p}: schema version {version!r}: must be a whole number >= 1")
+    newest = SCHEMA["version"]
+    if isinstance(newest, int) and version > newest:
+        raise ParameterError(f"{p}: controller schema version {version} is newer than this "
+                             f"empact reads (up to {newest}); update empact")
     measured = _names(doc, "measured", p, MEASURABLE)
     outputs = _names(doc, "outputs", p, ("T_mp", "T_ms"))
+    _units(doc, "inputs_units", [OUTPUT_UNITS.get(m, "-") for m in measured], "measured", p)
+    _units(doc, "outputs_units", [INPUT_UNITS[o] for o in outputs], "outputs", p)
     a = doc.get("A")
     n = len(a) if isinstance(a, list) else 0
     ne, nu = len(measured), len(outputs)

@@ -580,6 +580,18 @@ def load_family(path: str | os.PathLike[str]) -> PlantFamily:
             raise ParameterError(f"{p}: not a plant family ({key} has shape "
                                  f"{z[key].shape}, expected {shape} for the grid {grid} of "
                                  f"{n} states, {m} inputs, {q} outputs)")
+    for key in ("A", "B", "C", "D", *(f"axis_{n}" for n in names)):
+        arr = np.asarray(z[key])
+        if arr.dtype.kind not in "iuf":
+            raise ParameterError(f"{p}: not a plant family ({key} holds no numbers; {hint})")
+        ok = z["ok"].astype(bool)
+        bad = ~np.isfinite(arr) if key.startswith("axis_") else \
+            ~np.isfinite(arr).reshape(ok.shape + (-1,)).all(axis=-1) & ok
+        if bad.any():
+            where = np.argwhere(bad)[0]
+            raise ParameterError(f"{p}: {key} holds a value that is not finite (NaN or "
+                                 f"infinite) at grid index {tuple(int(i) for i in where)}; "
+                                 "not a usable plant family")
     axes = {n: z[f"axis_{n}"] for n in names}
     fixed = {k[len("fixed_"):]: float(z[k]) for k in z if k.startswith("fixed_")}
     return PlantFamily(axes=axes, fixed=fixed, A=z["A"], B=z["B"], C=z["C"], D=z["D"],

@@ -19,6 +19,7 @@ import numpy as np
 
 from .._lazy import lazy_module
 from .._results import TableResult
+from ..errors import ParameterError
 
 sig = lazy_module("scipy.signal")
 
@@ -179,6 +180,12 @@ def estimate_frf(u, y, fs: float, method: str = "H1", nperseg: int | None = None
     noverlap = int(noverlap)
     in_names = _names("inputs", inputs, m, "u")
     out_names = _names("outputs", outputs, p, "y")
+    for kind, names, data, why in (("input", in_names, u, "excites nothing"),
+                                   ("output", out_names, y, "carries no response")):
+        for k, name in enumerate(names):
+            if np.ptp(data[:, k]) == 0:
+                raise ParameterError(f"{kind} {name!r} is constant ({data[0, k]:g} in every "
+                                     f"sample): a dead channel {why}; check the record")
 
     z = np.concatenate([u, y], axis=1).T                           # (n_c, n_t)
     f, P = sig.csd(z[:, None, :], z[None, :, :], fs=fs, window=window, nperseg=nperseg,

@@ -7,8 +7,10 @@ A record file has one header line of column names and one row per sample, for ex
     0.001,0.10,1.3e-4,0.011
 
 Lines before the header that start with ``#`` are comments; a unit in brackets after a name
-(``time [s]``) is allowed and not part of the name, so ``empact simulate``'s CSV reads as well
-as ``empact rig``'s; a UTF-8 byte-order mark (as spreadsheets write) is skipped.  The sample
+(``time [s]``) is not part of the name, so ``empact simulate``'s CSV reads as well as ``empact
+rig``'s.  The unit of every column that is read is converted to SI (`HEADER_UNITS`: ``[ms]``,
+``[us]``, ``[min]`` to s, ``[rpm]`` to rad/s, ...); a unit empact does not know is refused,
+never ignored.  A UTF-8 byte-order mark (as spreadsheets write) is skipped.  The sample
 rate is given (``fs``) or follows from a time column, which must then be uniform.
 """
 from __future__ import annotations
@@ -16,13 +18,29 @@ from __future__ import annotations
 import csv
 import re
 from pathlib import Path
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
+from .._io import read_input_text
 from ..errors import DataError
 
-__all__ = ["load_records", "sample_rate", "column_name", "header_cell"]
+__all__ = ["load_records", "sample_rate", "column_name", "header_cell", "HEADER_UNITS",
+           "column_unit"]
+
+#: units a CSV header may give a column that is read -> (factor to SI, quantity); a column
+#: without a unit is taken as SI
+HEADER_UNITS: dict[str, tuple[float, str]] = {
+    "s": (1.0, "time"), "ms": (1e-3, "time"), "us": (1e-6, "time"), "\u00b5s": (1e-6, "time"),
+    "min": (60.0, "time"),
+    "N m": (1.0, "torque"), "Nm": (1.0, "torque"), "N*m": (1.0, "torque"),
+    "N\u00b7m": (1.0, "torque"),
+    "rad": (1.0, "angle"), "rad/s": (1.0, "angular speed"),
+    "rpm": (2.0 * np.pi / 60.0, "angular speed"), "1/min": (2.0 * np.pi / 60.0, "angular speed"),
+    "-": (1.0, "dimensionless"), "1": (1.0, "dimensionless"), "N": (1.0, "force"),
+    "m": (1.0, "length"), "m/s": (1.0, "speed"), "W": (1.0, "power"), "J": (1.0, "energy"),
+    "1/s": (1.0, "rate"), "A": (1.0, "current"), "V": (1.0, "voltage"),
+}
 
 
 def header_cell(name: str, unit: str) -> str:
@@ -60,8 +78,44 @@ def column_name(header: str) -> str:
     return re.sub(r"\s*\[[^\]]*\]\s*$", "", header.strip())
 
 
-def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
-                 ) -> dict[str, np.ndarray]:
+def column_unit(header: str) -> str | None:
+    """The bracketed unit of a header cell (``"time [ms]"`` -> ``"ms"``), None without one.
+
+    Parameters
+    ----------
+    header : str
+        A CSV header cell.
+
+    Returns
+    -------
+    str or None
+        The unit, white space collapsed to single spaces.
+    """
+    m = re.search(r"\[([^\]]*)\]\s*$", header.strip())
+    return " ".join(m.group(1).split()) if m else None
+
+
+def _si_factor(path: Path, name: str, unit: str | None, quantity: str | None) -> float:
+    """Factor from a column's header unit to SI; one line for an unknown unit or one of
+    another quantity than the column must have."""
+    if unit is None:
+        return 1.0
+    if unit not in HEADER_UNITS:
+        known = ", ".join(u for u, (_, k) in HEADER_UNITS.items()
+                          if u.isascii() and quantity in (None, k))
+        raise DataError(f"{path}: column {name!r} has unit [{unit}], which empact does not "
+                        f"convert; give one of {known} (or no unit: SI)")
+    factor, kind = HEADER_UNITS[unit]
+    if quantity is not None and kind != quantity:
+        units = ", ".join(u for u, (_, k) in HEADER_UNITS.items() if k == quantity
+                          and u.isascii())
+        raise DataError(f"{path}: column {name!r} has unit [{unit}], a unit of {kind}; the "
+                        f"column is a {quantity} ({units})")
+    return factor
+
+
+def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16,
+                 quantities: Mapping[str, str] | None = None) -> dict[str, np.ndarray]:
     """Read the named columns of a CSV file as float arrays, shape (n_t,) each.
 
     Parameters
@@ -73,38 +127,33 @@ def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
         Names of the columns to read (without units).
     min_rows : int
         Fewest data rows accepted.
+    quantities : mapping str -> str, optional
+        The quantity a column must be (``{"time": "time"}``): a header unit of another
+        quantity is refused.
 
     Returns
     -------
     dict str -> ndarray
-        Each of `columns` as a float array, shape (n_t,), in the file's units.
+        Each of `columns` as a float array, shape (n_t,), in SI (a header unit of
+        `HEADER_UNITS` converted; no unit: SI).
 
     Raises
     ------
     DataError
         One line naming the file, and the column, row and value that are wrong: a missing file
         or column, a column named twice, a non-numeric or non-finite entry, fewer than
-        `min_rows` rows, a binary or non-UTF-8 file.
+        `min_rows` rows, a binary or non-UTF-8 file, a header unit empact does not
+        convert (or of another quantity than `quantities` names).
     """
     path = Path(path)
-    try:
-        with path.open(newline="", encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except FileNotFoundError:
-        raise DataError(f"{path}: no such data file") from None
-    except IsADirectoryError:
-        raise DataError(f"{path}: is a folder, not a data file") from None
-    except UnicodeDecodeError:
-        raise DataError(f"{path}: not a UTF-8 text (CSV) file") from None
-    except OSError as exc:
-        raise DataError(f"{path}: cannot be read ({exc.strerror})") from None
-    if "\x00" in text:
-        raise DataError(f"{path}: a binary file, not CSV text")
+    text = read_input_text(path, "data", error=DataError)
     lines = [ln for ln in text.splitlines() if ln.strip()]
     while lines and lines[0].lstrip().startswith("#"):
         lines.pop(0)
     reader = csv.reader(lines)
-    header = [column_name(h) for h in next(reader, [])]
+    cells = next(reader, [])
+    header = [column_name(h) for h in cells]
+    units = [column_unit(h) for h in cells]
     rows = [r for r in reader if r and any(c.strip() for c in r)]
     if not header:
         raise DataError(f"{path}: empty file (expected a header row of column names)")
@@ -119,6 +168,7 @@ def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
         if name not in header:
             raise DataError(f"{path}: no column {name!r} (columns: {', '.join(header)})")
         j = header.index(name)
+        factor = _si_factor(path, name, units[j], (quantities or {}).get(name))
         values = np.empty(len(rows))
         for i, row in enumerate(rows):
             cell = row[j].strip() if j < len(row) else ""
@@ -130,7 +180,7 @@ def load_records(path: str | Path, columns: Sequence[str], *, min_rows: int = 16
             if not np.isfinite(values[i]):
                 raise DataError(f"{path}: column {name!r}, data row {i + 1}: {cell!r} is not "
                                 "finite")
-        out[name] = values
+        out[name] = values * factor if factor != 1.0 else values
     if len(rows) < min_rows:
         raise DataError(f"{path}: {len(rows)} data rows; at least {min_rows} are needed")
     return out

@@ -34,13 +34,14 @@ parameter's allowed range, and minimises ``sum weight * (f_model / f_target - 1)
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import MISSING, dataclass, field, fields
 from typing import Any, Sequence
 
 import numpy as np
 
 from .._lazy import lazy_module
 from .._results import Result
+from .._validate import check_number
 from ..errors import ParameterError
 from ..params import _SECTIONS, DampingLevel, Params, read_toml
 from .actuation import KINEMATICS, actuation_model
@@ -134,18 +135,19 @@ def _check_target(raw: dict[str, Any], where: str) -> Target:
     if unknown:
         raise ParameterError(f"{where}: unknown key {sorted(unknown)[0]!r} (allowed: "
                              f"{', '.join(sorted(allowed))})")
-    try:
-        t = Target(**raw)
-    except TypeError as exc:
-        raise ParameterError(f"{where}: {exc}") from None
+    required = [f.name for f in fields(Target) if f.default is MISSING]
+    missing = [k for k in required if k not in raw]
+    if missing:
+        raise ParameterError(f"{where}: missing {', '.join(missing)} (each target needs "
+                             f"{', '.join(required)})")
+    t = Target(**raw)
     if t.model not in MODELS:
         raise ParameterError(f"{where}: model = {t.model!r}: must be one of {', '.join(MODELS)}")
     if t.kinematics not in KINEMATICS:
         raise ParameterError(f"{where}: kinematics = {t.kinematics!r}: must be one of "
                              f"{', '.join(KINEMATICS)}")
-    if not isinstance(t.frequency_hz, (int, float)) or isinstance(t.frequency_hz, bool) \
-            or not t.frequency_hz > 0:
-        raise ParameterError(f"{where}: frequency_hz = {t.frequency_hz!r}: must be > 0 [Hz]")
+    check_number("frequency_hz", t.frequency_hz, 0.0, 1e6, lo_open=True, unit="Hz",
+                 where=where)
     if t.uncoupled is not None:
         if t.model != "driveline" or t.uncoupled not in ("primary", "secondary"):
             raise ParameterError(f"{where}: uncoupled = {t.uncoupled!r}: only for the driveline, "

@@ -219,9 +219,10 @@ _PROBES = np.linspace(0.0005, 0.9995, 41)
 
 
 def _check_reachable(d: Distribution, params: Params, where: str) -> None:
-    """Refuse a distribution none of whose values (41 quantiles, 0.05 % to 99.95 %) the
-    parameter set accepts: every run of the study would fail."""
-    why = ""
+    """Refuse a distribution whose values (41 quantiles, 0.05 % to 99.95 %) the parameter
+    set refuses wholly (every run of the study would fail) or for the most part (more than
+    half of the probes: most runs would fail, found only after they ran)."""
+    why, refused = "", 0
     for x in d.ppf(_PROBES):
         try:
             p = params.from_dotted({d.name: float(x)})
@@ -231,13 +232,20 @@ def _check_reachable(d: Distribution, params: Params, where: str) -> None:
                 if not lo <= nu <= hi:
                     raise ParameterError(f"{d.name} = {fmt(nu)}: outside the valid slip range "
                                          f"[{fmt(lo)}, {fmt(hi)}] of the traction curve")
-            return
         except ParameterError as exc:
-            why = why or str(exc)
+            why, refused = why or str(exc), refused + 1
+    if 2 * refused <= len(_PROBES):
+        return
     m = re.search(r"= \S+: (.*)$", why)
-    raise ParameterError(f"{where}: {d.describe()} lies wholly outside the values "
-                         f"{d.name} may take ({m.group(1) if m else why}); every run would "
-                         "fail")
+    if refused == len(_PROBES):
+        raise ParameterError(f"{where}: {d.describe()} lies wholly outside the values "
+                             f"{d.name} may take ({m.group(1) if m else why}); every run "
+                             "would fail")
+    share = 100 * refused / len(_PROBES)
+    raise ParameterError(f"{where}: {d.describe()} lies for the most part ({share:.0f} % of "
+                         f"its quantiles) outside the values {d.name} may take "
+                         f"({m.group(1) if m else why}); most runs would fail (narrow it or "
+                         "bound it with lower and upper)")
 
 
 def spread_from_dict(data: Mapping[str, Any], params: Params, source: str = "") -> Spread:

@@ -100,7 +100,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._deprecate import REMOVAL, warn_renamed
-from .._validate import check_choice, check_number, check_values
+from .._validate import check_choice, check_int, check_number, check_values
 from ..errors import ParameterError
 from ..hardware import SensorParams, ServoLimits
 from ..operating import curve_peak
@@ -553,8 +553,8 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario",
                             lo_open=True, unit="s", where=src)
     omega_min = check_number("solver.omega_min", solver.get("omega_min", 1.0), 0.0, 1e4,
                              lo_open=True, unit="rad/s", where=src)
-    max_steps = int(check_number("solver.max_steps", solver.get("max_steps", 2_000_000), 0.0,
-                                 1e9, lo_open=True, where=src))
+    max_steps = check_int("solver.max_steps", solver.get("max_steps", 2_000_000), 1, 10**9,
+                          where=src)
     method = check_choice("solver.method", solver.get("method", DEFAULT_METHOD), METHODS,
                           where=src)
     sc = Scenario(name=str(head.get("name", Path(src).stem)),

@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import csv
 import os
-import tomllib
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._io import check_input, parse_toml, read_input_text
 from ..errors import ParameterError
 from . import _laws
 
@@ -30,9 +30,7 @@ def read_curves(path: str | os.PathLike[str], what: str, x: str, y: str) -> Curv
 
     `what` names the table in messages (``"traction table"``); `x`, `y` are its columns.
     """
-    p = Path(path)
-    if not p.is_file():
-        raise ParameterError(f"{p}: no such {what}")
+    p = check_input(path, what)
     suffix = p.suffix.lower()
     if suffix == ".csv":
         return _read_csv(p, what, x, y)
@@ -157,11 +155,9 @@ def _number(text: str, where: str) -> float:
 
 
 def _read_csv(p: Path, what: str, x: str, y: str) -> Curves:
-    try:
-        with open(p, newline="", encoding="utf-8-sig") as fh:
-            rows = [row for row in csv.reader(fh) if row and not row[0].lstrip().startswith("#")]
-    except UnicodeDecodeError:
-        raise ParameterError(f"{p}: not a UTF-8 text file") from None
+    text = read_input_text(p, what)
+    rows = [row for row in csv.reader(text.splitlines())
+            if row and not row[0].lstrip().startswith("#")]
     if not rows:
         raise ParameterError(f"{p}: empty {what}")
     header = [h.strip() for h in rows[0]]
@@ -186,10 +182,7 @@ def _read_csv(p: Path, what: str, x: str, y: str) -> Curves:
 
 
 def _read_toml(p: Path, x: str, y: str) -> Curves:
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ParameterError(f"{p}: not valid TOML ({exc})") from None
+    data = parse_toml(p, "curve table")
     if set(data) != {"curve"} or not isinstance(data["curve"], list) or not data["curve"]:
         raise ParameterError(f"{p}: expected only [[curve]] tables with r_g, {x}, {y}")
     curves: Curves = {}
