@@ -129,7 +129,8 @@ def announce_compilation() -> None:
     class _Notice(event.Listener):
         def on_start(self, ev: Any) -> None:
             fn = getattr(ev.data.get("dispatcher"), "py_func", None)
-            if getattr(fn, "__module__", "").startswith("empact.") and not _announced.value:
+            module = getattr(fn, "__module__", None) or ""  # None for generated functions
+            if module.startswith("empact.") and not _announced.value:
                 _announced.value = 1
                 tqdm.write(COMPILING, file=sys.stderr)  # (a bar on a terminal is redrawn)
 
