@@ -950,6 +950,37 @@ def test_control_check_strict_gates_a_script(tmp_path):
     assert res.exit_code == 0, res.output
 
 
+def test_control_check_strict_gates_on_the_design_margin(tmp_path):
+    """Without --min-disk-margin, `control check --strict` judges the controller's own design
+    margin (its record's alpha_min; issue 33, item 9): the shipped PI on two plants of its
+    family passes at its alpha_min, and the same file promising more than the check finds
+    exits 1 naming the promise."""
+    pi = resources.files("empact") / "data" / "control" / "pi.json"
+    fam = tmp_path / "family.npz"
+    res = run("plants", "--ratio", "0.8,1.25", "--tau", "0.9", "--clamp", "16000", "--out", fam,
+              "--quiet")
+    assert res.exit_code == 0, res.output
+    res = run("control", "check", pi, "--family", fam, "--strict", "--quiet", "--json")
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    doc = json.loads(pi.read_text())
+    assert data["gate"] == {"min_disk_margin": doc["design"]["alpha_min"],
+                            "source": "the design's alpha_min"}
+    worst = data["worst"]["disk_margin"]
+    doc["design"]["alpha_min"] = round(worst + 0.01, 3)  # a design promising more
+    promised = tmp_path / "promised.json"
+    promised.write_text(json.dumps(doc))
+    res = run("control", "check", promised, "--family", fam, "--strict", "--quiet")
+    assert res.exit_code == 1
+    assert res.output.strip().splitlines()[-1] == (
+        f"error: check failed: 0 unstable plants, worst disk margin {worst:.3f} (required "
+        f"{doc['design']['alpha_min']:g}: the design's alpha_min)")
+    # an explicit --min-disk-margin replaces the design's
+    res = run("control", "check", promised, "--family", fam, "--strict", "--quiet",
+              "--min-disk-margin", "0.1")
+    assert res.exit_code == 0, res.output
+
+
 @pytest.mark.parametrize("example, status", [("slip-small-step-r1", 0), ("shift-low-od", 1)])
 def test_control_simulate_strict_exits_1_on_a_missed_target(example, status):
     """`control simulate --strict` exits 1 when a [targets] entry is missed (shift-low-od's

@@ -3,7 +3,7 @@ closed loop on the nonlinear machine (beyond the paper)."""
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import Any, Mapping
 
 import click
 import numpy as np
@@ -304,10 +304,13 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
               help="Plant family (.npz from `empact plants`; default: the design family "
                    "on the parameter set).")
 @loop_option
-@click.option("--min-disk-margin", "min_dm", type=float, default=0.0, show_default=True,
-              help="With --strict: the smallest multiloop disk margin allowed.")
+@click.option("--min-disk-margin", "min_dm", type=float, default=None,
+              help="With --strict: the smallest multiloop disk margin allowed (default: the "
+                   "controller's own design margin, its design record's alpha_min, else its "
+                   "worst disk_margin; none recorded: stability alone).")
 @click.option("--strict", is_flag=True, help="Exit 1 when a plant is unstable or a disk "
-              "margin is below --min-disk-margin (without it: report and exit 0).")
+              "margin is below --min-disk-margin or, without it, the controller's design "
+              "margin (without --strict: report and exit 0).")
 @click.option("--mu", is_flag=True, help="Also the structured singular value bound "
               "(slycot ab13md, continuous loop) over a parametric spread covering the family.")
 @traction_option
@@ -325,11 +328,14 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
     from ..control.loop import family_loops
     from ..control.robustness import disk_gain_phase, mu_upper_bound
 
-    check_number("--min-disk-margin", min_dm, 0.0, 1.99)
+    if min_dm is not None:
+        check_number("--min-disk-margin", min_dm, 0.0, 1.99)
     if family_file and traction_table is not None:
         raise InputError("--traction: give it with the design family, not with --family (a "
                          "family file records its own model options)")
     ctrl = load_controller(controller)
+    gate, gate_source = ((min_dm, "--min-disk-margin") if min_dm is not None
+                         else design_margin(ctrl.design))
     params = get_params(params_file)
     loop = _loop_from(loop_scenario, params)
     tables = {} if traction_table is None else {"traction": traction_table}
@@ -364,7 +370,8 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
                 {k: float(np.median(v)) for k, v in fam.operating.items()})
                 if ctrl.schedule is not None else ctrl, tuple(s // 2 for s in fam.shape))
             bar.update(1)
-    ok = data["worst"]["all_stable"] and worst >= min_dm
+    data["gate"] = {"min_disk_margin": gate, "source": gate_source}
+    ok = data["worst"]["all_stable"] and worst >= gate
     if as_json or json_out:
         emit_json({**data, "passed": ok}, "control.check", json_out)
     else:
@@ -378,7 +385,20 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
                        "real blocks; < 1 certifies the box)")
     if strict and not ok:
         raise Failed(f"check failed: {fam.size - data['worst']['stable']} unstable plants, "
-                     f"worst disk margin {worst:.3f} (--min-disk-margin {min_dm:g})")
+                     f"worst disk margin {worst:.3f} (required {gate:g}: {gate_source})")
+
+
+def design_margin(design: Mapping[str, Any]) -> tuple[float, str]:
+    """The disk margin a controller's design record promises, and where it comes from: its
+    ``alpha_min`` (the margin the design required of every plant), else its
+    ``worst.disk_margin`` (the margin it reports); ``(0, "none recorded")`` without either
+    (stability alone is judged)."""
+    if isinstance(design.get("alpha_min"), (int, float)):
+        return float(design["alpha_min"]), "the design's alpha_min"
+    worst = design.get("worst")
+    if isinstance(worst, dict) and isinstance(worst.get("disk_margin"), (int, float)):
+        return float(worst["disk_margin"]), "the design's worst disk_margin"
+    return 0.0, "no design margin recorded: stability alone"
 
 
 @control_group.command("simulate")
