@@ -981,6 +981,61 @@ def test_control_check_strict_gates_on_the_design_margin(tmp_path):
     assert res.exit_code == 0, res.output
 
 
+def test_control_export_closes_from_the_file_alone(tmp_path):
+    """`control discretize --at` writes the shipped scheduled PI folded at an operating point
+    with the loop that runs there; a plain python-control loop built from that file alone has
+    the closed-loop poles `control check` computes at the point (issue 33, item 5): every pole
+    of |z| >= 0.05 to 1e-6 (measured 3e-8); the 12 or so poles within |z| < 0.05 are the
+    counting window's and the delay's shift registers (eigenvalue 0 of a Jordan chain of ~10,
+    which any eigensolver places only to about eps ** (1 / 10) ~ 0.03): both lists have them
+    there, and as many."""
+    import scipy.io
+    from scipy.optimize import linear_sum_assignment
+
+    ct = pytest.importorskip("control")
+    pi = resources.files("empact") / "data" / "control" / "pi.json"
+    fam = tmp_path / "point.npz"
+    res = run("plants", "--ratio", "1", "--tau", "0.9", "--clamp", "10000", "--out", fam,
+              "--quiet")
+    assert res.exit_code == 0, res.output
+    res = run("control", "check", pi, "--family", fam, "--quiet", "--json")
+    assert res.exit_code == 0, res.output
+    poles = np.array(json.loads(res.stdout)["poles_z"], float)
+    p_check = poles[..., 0] + 1j * poles[..., 1]
+    out = tmp_path / "k.json"
+    res = run("control", "discretize", pi, "--at", "r_g=1,tau=0.9,F_s=10000", "--out", out)
+    assert res.exit_code == 0, res.output
+    k = json.loads(out.read_text())  # the file alone from here on
+    assert k["schema"] == {"name": "empact.controller", "version": 2}
+    assert k["dt"] == 1e-3 and k["schedule"] is None
+    lp = k["design"]["loop_plant"]
+    K = ct.ss(k["A"], k["B"], k["C"], k["D"], k["dt"])
+    P = ct.ss(lp["A"], lp["B"], lp["C"], np.zeros((2, 2)), lp["dt"])
+    p_file = ct.feedback(K, P, sign=1).poles()
+    assert p_file.shape == p_check.shape
+    cost = np.abs(p_check[:, None] - p_file[None, :])
+    i, j = linear_sum_assignment(cost)
+    slow = np.abs(p_check[i]) >= 0.05
+    assert slow.sum() >= 30
+    assert cost[i, j][slow].max() < 1e-6
+    assert np.all(np.abs(p_file[j][~slow]) < 0.05)
+    assert np.abs(p_file).max() < 1  # stable, as the check says
+    # the loop's whole specification rides along
+    spec = k["design"]["loop"]
+    assert spec["controller"]["feedforward_gain"] == 0.9 and spec["delay_samples"] == 1
+    assert spec["speed_window_samples"] == 10 and spec["servo_limits"]["T_ms_max"] == 15.0
+    # the .mat carries the same for MATLAB (`feedback(K, P, +1)`)
+    mat = tmp_path / "k.mat"
+    res = run("control", "discretize", pi, "--at", "r_g=1,tau=0.9,F_s=10000", "--out", mat)
+    assert res.exit_code == 0, res.output
+    m = scipy.io.loadmat(mat)
+    assert_allclose(m["loop_plant_A"], lp["A"], rtol=0, atol=0)
+    assert_allclose(m["B"], k["B"], rtol=0, atol=0)
+    # bad points: one line naming the value
+    res = run("control", "discretize", pi, "--at", "r_g=1,tau", "--out", tmp_path / "x.json")
+    assert res.exit_code == 2 and "'tau' is not NAME=VALUE" in res.output
+
+
 @pytest.mark.parametrize("example, status", [("slip-small-step-r1", 0), ("shift-low-od", 1)])
 def test_control_simulate_strict_exits_1_on_a_missed_target(example, status):
     """`control simulate --strict` exits 1 when a [targets] entry is missed (shift-low-od's

@@ -360,7 +360,7 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
                       "spectral_radius": float(rho.max()),
                       "all_stable": bool(np.all(rho < 1)),
                       "stable": int((rho < 1).sum()), "points": int(rho.size)},
-            "spectral_radius": rho, "disk_margin": dm["alpha"],
+            "spectral_radius": rho, "poles_z": lm.poles(), "disk_margin": dm["alpha"],
             "input_disk_margin": dm["input"], "output_disk_margin": dm["output"],
             "axes": {k: v for k, v in fam.axes.items()},
             "loop": {"rate_hz": loop.spec.rate, "feedforward": loop.spec.feedforward,
@@ -475,27 +475,74 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
 
 @control_group.command("discretize")
 @click.argument("controller", type=click.Path(dir_okay=False))
-@click.option("--rate", required=True, metavar="HZ", help="Sample rate [Hz].")
+@click.option("--rate", default=None, metavar="HZ", help="Sample rate [Hz] (with --at: the "
+              "loop's, which is the default there).")
 @click.option("--method", type=click.Choice(["tustin", "zoh", "foh", "bilinear"]),
               default="tustin", show_default=True, help="Discretisation (the formulas of "
-              "scipy.signal.cont2discrete).")
+              "scipy.signal.cont2discrete; with --at: tustin, as the loop law).")
+@click.option("--at", "at", default=None, metavar="NAME=VALUE,...",
+              help="Fold the schedule's gains at this operating point into B and D and add "
+                   "the loop that runs there (loop_plant: servo torques -> errors), e.g. "
+                   "r_g=1,tau=0.9,F_s=10000 (r_g and two of slip/tau, F_s, T_l; SI).")
+@loop_option
 @click.option("--out", "out", type=OutputFile(("json", "mat")), required=True,
               help="The discrete controller (.json or .mat; an existing file only with "
                    "--force).")
+@params_option
 @force_option
-def discretize_cmd(controller, rate, method, out, force) -> None:
+def discretize_cmd(controller, rate, method, at, loop_scenario, out, params_file,
+                   force) -> None:
     """Write CONTROLLER as a discrete-time state space at its sample rate (x[k+1] = A x[k] +
-    B e[k], du[k] = C x[k] + D e[k]; a schedule's gains act on e as before)."""
+    B e[k], du[k] = C x[k] + D e[k]; a schedule's gains act on e as before, or, with --at,
+    are folded in at that point, with the loop it closes there)."""
     from ..control.controller import load_controller
 
-    try:
-        rate = float(rate)
-    except ValueError:
-        raise InputError(f"--rate {rate!r}: a sample rate in Hz") from None
-    check_number("--rate", rate, 1.0, 1e5, unit="Hz")
+    if rate is not None:
+        try:
+            rate = float(rate)
+        except ValueError:
+            raise InputError(f"--rate {rate!r}: a sample rate in Hz") from None
+        check_number("--rate", rate, 1.0, 1e5, unit="Hz")
     ctrl = load_controller(controller)
     if ctrl.dt:
         raise InputError(f"{controller}: already discrete (dt = {ctrl.dt:g} s)")
-    cd = ctrl.discretize(1.0 / rate, method)
+    if at is None:
+        if rate is None:
+            raise InputError("--rate: give the sample rate in Hz (or --at, at the loop's)")
+        cd = ctrl.discretize(1.0 / rate, method)
+        cd.save(out)
+        click.echo(f"{ctrl.n}-state controller at {rate:g} Hz ({method}) written to {out}")
+        return
+    from ..control.loop import controller_at
+
+    point = parse_point(at)
+    params = get_params(params_file)
+    loop = _loop_from(loop_scenario, params)
+    if rate is not None and rate != loop.spec.rate:
+        raise InputError(f"--rate {rate:g}: with --at the controller runs at the loop's rate "
+                         f"({loop.spec.rate:g} Hz)")
+    if method != "tustin":
+        raise InputError(f"--method {method}: with --at the controller is discretised as the "
+                         "loop law does (tustin)")
+    cd = controller_at(ctrl, loop, params, point)
     cd.save(out)
-    click.echo(f"{ctrl.n}-state controller at {rate:g} Hz ({method}) written to {out}")
+    click.echo(f"{ctrl.n}-state controller at {loop.spec.rate:g} Hz (tustin) folded at "
+               f"{at} (gains {', '.join(f'{g:.6g}' for g in cd.design['schedule_gains'])}), "
+               f"with the loop there ({cd.design['loop_plant']['A'].shape[0]} states), "
+               f"written to {out}")
+
+
+def parse_point(text: str) -> dict[str, float]:
+    """``--at NAME=VALUE,...`` as a mapping (one error line naming what is wrong)."""
+    point: dict[str, float] = {}
+    for item in text.split(","):
+        name, eq, value = item.partition("=")
+        name = name.strip()
+        try:
+            point[name] = float(value)
+        except ValueError:
+            raise InputError(f"--at {text!r}: {item!r} is not NAME=VALUE with a number "
+                             "(e.g. r_g=1,tau=0.9,F_s=10000)") from None
+        if not eq or not name:
+            raise InputError(f"--at {text!r}: {item!r} is not NAME=VALUE")
+    return point

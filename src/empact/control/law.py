@@ -585,6 +585,26 @@ class LoopLaw:
         replaces the controller's secondary servo torque)."""
         return np.array([1.0, 0.0 if self.config.spec.clamping == "safety-factor" else 1.0])
 
+    def at_rest(self) -> dict[str, Any]:
+        """What the law holds at its trimmed start: the point its schedule is read at
+        (``r_g`` the measured ratio [-], ``tau`` the set-point's ``mu / mu_max`` at the
+        reference ratio [-], ``F_s`` the clamping feedforward's force, or the start's
+        clamping force without feedforward [N]), the holding torques ``u0`` [N m], the
+        feedforward's clamping force ``F_ff`` [N] and servo torque per newton ``tpf`` [N m/N],
+        and the decoupler's gain ``decoupling`` [-] (``T_mp* / T_ms*``).
+
+        Returns
+        -------
+        dict
+            ``schedule_point`` (dict name -> float), ``u0`` (list of 2 floats), ``F_ff``,
+            ``tpf``, ``decoupling`` (floats).
+        """
+        tau = float(self.refs.mu[0] / self.model.mu_max(self.refs.r_g[:1])[0])
+        F = self._F0 if self.config.spec.feedforward else self.point["F_s"]
+        return {"schedule_point": {"r_g": float(self.raw0[0]), "tau": tau, "F_s": float(F)},
+                "u0": [float(x) for x in self.u0], "F_ff": float(self._F0),
+                "tpf": float(self._tpf), "decoupling": float(self._decoupling0)}
+
     def update(self, z: NDArray, raw: NDArray, k: int, ref: NDArray | None = None,
                ideal: bool = False) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """One sample of the law: the next state and the servo torques ``[T_mp, T_ms]``

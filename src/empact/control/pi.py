@@ -24,7 +24,7 @@ from ..params import Params
 from .controller import SCHEDULE_VARIABLES, Controller, Schedule
 from .family import PlantFamily
 from .law import LoopConfig
-from .loop import family_loops
+from .loop import family_loops, loop_specification
 from .robustness import (
     OMEGA,
     disk_gain_phase,
@@ -330,8 +330,6 @@ def _design_pi_loop(family, bandwidth_hz, alpha_min, slip, nominal, loop, params
               "nominal": {k: float(v[nominal]) for k, v in family.operating.items()},
               "family_axes": {k: v.tolist() for k, v in family.axes.items()},
               "family_fixed": dict(family.fixed), "slip": slip, "scheduled": schedule,
-              "loop": {"rate_hz": loop.spec.rate, "feedforward": loop.spec.feedforward,
-                       "feedforward_filter_hz": loop.spec.feedforward_filter_hz,
-                       "sensors": loop.sensors is not None}}
+              "loop": loop_specification(loop)}
     return Controller(ctrl.A, ctrl.B, ctrl.C, ctrl.D, measured, outputs, 0.0, "pi", design,
                       ctrl.schedule)
