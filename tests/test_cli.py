@@ -553,7 +553,7 @@ BAD_INPUT = [
       "--out", "c.json"],
      "nominal point (3, 1, 0) (r_g = 1, tau = 0.9, F_s = 8000): H-infinity ill-posed (A1)"),
     (["control", "design", "--nominal", "9,9", "--out", "c.json"],
-     "--nominal '9,9': indices in a grid of shape (7, 3, 3)"),
+     "--nominal '9,9': indices in a grid of shape (7, 3, 5)"),
     (["control", "check", "nosuch.json", "--family", "f.npz"], "nosuch.json: no such controller"),
     (["control", "simulate"], "give exactly one of SCENARIO or --example"),
     (["control", "simulate", "--example", "nosuch"], "unknown control example 'nosuch'"),

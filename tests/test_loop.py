@@ -65,6 +65,40 @@ def test_feedforward_linearisation_is_the_closed_form(params, bench):
     assert got == pytest.approx(expected, rel=1e-7)
 
 
+def test_feedforward_gain_table_is_the_integral_of_its_gains(params, bench):
+    """The scheduled feedforward (``feedforward_gain_table``, issue 33) clamps for the
+    integral of its incremental gain over the full feedforward force (closed form of a
+    piecewise-linear gain, to 1e-12 relative); a table of one gain is that gain times the
+    force (1e-15); and the loop's linear model sees the table's gain at the point's force:
+    the pre-processing's derivative of the clamping with respect to the driveshaft torque is
+    the constant-gain law's times gain(F_full) / feedforward_gain (1e-7, central
+    differences)."""
+    from empact.control import _law_core as core
+
+    tab = core.ff_table(((0.0, 0.5), (4000.0, 0.5), (8000.0, 0.9)))
+    for F, expected in ((-1000.0, -500.0), (2000.0, 1000.0), (6000.0, 2000 + 0.5 * 2000
+                                                                + 0.5 * 1e-4 * 2000 ** 2),
+                        (8000.0, 2000 + 2800.0), (10000.0, 4800 + 1800.0)):
+        assert core.scheduled_ff(tab, F) == pytest.approx(expected, rel=1e-12)
+    flat = core.ff_table(((0.0, 0.9), (1000.0, 0.9)))
+    for F in (-50.0, 500.0, 3e4):
+        assert core.scheduled_ff(flat, F) == pytest.approx(0.9 * F, rel=1e-15)
+    point = {"r_g": 1.0, "nu": 0.0144, "omega_p": 300.0, "T_l": 100.0, "F_s": 1e4}
+    ctrl = pi_controller([-1.0, 100.0], [1.0, 1.0], [10.0, 10.0])
+    laws = [LoopLaw(ctrl, bench, point, np.zeros(2), LoopConfig.of(
+        params, **{**SHIPPED_LOOP, "feedforward_gain_table": table}).ideal())
+        for table in (None, ((0.0, 0.3), (1e5, 0.9)))]
+    F_full = laws[0].at_rest()["F_ff"] / 0.9
+    gain = 0.3 + 0.6 * F_full / 1e5
+    col = 3 * laws[0]._n_buf + laws[0]._delay - 1  # T_ds's buffer entry the next sample reads
+    d = [linear_preprocess(law)["Fz"][1, col] for law in laws]
+    assert d[1] == pytest.approx(d[0] * gain / 0.9, rel=1e-7)
+    for table, message in ((((0.0, 0.5), (1.0, 0.7)), "with controller.feedforward_gain_table "
+                            "it is"), (((5.0, 0.9), (1.0, 0.9)), "forces from 0")):
+        with pytest.raises(ParameterError, match=message):
+            LoopConfig.of(params, **{**SHIPPED_LOOP, "feedforward_gain_table": table})
+
+
 def test_linear_prediction_matches_the_nonlinear_run_for_a_small_step(params):
     """For a load step of 2 % of the torque capacity the nonlinear closed loop (the same law
     without limits, quantisation and noise) and its linear model agree: the slip's and the

@@ -203,7 +203,7 @@ loop_option = click.option(
                    "design's: design_pi 0.5,1; design_hinf 0.1,0.05).")
 @click.option("--alpha-min", "alpha_min", type=float, default=None,
               help="PI: smallest multiloop disk margin at every grid point (default: "
-                   "design_pi's, 0.3, the shipped design's).")
+                   "design_pi's, 0.5, the shipped design's).")
 @click.option("--schedule/--no-schedule", default=None,
               help="PI: gain-schedule the proportional gains over the family's axes (r_g, "
                    "tau, F_s) (default: design_pi's: scheduled, on the loop that runs).")
@@ -227,8 +227,8 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
                drive, load_mode, traction_table, out, params_file, as_json, json_out, force,
                quiet) -> None:
     """Design a controller (T_mp, T_ms) from the errors of (r_g, slip) on a plant family
-    (default: empact.control.family.DESIGN_GRID: r_g 0.5..2 (7, geometric) x torque ratio
-    tau 0.8, 0.9, 0.95 x clamping force 8, 16, 32 kN at [operating]'s speed)."""
+    (default: empact.control.family.DESIGN_GRID: r_g 0.43..2.25 (7, geometric) x torque
+    ratio tau 0.8, 0.9, 0.95 x clamping force 3, 5, 8, 16, 32 kN at [operating]'s speed)."""
     from ..control.family import DESIGN_GRID
 
     kind = CONTROLLER_TYPES[method]

@@ -119,10 +119,13 @@ def _no_geometry(r_g: float) -> ParameterError:
 
 
 #: the loop of the shipped scenarios and designs (`ControllerSpec` keys): the clamping
-#: feedforward of the driveshaft torque at 0.9 of it, unfiltered but for noise, and the
-#: primary servo following it through a 5 Hz low-pass (see the module notes)
-SHIPPED_LOOP = {"feedforward": True, "feedforward_gain": 0.9, "feedforward_filter_hz": 100.0,
-                "decoupling": True, "decoupling_filter_hz": 5.0}
+#: feedforward of the driveshaft torque at 0.9 of it above 8 kN of full feedforward force,
+#: 0.5 below 4 kN (linear between; at light load in overdrive the feedforward at 0.9
+#: destabilises the loop, issue 33), unfiltered but for noise, and the primary servo
+#: following it through a 5 Hz low-pass (see the module notes)
+SHIPPED_LOOP = {"feedforward": True, "feedforward_gain": 0.9,
+                "feedforward_gain_table": ((0.0, 0.5), (4000.0, 0.5), (8000.0, 0.9)),
+                "feedforward_filter_hz": 100.0, "decoupling": True, "decoupling_filter_hz": 5.0}
 
 #: what the law reads from the machine, in this order (model outputs)
 RAW_SIGNALS = ("r_g", "omega_p", "omega_s", "T_ds", "omega_mp", "omega_ms", "T_l_act")
@@ -338,6 +341,7 @@ class LoopLaw:
         self._alpha_ff = float(np.exp(-2 * np.pi * spec.feedforward_filter_hz * dt))
         self._alpha_dec = float(np.exp(-2 * np.pi * spec.decoupling_filter_hz * dt))
         self._decoupling0 = float(self.refs.decoupling[0])
+        self._ff_table = core.ff_table(spec.feedforward_gain_table)
         self._L_aw = _antiwindup_gain(cd.A, cd.C) if spec.anti_windup else \
             np.zeros((cd.n, 2))
         self.raw0 = self.raw_at_rest(self.point)
@@ -397,7 +401,7 @@ class LoopLaw:
             mu_max=self.model.mu_max(refs.r_g) if sched is not None else np.zeros(self.n_k),
             R_p=geo[0], R_s=geo[1], phi=geo[2], kappa_geo=geo[3], noise=self._noise,
             schedule=sched._packed if sched is not None else np.zeros(2), A=c.A, B=c.B,
-            C=c.C, D=c.D, L=self._L_aw, p=self.model.p)
+            C=c.C, D=c.D, L=self._L_aw, ff_table=self._ff_table, p=self.model.p)
         self._wk = core.work(len(RAW_SIGNALS))
 
     def _law_at(self, ref: NDArray, k: int) -> Any:
@@ -416,7 +420,8 @@ class LoopLaw:
                     else np.zeros(1)),
             R_p=one[0], R_s=one[1], phi=one[2], kappa_geo=one[3],
             noise=self._tb.noise[kk:kk + 1], schedule=self._tb.schedule, A=self._tb.A,
-            B=self._tb.B, C=self._tb.C, D=self._tb.D, L=self._tb.L, p=self._tb.p), self._wk)
+            B=self._tb.B, C=self._tb.C, D=self._tb.D, L=self._tb.L,
+            ff_table=self._tb.ff_table, p=self._tb.p), self._wk)
 
     # -- set-up ----------------------------------------------------------------------------
     def _references(self, references: Mapping[str, NDArray]) -> _Refs:
@@ -522,6 +527,9 @@ class LoopLaw:
         """Clamping force [N] that holds the traction coefficient ``traction_error * mu_ref``
         at driveshaft torque `T_ds` and ratio `r_g`."""
         spec = self.config.spec
+        if spec.feedforward_gain_table is not None:
+            return float(core.scheduled_ff(self._ff_table, T_ds * self._cosb / (
+                2 * spec.traction_error * mu_ref * self._R_s(r_g))))
         return spec.feedforward_gain * T_ds * self._cosb / (2 * spec.traction_error * mu_ref
                                                             * self._R_s(r_g))
 
