@@ -17,7 +17,10 @@ At each sample ``k`` (period ``dt = 1 / rate``) the law
    ``T_ms,ff = (i_e s / i_c) T_ds cos(beta) / (2 mu_hat R_s(r_g))`` with ``mu_hat =
    traction_error * mu(nu*, r_g*)`` (times ``feedforward_gain``: below 1 it leaves the belt
    part of its damping of the driveshaft mode, which a full feedforward of the driveshaft
-   torque cancels), through a first-order low-pass at
+   torque cancels; with ``feedforward_gain_table``, the integral of the table's gain over
+   the full force ``F_full = T_ds cos(beta) / (2 mu_hat R_s)``, so that a change of load
+   sees the table's gain at that load: lower at light load, where the full gain destabilises
+   the loop in overdrive), through a first-order low-pass at
    ``feedforward_filter_hz`` (below the clamping mode near 9.5 Hz); or, with ``clamping =
    "safety-factor"``, the open-loop clamping of a production CVT (the slip loop off):
    ``F_s = SF T_l cos(beta) / (2 mu_design R_s)``, ``mu_design`` the smallest traction peak
