@@ -814,8 +814,8 @@ def controller_at(controller: Controller, config: LoopConfig, params: Params,
     if bad:
         raise ParameterError(f"operating point: {', '.join(bad)} unknown; give r_g and two "
                              f"of nu (or tau), F_s, T_l ({', '.join(_POINT_KEYS)})")
-    fam = plant_family(params, outputs=LOOP_FAMILY_OUTPUTS, **options,
-                       **{k: float(v) for k, v in point.items()})
+    values: dict[str, Any] = {k: float(v) for k, v in point.items()}
+    fam = plant_family(params, outputs=LOOP_FAMILY_OUTPUTS, **options, **values)
     if not fam.ok.all():
         raise ParameterError(f"operating point {dict(point)}: does not trim "
                              f"({fam.reason.ravel()[0]})")
