@@ -606,9 +606,10 @@ BAD_INPUT = [
     (["control", "design", "--bandwidth", "0,1", "--out", "c.json"], "--bandwidth = 0"),
     (["control", "design", "--method", "hinf", "--drive", "torque", "--nominal", "3,1,0",
       "--out", "c.json"],
-     "nominal point (3, 1, 0) (r_g = 1, tau = 0.9, F_s = 8000): H-infinity ill-posed (A1)"),
+     "nominal point (3, 1, 0) (r_g = 0.9836, tau = 0.9, F_s = 3000): H-infinity ill-posed "
+     "(A1)"),
     (["control", "design", "--nominal", "9,9", "--out", "c.json"],
-     "--nominal '9,9': indices in a grid of shape (7, 3, 3)"),
+     "--nominal '9,9': indices in a grid of shape (7, 3, 5)"),
     (["control", "check", "nosuch.json", "--family", "f.npz"], "nosuch.json: no such controller"),
     (["control", "simulate"], "give exactly one of SCENARIO or --example"),
     (["control", "simulate", "--example", "nosuch"], "unknown control example 'nosuch'"),
@@ -894,7 +895,7 @@ BAD_INPUT = [
     (["params", "validate", "deep.toml"], "deep.toml: nested deeper than 32 levels"),
     (["simulate", "deep.toml"], "deep.toml: nested deeper than 32 levels"),
     (["control", "check", "c99.json", "--family", "f.npz"],
-     "c99.json: controller schema version 99 is newer than this empact reads (up to 1)"),
+     "c99.json: controller schema version 99 is newer than this empact reads (up to 2)"),
     (["control", "discretize", "c99.json", "--rate", "100", "--out", "d.json"],
      "controller schema version 99 is newer"),
     (["control", "check", "c_units.json", "--family", "f.npz"],
@@ -1109,6 +1110,92 @@ def test_control_check_strict_gates_a_script(tmp_path):
     # without --strict it reports and exits 0
     res = run("control", "check", pi, "--family", fam, "--quiet", "--min-disk-margin", "0.99")
     assert res.exit_code == 0, res.output
+
+
+def test_control_check_strict_gates_on_the_design_margin(tmp_path):
+    """Without --min-disk-margin, `control check --strict` judges the controller's own design
+    margin (its record's alpha_min; issue 33, item 9): the shipped PI on two plants of its
+    family passes at its alpha_min, and the same file promising more than the check finds
+    exits 1 naming the promise."""
+    pi = resources.files("empact") / "data" / "control" / "pi.json"
+    fam = tmp_path / "family.npz"
+    res = run("plants", "--ratio", "0.8,1.25", "--tau", "0.9", "--clamp", "16000", "--out", fam,
+              "--quiet")
+    assert res.exit_code == 0, res.output
+    res = run("control", "check", pi, "--family", fam, "--strict", "--quiet", "--json")
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    doc = json.loads(pi.read_text())
+    assert data["gate"] == {"min_disk_margin": doc["design"]["alpha_min"],
+                            "source": "the design's alpha_min"}
+    worst = data["worst"]["disk_margin"]
+    doc["design"]["alpha_min"] = round(worst + 0.01, 3)  # a design promising more
+    promised = tmp_path / "promised.json"
+    promised.write_text(json.dumps(doc))
+    res = run("control", "check", promised, "--family", fam, "--strict", "--quiet")
+    assert res.exit_code == 1
+    assert res.output.strip().splitlines()[-1] == (
+        f"error: check failed: 0 unstable plants, worst disk margin {worst:.3f} (required "
+        f"{doc['design']['alpha_min']:g}: the design's alpha_min)")
+    # an explicit --min-disk-margin replaces the design's
+    res = run("control", "check", promised, "--family", fam, "--strict", "--quiet",
+              "--min-disk-margin", "0.1")
+    assert res.exit_code == 0, res.output
+
+
+def test_control_export_closes_from_the_file_alone(tmp_path):
+    """`control discretize --at` writes the shipped scheduled PI folded at an operating point
+    with the loop that runs there; a plain python-control loop built from that file alone has
+    the closed-loop poles `control check` computes at the point (issue 33, item 5): every pole
+    of |z| >= 0.05 to 1e-6 (measured 3e-8); the 12 or so poles within |z| < 0.05 are the
+    counting window's and the delay's shift registers (eigenvalue 0 of a Jordan chain of ~10,
+    which any eigensolver places only to about eps ** (1 / 10) ~ 0.03): both lists have them
+    there, and as many."""
+    import scipy.io
+    from scipy.optimize import linear_sum_assignment
+
+    ct = pytest.importorskip("control")
+    pi = resources.files("empact") / "data" / "control" / "pi.json"
+    fam = tmp_path / "point.npz"
+    res = run("plants", "--ratio", "1", "--tau", "0.9", "--clamp", "10000", "--out", fam,
+              "--quiet")
+    assert res.exit_code == 0, res.output
+    res = run("control", "check", pi, "--family", fam, "--quiet", "--json")
+    assert res.exit_code == 0, res.output
+    poles = np.array(json.loads(res.stdout)["poles_z"], float)
+    p_check = poles[..., 0] + 1j * poles[..., 1]
+    out = tmp_path / "k.json"
+    res = run("control", "discretize", pi, "--at", "r_g=1,tau=0.9,F_s=10000", "--out", out)
+    assert res.exit_code == 0, res.output
+    k = json.loads(out.read_text())  # the file alone from here on
+    assert k["schema"] == {"name": "empact.controller", "version": 2}
+    assert k["dt"] == 1e-3 and k["schedule"] is None
+    lp = k["design"]["loop_plant"]
+    K = ct.ss(k["A"], k["B"], k["C"], k["D"], k["dt"])
+    P = ct.ss(lp["A"], lp["B"], lp["C"], np.zeros((2, 2)), lp["dt"])
+    p_file = ct.feedback(K, P, sign=1).poles()
+    assert p_file.shape == p_check.shape
+    cost = np.abs(p_check[:, None] - p_file[None, :])
+    i, j = linear_sum_assignment(cost)
+    slow = np.abs(p_check[i]) >= 0.05
+    assert slow.sum() >= 30
+    assert cost[i, j][slow].max() < 1e-6
+    assert np.all(np.abs(p_file[j][~slow]) < 0.05)
+    assert np.abs(p_file).max() < 1  # stable, as the check says
+    # the loop's whole specification rides along
+    spec = k["design"]["loop"]
+    assert spec["controller"]["feedforward_gain"] == 0.9 and spec["delay_samples"] == 1
+    assert spec["speed_window_samples"] == 10 and spec["servo_limits"]["T_ms_max"] == 15.0
+    # the .mat carries the same for MATLAB (`feedback(K, P, +1)`)
+    mat = tmp_path / "k.mat"
+    res = run("control", "discretize", pi, "--at", "r_g=1,tau=0.9,F_s=10000", "--out", mat)
+    assert res.exit_code == 0, res.output
+    m = scipy.io.loadmat(mat)
+    assert_allclose(m["loop_plant_A"], lp["A"], rtol=0, atol=0)
+    assert_allclose(m["B"], k["B"], rtol=0, atol=0)
+    # bad points: one line naming the value
+    res = run("control", "discretize", pi, "--at", "r_g=1,tau", "--out", tmp_path / "x.json")
+    assert res.exit_code == 2 and "'tau' is not NAME=VALUE" in res.output
 
 
 @pytest.mark.parametrize("example, status", [("slip-small-step-r1", 0), ("shift-low-od", 1)])

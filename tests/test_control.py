@@ -27,9 +27,11 @@ from empact.reproduction.control import SHIPPED_DESIGNS, shipped_controller
 
 @pytest.fixture(scope="module")
 def design_family(params):
-    from empact.control.family import design_family as make
+    """Issue 21's design family (`ISSUE21_GRID`), the one the shipped H-infinity design was
+    made on."""
+    from empact.control.family import ISSUE21_GRID, LOOP_FAMILY_OUTPUTS
 
-    return make(params)
+    return plant_family(params, **ISSUE21_GRID, outputs=LOOP_FAMILY_OUTPUTS)
 
 
 def test_family_points_equal_single_point_linearisation(params):
@@ -147,11 +149,11 @@ def test_disk_margin_agrees_with_python_control():
 
 
 def test_regression_shipped_hinf_is_the_documented_design(params, design_family):
-    """Regression guard: data/control/hinf.json is what `design_hinf` gives on the design
-    family with the shipped recipe (`SHIPPED_DESIGNS`), compared by frequency response (a
-    state space is unique only up to its coordinates; H-infinity synthesis moves them
-    between LAPACK builds): within 1e-3 relative, 0.001-100 Hz.  The PI's guard is in
-    test_loop.py (its design checks the sampled loop)."""
+    """Regression guard: data/control/hinf.json is what `design_hinf` gives on issue 21's
+    design family (its record's axes) with the shipped recipe (`SHIPPED_DESIGNS`), compared
+    by frequency response (a state space is unique only up to its coordinates; H-infinity
+    synthesis moves them between LAPACK builds): within 1e-3 relative, 0.001-100 Hz.  The
+    PI's guard is in test_loop.py (its design checks the sampled loop)."""
     w = 2 * np.pi * np.logspace(-3, 2, 200)
     c = design_hinf(design_family, **SHIPPED_DESIGNS["hinf"])
     shipped = shipped_controller("hinf")

@@ -15,7 +15,9 @@ compressed.
 
 How: from a checkout of the commit whose law is the reference (the file's ``commit`` entry
 records it; the shipped file was made from main at ``89f6a97``, the law before its one
-compiled sample, issue 31 item 2; its runs and Monte Carlo are bitwise those of ``9bddc97``)::
+compiled sample, issue 31 item 2; its runs and Monte Carlo are bitwise those of ``9bddc97``;
+remade at issue 33 item 1, ``cf367a5``, for the new shipped PI and the feedforward's gain
+table: the shipped runs changed on purpose)::
 
     PYTHONPATH=<that checkout>/src python tests/data/make_golden.py tests/data/golden_loop.npz
 

@@ -3,7 +3,7 @@ closed loop on the nonlinear machine (beyond the paper)."""
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import Any, Mapping
 
 import click
 import numpy as np
@@ -203,7 +203,7 @@ loop_option = click.option(
                    "design's: design_pi 0.5,1; design_hinf 0.1,0.05).")
 @click.option("--alpha-min", "alpha_min", type=float, default=None,
               help="PI: smallest multiloop disk margin at every grid point (default: "
-                   "design_pi's, 0.3, the shipped design's).")
+                   "design_pi's, 0.5, the shipped design's).")
 @click.option("--schedule/--no-schedule", default=None,
               help="PI: gain-schedule the proportional gains over the family's axes (r_g, "
                    "tau, F_s) (default: design_pi's: scheduled, on the loop that runs).")
@@ -227,8 +227,8 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
                drive, load_mode, traction_table, out, params_file, as_json, json_out, force,
                quiet) -> None:
     """Design a controller (T_mp, T_ms) from the errors of (r_g, slip) on a plant family
-    (default: empact.control.family.DESIGN_GRID: r_g 0.5..2 (7, geometric) x torque ratio
-    tau 0.8, 0.9, 0.95 x clamping force 8, 16, 32 kN at [operating]'s speed)."""
+    (default: empact.control.family.DESIGN_GRID: r_g 0.43..2.25 (7, geometric) x torque
+    ratio tau 0.8, 0.9, 0.95 x clamping force 3, 5, 8, 16, 32 kN at [operating]'s speed)."""
     from ..control.family import DESIGN_GRID
 
     kind = CONTROLLER_TYPES[method]
@@ -304,10 +304,13 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
               help="Plant family (.npz from `empact plants`; default: the design family "
                    "on the parameter set).")
 @loop_option
-@click.option("--min-disk-margin", "min_dm", type=float, default=0.0, show_default=True,
-              help="With --strict: the smallest multiloop disk margin allowed.")
+@click.option("--min-disk-margin", "min_dm", type=float, default=None,
+              help="With --strict: the smallest multiloop disk margin allowed (default: the "
+                   "controller's own design margin, its design record's alpha_min, else its "
+                   "worst disk_margin; none recorded: stability alone).")
 @click.option("--strict", is_flag=True, help="Exit 1 when a plant is unstable or a disk "
-              "margin is below --min-disk-margin (without it: report and exit 0).")
+              "margin is below --min-disk-margin or, without it, the controller's design "
+              "margin (without --strict: report and exit 0).")
 @click.option("--mu", is_flag=True, help="Also the structured singular value bound "
               "(slycot ab13md, continuous loop) over a parametric spread covering the family.")
 @traction_option
@@ -325,11 +328,14 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
     from ..control.loop import family_loops
     from ..control.robustness import disk_gain_phase, mu_upper_bound
 
-    check_number("--min-disk-margin", min_dm, 0.0, 1.99)
+    if min_dm is not None:
+        check_number("--min-disk-margin", min_dm, 0.0, 1.99)
     if family_file and traction_table is not None:
         raise InputError("--traction: give it with the design family, not with --family (a "
                          "family file records its own model options)")
     ctrl = load_controller(controller)
+    gate, gate_source = ((min_dm, "--min-disk-margin") if min_dm is not None
+                         else design_margin(ctrl.design))
     params = get_params(params_file)
     loop = _loop_from(loop_scenario, params)
     tables = {} if traction_table is None else {"traction": traction_table}
@@ -354,7 +360,7 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
                       "spectral_radius": float(rho.max()),
                       "all_stable": bool(np.all(rho < 1)),
                       "stable": int((rho < 1).sum()), "points": int(rho.size)},
-            "spectral_radius": rho, "disk_margin": dm["alpha"],
+            "spectral_radius": rho, "poles_z": lm.poles(), "disk_margin": dm["alpha"],
             "input_disk_margin": dm["input"], "output_disk_margin": dm["output"],
             "axes": {k: v for k, v in fam.axes.items()},
             "loop": {"rate_hz": loop.spec.rate, "feedforward": loop.spec.feedforward,
@@ -364,7 +370,8 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
                 {k: float(np.median(v)) for k, v in fam.operating.items()})
                 if ctrl.schedule is not None else ctrl, tuple(s // 2 for s in fam.shape))
             bar.update(1)
-    ok = data["worst"]["all_stable"] and worst >= min_dm
+    data["gate"] = {"min_disk_margin": gate, "source": gate_source}
+    ok = data["worst"]["all_stable"] and worst >= gate
     if as_json or json_out:
         emit_json({**data, "passed": ok}, "control.check", json_out)
     else:
@@ -378,7 +385,20 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
                        "real blocks; < 1 certifies the box)")
     if strict and not ok:
         raise Failed(f"check failed: {fam.size - data['worst']['stable']} unstable plants, "
-                     f"worst disk margin {worst:.3f} (--min-disk-margin {min_dm:g})")
+                     f"worst disk margin {worst:.3f} (required {gate:g}: {gate_source})")
+
+
+def design_margin(design: Mapping[str, Any]) -> tuple[float, str]:
+    """The disk margin a controller's design record promises, and where it comes from: its
+    ``alpha_min`` (the margin the design required of every plant), else its
+    ``worst.disk_margin`` (the margin it reports); ``(0, "none recorded")`` without either
+    (stability alone is judged)."""
+    if isinstance(design.get("alpha_min"), (int, float)):
+        return float(design["alpha_min"]), "the design's alpha_min"
+    worst = design.get("worst")
+    if isinstance(worst, dict) and isinstance(worst.get("disk_margin"), (int, float)):
+        return float(worst["disk_margin"]), "the design's worst disk_margin"
+    return 0.0, "no design margin recorded: stability alone"
 
 
 @control_group.command("simulate")
@@ -456,27 +476,74 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
 
 @control_group.command("discretize")
 @click.argument("controller", type=click.Path(dir_okay=False))
-@click.option("--rate", required=True, metavar="HZ", help="Sample rate [Hz].")
+@click.option("--rate", default=None, metavar="HZ", help="Sample rate [Hz] (with --at: the "
+              "loop's, which is the default there).")
 @click.option("--method", type=click.Choice(["tustin", "zoh", "foh", "bilinear"]),
               default="tustin", show_default=True, help="Discretisation (the formulas of "
-              "scipy.signal.cont2discrete).")
+              "scipy.signal.cont2discrete; with --at: tustin, as the loop law).")
+@click.option("--at", "at", default=None, metavar="NAME=VALUE,...",
+              help="Fold the schedule's gains at this operating point into B and D and add "
+                   "the loop that runs there (loop_plant: servo torques -> errors), e.g. "
+                   "r_g=1,tau=0.9,F_s=10000 (r_g and two of slip/tau, F_s, T_l; SI).")
+@loop_option
 @click.option("--out", "out", type=OutputFile(("json", "mat")), required=True,
               help="The discrete controller (.json or .mat; an existing file only with "
                    "--force).")
+@params_option
 @force_option
-def discretize_cmd(controller, rate, method, out, force) -> None:
+def discretize_cmd(controller, rate, method, at, loop_scenario, out, params_file,
+                   force) -> None:
     """Write CONTROLLER as a discrete-time state space at its sample rate (x[k+1] = A x[k] +
-    B e[k], du[k] = C x[k] + D e[k]; a schedule's gains act on e as before)."""
+    B e[k], du[k] = C x[k] + D e[k]; a schedule's gains act on e as before, or, with --at,
+    are folded in at that point, with the loop it closes there)."""
     from ..control.controller import load_controller
 
-    try:
-        rate = float(rate)
-    except ValueError:
-        raise InputError(f"--rate {rate!r}: a sample rate in Hz") from None
-    check_number("--rate", rate, 1.0, 1e5, unit="Hz")
+    if rate is not None:
+        try:
+            rate = float(rate)
+        except ValueError:
+            raise InputError(f"--rate {rate!r}: a sample rate in Hz") from None
+        check_number("--rate", rate, 1.0, 1e5, unit="Hz")
     ctrl = load_controller(controller)
     if ctrl.dt:
         raise InputError(f"{controller}: already discrete (dt = {ctrl.dt:g} s)")
-    cd = ctrl.discretize(1.0 / rate, method)
+    if at is None:
+        if rate is None:
+            raise InputError("--rate: give the sample rate in Hz (or --at, at the loop's)")
+        cd = ctrl.discretize(1.0 / rate, method)
+        cd.save(out)
+        click.echo(f"{ctrl.n}-state controller at {rate:g} Hz ({method}) written to {out}")
+        return
+    from ..control.loop import controller_at
+
+    point = parse_point(at)
+    params = get_params(params_file)
+    loop = _loop_from(loop_scenario, params)
+    if rate is not None and rate != loop.spec.rate:
+        raise InputError(f"--rate {rate:g}: with --at the controller runs at the loop's rate "
+                         f"({loop.spec.rate:g} Hz)")
+    if method != "tustin":
+        raise InputError(f"--method {method}: with --at the controller is discretised as the "
+                         "loop law does (tustin)")
+    cd = controller_at(ctrl, loop, params, point)
     cd.save(out)
-    click.echo(f"{ctrl.n}-state controller at {rate:g} Hz ({method}) written to {out}")
+    click.echo(f"{ctrl.n}-state controller at {loop.spec.rate:g} Hz (tustin) folded at "
+               f"{at} (gains {', '.join(f'{g:.6g}' for g in cd.design['schedule_gains'])}), "
+               f"with the loop there ({cd.design['loop_plant']['A'].shape[0]} states), "
+               f"written to {out}")
+
+
+def parse_point(text: str) -> dict[str, float]:
+    """``--at NAME=VALUE,...`` as a mapping (one error line naming what is wrong)."""
+    point: dict[str, float] = {}
+    for item in text.split(","):
+        name, eq, value = item.partition("=")
+        name = name.strip()
+        try:
+            point[name] = float(value)
+        except ValueError:
+            raise InputError(f"--at {text!r}: {item!r} is not NAME=VALUE with a number "
+                             "(e.g. r_g=1,tau=0.9,F_s=10000)") from None
+        if not eq or not name:
+            raise InputError(f"--at {text!r}: {item!r} is not NAME=VALUE")
+    return point

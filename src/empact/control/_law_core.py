@@ -108,6 +108,7 @@ class LawTables(NamedTuple):
     C: np.ndarray
     D: np.ndarray
     L: np.ndarray  #: the anti-windup gain (n_c, 2)
+    ff_table: np.ndarray  #: (3, n) the feedforward gain table (`ff_table`); n = 0: none
     p: np.ndarray  #: the model's parameter vector (`EmpactModel.p`)
 
 
@@ -408,7 +409,10 @@ def pre(law, s, out, raw, k, ideal):
         R_s = _radius(r_m, c.L_belt, c.a, wk.radius)
         if R_s != R_s:
             return 1, e0, e1, c.bias0, u1
-        ff = c.ff_gain * T_b * c.cosb / (c.ff_den * mu_ref * R_s)
+        if tb.ff_table.shape[1]:
+            ff = scheduled_ff(tb.ff_table, T_b * c.cosb / (c.ff_den * mu_ref * R_s))
+        else:
+            ff = c.ff_gain * T_b * c.cosb / (c.ff_den * mu_ref * R_s)
         f = a * f + (1 - a) * ff
         u1 += c.tpf * f
     else:
@@ -430,6 +434,39 @@ def pre(law, s, out, raw, k, ideal):
         g = 0.0
     out[nb + 1] = g
     return 0, e0, e1, u0, u1
+
+
+def ff_table(pairs) -> np.ndarray:
+    """The feedforward gain table as `scheduled_ff` reads it: rows the forces ``F_i`` [N],
+    the gains ``g_i`` [-] and ``H_i = int_0^F_i g dF`` [N] (``g_0`` held below ``F_0``, the
+    gain linear between the points); shape (3, 0) without a table (`pairs` None)."""
+    if pairs is None:
+        return np.zeros((3, 0))
+    F = np.array([p[0] for p in pairs], float)
+    g = np.array([p[1] for p in pairs], float)
+    H = np.empty_like(F)
+    H[0] = g[0] * F[0]
+    for i in range(1, len(F)):
+        H[i] = H[i - 1] + 0.5 * (g[i - 1] + g[i]) * (F[i] - F[i - 1])
+    return np.ascontiguousarray(np.stack([F, g, H]))
+
+
+@njit(cache=True)
+def scheduled_ff(tab, F):
+    """The feedforward's clamping force [N] of the full force `F` [N] (the clamping at gain
+    1) under the gain table `tab` (`ff_table`): ``int_0^F g(x) dx``, ``g`` linear between the
+    table's forces and held beyond them."""
+    n = tab.shape[1]
+    if F <= tab[0, 0]:
+        return tab[1, 0] * F
+    if F >= tab[0, n - 1]:
+        return tab[2, n - 1] + tab[1, n - 1] * (F - tab[0, n - 1])
+    i = 0
+    while tab[0, i + 1] < F:
+        i += 1
+    d = F - tab[0, i]
+    slope = (tab[1, i + 1] - tab[1, i]) / (tab[0, i + 1] - tab[0, i])
+    return tab[2, i] + tab[1, i] * d + 0.5 * slope * d * d
 
 
 @njit(cache=True)

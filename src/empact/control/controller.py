@@ -13,10 +13,24 @@ the operating point (``e -> g(sigma) e``, then the fixed state space), interpola
 grid of the ratio, the set-point's torque ratio and the clamping force.  Scaling the errors
 before the dynamics keeps the integrators' states continuous when the gains move (no bump).
 
-Files: JSON (schema ``empact.controller``) with A, B, C, D, the names, units, ``dt``, the
-schedule and the design data; ``.mat`` with the same fields (in MATLAB: ``k =
-load('c.mat'); K = ss(k.A, k.B, k.C, k.D, k.dt)``, ``dt = 0`` for continuous; the schedule
-as ``schedule_axes`` names, ``schedule_<axis>`` grids and ``schedule_gains``).
+Files: JSON (schema ``empact.controller``, version 2; version 1 files read the same) with A,
+B, C, D, the names, units, ``dt``, the schedule with its interpolation rule and the design
+data (with the whole loop specification, ``design["loop"]``:
+`empact.control.loop.loop_specification`); ``.mat`` with the same fields (the schedule as
+``schedule_axes`` names, ``schedule_<axis>`` grids, ``schedule_gains`` and
+``schedule_interpolation``; the design as ``design_json``).
+
+A scheduled controller's A, B, C, D are the unit-gain dynamics: closing them alone is not the
+loop that runs.  ``empact control discretize pi.json --at r_g=1,tau=0.9,F_s=10000 --out
+k.mat`` (`empact.control.loop.controller_at`) writes the controller folded at an operating
+point, discrete at the loop's rate, with the loop it closes there (``loop_plant_A``, ``_B``,
+``_C``: the sampled machine with the loop law's sensors and feedforwards, from the servo
+torques to the errors).  In MATLAB::
+
+    k = load('k.mat');
+    K = ss(k.A, k.B, k.C, k.D, k.dt);                          % errors -> servo torques
+    P = ss(k.loop_plant_A, k.loop_plant_B, k.loop_plant_C, 0, k.dt);  % servo torques -> errors
+    pole(feedback(K, P, +1))       % du = K e, e = P du: the poles `control check` computes
 """
 from __future__ import annotations
 
@@ -43,7 +57,21 @@ sio = lazy_module("scipy.io")
 
 __all__ = ["Controller", "Schedule", "load_controller", "SCHEDULE_VARIABLES"]
 
-SCHEMA = {"name": "empact.controller", "version": 1}
+SCHEMA = {"name": "empact.controller", "version": 2}
+#: the schema versions `load_controller` reads (1: no interpolation rule, no loop record)
+READABLE_VERSIONS = (1, 2)
+
+#: how a schedule is read (written with it: `Schedule.to_dict`)
+INTERPOLATION = {
+    "rule": "multilinear in ln|gain| over the axes, ln r_g, tau and ln F_s; held at the "
+            "grid's edges; each gain keeps its sign",
+    "log_axes": ["r_g", "F_s"],
+    "applies": "e -> gain * e on each error input, before A, B, C, D (no bump when the "
+               "gains move)",
+    "variables": {"r_g": "the measured ratio [-]",
+                  "tau": "the set-point's mu(nu*, r_g*) / mu_max(r_g*) [-]",
+                  "F_s": "the clamping feedforward's filtered force [N] (the start's "
+                         "clamping force without feedforward)"}}
 
 #: the signals a controller may measure (a slip or ratio, or its logarithm ``ln_...``)
 MEASURABLE = ("r_g", "nu", "nu_r", "ln_r_g", "ln_nu", "ln_nu_r")
@@ -145,7 +173,7 @@ class Schedule:
     def to_dict(self) -> dict[str, Any]:
         """Plain data (the file layout)."""
         return {"axes": {k: v.tolist() for k, v in self.axes.items()},
-                "gains": self.gains.tolist()}
+                "gains": self.gains.tolist(), "interpolation": INTERPOLATION}
 
 
 @dataclass(frozen=True, eq=False)
@@ -314,6 +342,11 @@ class Controller:
                 for name, grid in self.schedule.axes.items():
                     flat[f"schedule_{name}"] = grid
                 flat["schedule_gains"] = self.schedule.gains
+                flat["schedule_interpolation"] = json.dumps(INTERPOLATION)
+            plant = data["design"].get("loop_plant")
+            if isinstance(plant, Mapping):  # the loop at a point (`controller_at`)
+                for key in ("A", "B", "C"):
+                    flat[f"loop_plant_{key}"] = np.asarray(plant[key], float)
             flat["design_json"] = json.dumps(jsonable(data["design"]))
             with atomic_file(path) as tmp:
                 sio.savemat(tmp, flat)
@@ -429,10 +462,13 @@ def load_controller(path: str | os.PathLike[str]) -> Controller:
     version = doc["schema"].get("version", 1)
     if isinstance(version, bool) or not isinstance(version, int) or version < 1:
         raise ParameterError(f"{p}: schema version {version!r}: must be a whole number >= 1")
-    newest = SCHEMA["version"]
-    if isinstance(newest, int) and version > newest:
+    newest = max(READABLE_VERSIONS)
+    if version > newest:
         raise ParameterError(f"{p}: controller schema version {version} is newer than this "
                              f"empact reads (up to {newest}); update empact")
+    if version not in READABLE_VERSIONS:
+        raise ParameterError(f"{p}: schema version {version}: this empact reads "
+                             f"{', '.join(map(str, READABLE_VERSIONS))}")
     measured = _names(doc, "measured", p, MEASURABLE)
     outputs = _names(doc, "outputs", p, ("T_mp", "T_ms"))
     _units(doc, "inputs_units", [OUTPUT_UNITS.get(m, "-") for m in measured], "measured", p)

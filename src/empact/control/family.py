@@ -66,7 +66,8 @@ from ..sweep import SweepOptions, plan_chunks, run_chunks
 interpolate = lazy_module("scipy.interpolate")
 
 __all__ = ["VARIABLES", "PlantFamily", "FamilyRoots", "plant_family", "save_family",
-           "load_family", "BENCH_OPTIONS", "DESIGN_GRID", "LOOP_FAMILY_OUTPUTS", "design_family"]
+           "load_family", "BENCH_OPTIONS", "DESIGN_GRID", "ISSUE21_GRID", "LOOP_FAMILY_OUTPUTS",
+           "design_family"]
 
 #: operating variables of a family: unit, and whether it is interpolated in its logarithm
 #: (when all its grid values are positive: the plant depends on the slip through the slope of
@@ -78,12 +79,18 @@ VARIABLES = {"r_g": ("-", True), "nu": ("-", True), "tau": ("-", True), "F_s": (
 MAX_POINTS = 1_000_000
 
 #: the default design family of the shipped controllers and of ``empact control design``:
-#: ratio (7, geometric 0.5-2) x torque ratio (0.8-0.95: set-points with a 5-20 % torque
-#: reserve on the traction curve) x clamping force (8-32 kN: the shipped scenarios' range,
-#: up to the secondary servo's limit) at ``params.operating``'s speed
-DESIGN_GRID: dict[str, Any] = {"r_g": np.geomspace(0.5, 2.0, 7),
+#: ratio (7, geometric 0.43-2.25: where the machine runs, LOW to OD) x torque ratio (0.8-0.95:
+#: set-points with a 5-20 % torque reserve on the traction curve) x clamping force (3-32 kN:
+#: light-load cruising up to the secondary servo's limit; issue 33: the loop must be stable
+#: wherever it runs) at ``params.operating``'s speed
+DESIGN_GRID: dict[str, Any] = {"r_g": np.geomspace(0.43, 2.25, 7),
                                "tau": np.array([0.8, 0.9, 0.95]),
-                               "F_s": np.array([8e3, 16e3, 32e3])}
+                               "F_s": np.array([3e3, 5e3, 8e3, 16e3, 32e3])}
+#: the design family of issue 21 (ratio 0.5-2, clamping 8-32 kN), the one the shipped
+#: H-infinity design (``data/control/hinf.json``) was made on (its record's ``family_axes``)
+ISSUE21_GRID: dict[str, Any] = {"r_g": np.geomspace(0.5, 2.0, 7),
+                                "tau": np.array([0.8, 0.9, 0.95]),
+                                "F_s": np.array([8e3, 16e3, 32e3])}
 
 #: the outputs a family needs for the loop model (`empact.control.loop.family_loops`): the
 #: plant's, what the loop law measures (`empact.control.law.RAW_SIGNALS`) and what the loop
@@ -461,7 +468,7 @@ def design_family(params: Params, **options) -> "PlantFamily":
     Returns
     -------
     PlantFamily
-        Shape (7, 3, 3) over ``r_g`` [-] x ``tau`` [-] x ``F_s`` [N] (an ``omega_p`` array
+        Shape (7, 3, 5) over ``r_g`` [-] x ``tau`` [-] x ``F_s`` [N] (an ``omega_p`` array
         adds its axis), inputs ``T_mp, T_ms`` [N m] and the load input, outputs
         `LOOP_FAMILY_OUTPUTS`.
     """

@@ -17,7 +17,10 @@ At each sample ``k`` (period ``dt = 1 / rate``) the law
    ``T_ms,ff = (i_e s / i_c) T_ds cos(beta) / (2 mu_hat R_s(r_g))`` with ``mu_hat =
    traction_error * mu(nu*, r_g*)`` (times ``feedforward_gain``: below 1 it leaves the belt
    part of its damping of the driveshaft mode, which a full feedforward of the driveshaft
-   torque cancels), through a first-order low-pass at
+   torque cancels; with ``feedforward_gain_table``, the integral of the table's gain over
+   the full force ``F_full = T_ds cos(beta) / (2 mu_hat R_s)``, so that a change of load
+   sees the table's gain at that load: lower at light load, where the full gain destabilises
+   the loop in overdrive), through a first-order low-pass at
    ``feedforward_filter_hz`` (below the clamping mode near 9.5 Hz); or, with ``clamping =
    "safety-factor"``, the open-loop clamping of a production CVT (the slip loop off):
    ``F_s = SF T_l cos(beta) / (2 mu_design R_s)``, ``mu_design`` the smallest traction peak
@@ -119,10 +122,13 @@ def _no_geometry(r_g: float) -> ParameterError:
 
 
 #: the loop of the shipped scenarios and designs (`ControllerSpec` keys): the clamping
-#: feedforward of the driveshaft torque at 0.9 of it, unfiltered but for noise, and the
-#: primary servo following it through a 5 Hz low-pass (see the module notes)
-SHIPPED_LOOP = {"feedforward": True, "feedforward_gain": 0.9, "feedforward_filter_hz": 100.0,
-                "decoupling": True, "decoupling_filter_hz": 5.0}
+#: feedforward of the driveshaft torque at 0.9 of it above 8 kN of full feedforward force,
+#: 0.5 below 4 kN (linear between; at light load in overdrive the feedforward at 0.9
+#: destabilises the loop, issue 33), unfiltered but for noise, and the primary servo
+#: following it through a 5 Hz low-pass (see the module notes)
+SHIPPED_LOOP = {"feedforward": True, "feedforward_gain": 0.9,
+                "feedforward_gain_table": ((0.0, 0.5), (4000.0, 0.5), (8000.0, 0.9)),
+                "feedforward_filter_hz": 100.0, "decoupling": True, "decoupling_filter_hz": 5.0}
 
 #: what the law reads from the machine, in this order (model outputs)
 RAW_SIGNALS = ("r_g", "omega_p", "omega_s", "T_ds", "omega_mp", "omega_ms", "T_l_act")
@@ -338,6 +344,7 @@ class LoopLaw:
         self._alpha_ff = float(np.exp(-2 * np.pi * spec.feedforward_filter_hz * dt))
         self._alpha_dec = float(np.exp(-2 * np.pi * spec.decoupling_filter_hz * dt))
         self._decoupling0 = float(self.refs.decoupling[0])
+        self._ff_table = core.ff_table(spec.feedforward_gain_table)
         self._L_aw = _antiwindup_gain(cd.A, cd.C) if spec.anti_windup else \
             np.zeros((cd.n, 2))
         self.raw0 = self.raw_at_rest(self.point)
@@ -397,7 +404,7 @@ class LoopLaw:
             mu_max=self.model.mu_max(refs.r_g) if sched is not None else np.zeros(self.n_k),
             R_p=geo[0], R_s=geo[1], phi=geo[2], kappa_geo=geo[3], noise=self._noise,
             schedule=sched._packed if sched is not None else np.zeros(2), A=c.A, B=c.B,
-            C=c.C, D=c.D, L=self._L_aw, p=self.model.p)
+            C=c.C, D=c.D, L=self._L_aw, ff_table=self._ff_table, p=self.model.p)
         self._wk = core.work(len(RAW_SIGNALS))
 
     def _law_at(self, ref: NDArray, k: int) -> Any:
@@ -416,7 +423,8 @@ class LoopLaw:
                     else np.zeros(1)),
             R_p=one[0], R_s=one[1], phi=one[2], kappa_geo=one[3],
             noise=self._tb.noise[kk:kk + 1], schedule=self._tb.schedule, A=self._tb.A,
-            B=self._tb.B, C=self._tb.C, D=self._tb.D, L=self._tb.L, p=self._tb.p), self._wk)
+            B=self._tb.B, C=self._tb.C, D=self._tb.D, L=self._tb.L,
+            ff_table=self._tb.ff_table, p=self._tb.p), self._wk)
 
     # -- set-up ----------------------------------------------------------------------------
     def _references(self, references: Mapping[str, NDArray]) -> _Refs:
@@ -522,6 +530,9 @@ class LoopLaw:
         """Clamping force [N] that holds the traction coefficient ``traction_error * mu_ref``
         at driveshaft torque `T_ds` and ratio `r_g`."""
         spec = self.config.spec
+        if spec.feedforward_gain_table is not None:
+            return float(core.scheduled_ff(self._ff_table, T_ds * self._cosb / (
+                2 * spec.traction_error * mu_ref * self._R_s(r_g))))
         return spec.feedforward_gain * T_ds * self._cosb / (2 * spec.traction_error * mu_ref
                                                             * self._R_s(r_g))
 
@@ -584,6 +595,26 @@ class LoopLaw:
         """Which controller outputs reach the servos (the safety-factor strategy's clamping
         replaces the controller's secondary servo torque)."""
         return np.array([1.0, 0.0 if self.config.spec.clamping == "safety-factor" else 1.0])
+
+    def at_rest(self) -> dict[str, Any]:
+        """What the law holds at its trimmed start: the point its schedule is read at
+        (``r_g`` the measured ratio [-], ``tau`` the set-point's ``mu / mu_max`` at the
+        reference ratio [-], ``F_s`` the clamping feedforward's force, or the start's
+        clamping force without feedforward [N]), the holding torques ``u0`` [N m], the
+        feedforward's clamping force ``F_ff`` [N] and servo torque per newton ``tpf`` [N m/N],
+        and the decoupler's gain ``decoupling`` [-] (``T_mp* / T_ms*``).
+
+        Returns
+        -------
+        dict
+            ``schedule_point`` (dict name -> float), ``u0`` (list of 2 floats), ``F_ff``,
+            ``tpf``, ``decoupling`` (floats).
+        """
+        tau = float(self.refs.mu[0] / self.model.mu_max(self.refs.r_g[:1])[0])
+        F = self._F0 if self.config.spec.feedforward else self.point["F_s"]
+        return {"schedule_point": {"r_g": float(self.raw0[0]), "tau": tau, "F_s": float(F)},
+                "u0": [float(x) for x in self.u0], "F_ff": float(self._F0),
+                "tpf": float(self._tpf), "decoupling": float(self._decoupling0)}
 
     def update(self, z: NDArray, raw: NDArray, k: int, ref: NDArray | None = None,
                ideal: bool = False) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -19,7 +19,8 @@ builds it at every point of a plant family for a controller and a loop configura
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from typing import Any, Mapping
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,7 +35,7 @@ from ..nonlinear.simulation import scenario_model, scenario_signals
 from ..params import Params
 from .closed_loop import build_law
 from .controller import Controller
-from .family import LOOP_FAMILY_OUTPUTS, PlantFamily
+from .family import LOOP_FAMILY_OUTPUTS, PlantFamily, plant_family
 from .law import RAW_SIGNALS, LoopConfig, LoopLaw, reference_table
 from .robustness import disk_margin
 
@@ -44,7 +45,8 @@ _CHUNK_BYTES = 32e6
 
 __all__ = ["LoopModel", "loop_model", "predict_scenario", "family_loops", "LoopPrediction",
            "LoopShapes", "DiskMarginMap", "disk_margin_map", "PERFORMANCE",
-           "LOOP_FAMILY_OUTPUTS", "linear_preprocess", "zoh", "default_omega"]
+           "LOOP_FAMILY_OUTPUTS", "linear_preprocess", "zoh", "default_omega",
+           "loop_specification", "controller_at"]
 
 #: the machine's signals a loop model predicts (with the servo torques ``T_mp``, ``T_ms``)
 PERFORMANCE = ("r_g", "nu", "nu_r", "F_s", "T_ds", "tau")
@@ -704,3 +706,140 @@ def family_loops(family: PlantFamily, controller: Controller, config: LoopConfig
                      D[..., po, :][..., :, jj], pre)
     return LoopModel(**mats, controller=ctrl, mask=mask, dt=dt, disturbances=dist,
                      outputs=PERFORMANCE + LoopLaw.commands, y0=np.zeros(0))
+
+
+#: the clamping feedforward and the decoupler as the law computes them (`empact.control.law`,
+#: module notes), for the design record
+_FEEDFORWARD_FORMULA = (
+    "F_ff = feedforward_gain * T * cos(beta) / (2 * traction_error * mu(nu*, r_g*) * "
+    "R_s(r_g)), T the feedforward_signal (plus J_s omega_p dr*/dt with shift_feedforward), "
+    "R_s the secondary running radius at the measured ratio; through a first-order low-pass "
+    "at feedforward_filter_hz; T_ms += tpf * (F_ff - F_ff at the start), tpf = i_e s "
+    "sheave_sense / i_c")
+_DECOUPLER_FORMULA = (
+    "T_mp += LP(d * (T_ms,pre - T_ms at the start)), d = T_mp* / T_ms* (the holding torques "
+    "at the reference ratio), LP a first-order low-pass at decoupling_filter_hz; T_ms,pre the "
+    "secondary servo torque before the controller's share")
+_SCHEDULE_POINT = (
+    "r_g: the measured ratio; tau: mu(nu*, r_g*) / mu_max(r_g*); F_s: the clamping "
+    "feedforward's filtered force F_ff (the start's clamping force without feedforward)")
+
+
+def loop_specification(config: LoopConfig) -> dict[str, Any]:
+    """The whole specification of the loop a controller runs in, as plain data (a design
+    record's ``loop``): every ``[controller]`` key of the loop (`ControllerSpec` but the
+    file), the feedforward's and the decoupler's formulas, the sample delay and the counting
+    window, the sensors and the servo limits.
+
+    Parameters
+    ----------
+    config : LoopConfig
+        The loop (a scenario's, or `LoopConfig.of` the shipped one).
+
+    Returns
+    -------
+    dict
+        ``rate_hz`` [Hz], ``feedforward`` (bool), ``feedforward_filter_hz`` [Hz],
+        ``sensors`` (bool: the sensors are modelled), ``controller`` (the `ControllerSpec`
+        fields but ``file``), ``feedforward_formula``, ``decoupler_formula``,
+        ``schedule_point`` (str), ``discretization`` (``"tustin"``), ``delay_samples``,
+        ``speed_window_samples`` (ints), ``sensor_params`` and ``servo_limits`` (their
+        fields, SI, or None), ``holding_torques`` (how they are found).
+    """
+    spec = config.spec
+    dt = config.dt
+    s = config.sensors
+    return {"rate_hz": spec.rate, "feedforward": spec.feedforward,
+            "feedforward_filter_hz": spec.feedforward_filter_hz,
+            "sensors": s is not None,
+            "controller": {k: v for k, v in asdict(spec).items() if k != "file"},
+            "feedforward_formula": _FEEDFORWARD_FORMULA,
+            "decoupler_formula": _DECOUPLER_FORMULA,
+            "schedule_point": _SCHEDULE_POINT,
+            "discretization": "tustin",
+            "delay_samples": int(s.delay) if s is not None else 0,
+            "speed_window_samples": max(1, int(round(s.speed_window / dt)))
+            if s is not None else 1,
+            "sensor_params": None if s is None else asdict(s),
+            "servo_limits": None if config.limits is None else asdict(config.limits),
+            "holding_torques": "the trim's servo torques at the operating point (the "
+                               "controller's integrators start at them, less the "
+                               "feedforward's share)"}
+
+
+#: the operating variables `controller_at` accepts
+_POINT_KEYS = ("r_g", "nu", "tau", "F_s", "omega_p", "T_l")
+
+
+def controller_at(controller: Controller, config: LoopConfig, params: Params,
+                  point: Mapping[str, float], **options: Any) -> Controller:
+    """The controller folded at an operating point, discrete at the loop's rate, with the
+    loop that runs there: the schedule's gains at that point (where the law reads them,
+    `LoopLaw.at_rest`) folded into B and D, discretised as the law does (Tustin), and in its
+    ``design["loop_plant"]`` the augmented plant of the loop model at the point
+    (`family_loops`: the machine held and sampled, with the sensors and feedforwards closed
+    inside) from the servo-torque deviations ``du`` to the errors ``e``; closing ``du = K e``
+    around it (positive feedback: ``e = P du``) gives the closed-loop poles `family_loops`
+    computes there.
+
+    Parameters
+    ----------
+    controller : Controller
+        Continuous, scheduled or not.
+    config : LoopConfig
+        The loop it runs in.
+    params : Params
+        The parameter set.
+    point : mapping of str to float
+        Two of ``nu`` (or ``tau``), ``F_s``, ``T_l``, with ``r_g`` and optionally
+        ``omega_p`` (SI); what is not given comes from ``params.operating``.
+    **options
+        `empact.nonlinear.model.ModelOptions` fields of the plant (default the design
+        family's, `empact.control.family.BENCH_OPTIONS`).
+
+    Returns
+    -------
+    Controller
+        Discrete (``dt = 1 / rate``), without a schedule; its ``design`` adds ``point``
+        (the operating point, SI), ``loop`` (`loop_specification` of `config`),
+        ``at_rest`` (`LoopLaw.at_rest`), ``schedule_gains`` and ``loop_plant`` (``A``,
+        ``B``, ``C`` of ``P`` and its names).
+
+    Raises
+    ------
+    ParameterError
+        For an unknown operating variable or a point that does not trim.
+    """
+    bad = [k for k in point if k not in _POINT_KEYS]
+    if bad:
+        raise ParameterError(f"operating point: {', '.join(bad)} unknown; give r_g and two "
+                             f"of nu (or tau), F_s, T_l ({', '.join(_POINT_KEYS)})")
+    values: dict[str, Any] = {k: float(v) for k, v in point.items()}
+    fam = plant_family(params, outputs=LOOP_FAMILY_OUTPUTS, **options, **values)
+    if not fam.ok.all():
+        raise ParameterError(f"operating point {dict(point)}: does not trim "
+                             f"({fam.reason.ravel()[0]})")
+    model = nonlinear_model(params, **fam.options)
+    op = {k: float(np.ravel(fam.operating[k])[0]) for k in ("r_g", "nu", "omega_p", "T_l",
+                                                             "F_s")}
+    rest = LoopLaw(controller, model, op, np.zeros(2), config.ideal()).at_rest()
+    gains = (np.ones(len(controller.measured)) if controller.schedule is None
+             else controller.schedule(rest["schedule_point"]))
+    folded = Controller(controller.A, controller.B * gains, controller.C,
+                        controller.D * gains, controller.measured, controller.outputs,
+                        0.0, controller.method)
+    lm = family_loops(fam, folded, config, params, model)
+    Aa = lm.Aa.reshape(lm.Aa.shape[-2:])
+    Bu = (lm.Bu * lm.mask).reshape(lm.Bu.shape[-2:])
+    Ce = lm.Ce.reshape(lm.Ce.shape[-2:])
+    k = lm.controller
+    design = {**dict(controller.design),
+              "point": {kk: float(np.ravel(v)[0]) for kk, v in fam.operating.items()},
+              "loop": loop_specification(config), "discretized": "tustin", "at_rest": rest,
+              "schedule_gains": [float(g) for g in gains],
+              "loop_plant": {"A": Aa, "B": Bu, "C": Ce, "dt": lm.dt,
+                             "inputs": list(k.outputs), "outputs": list(k.inputs),
+                             "closing": "du = K e, e = P du (positive feedback of K and "
+                                        "P = ss(A, B, C, 0, dt)); the poles are the loop "
+                                        "model's (empact.control.loop.family_loops)"}}
+    return Controller(k.A, k.B, k.C, k.D, k.measured, k.outputs, k.dt, k.method, design)

@@ -24,7 +24,7 @@ from ..params import Params
 from .controller import SCHEDULE_VARIABLES, Controller, Schedule
 from .family import PlantFamily
 from .law import LoopConfig
-from .loop import family_loops
+from .loop import family_loops, loop_specification
 from .robustness import (
     OMEGA,
     disk_gain_phase,
@@ -88,7 +88,7 @@ def pi_controller(kp, wi, wf, measured=("r_g", "nu"), outputs=("T_mp", "T_ms"),
                       design or {})
 
 
-def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float = 0.3,
+def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float = 0.5,
               slip: str = "nu", nominal: tuple[int, ...] | None = None,
               loop: LoopConfig | None = None, params: Params | None = None,
               schedule: bool | None = None) -> Controller:
@@ -101,9 +101,9 @@ def design_pi(family: PlantFamily, bandwidth_hz=(0.5, 1.0), *, alpha_min: float 
     bandwidth_hz : (ratio, slip)
         Requested crossovers of the ratio and slip loops [Hz] on the nominal plant.
     alpha_min : float
-        Smallest multiloop disk margin allowed at any grid point (the default 0.3, the
-        shipped design's: simultaneous gain 0.74-1.35, i.e. +-2.6 dB, and +-17 deg in both
-        loops; 0.5: +-4.4 dB and +-28 deg).
+        Smallest multiloop disk margin allowed at any grid point (the default 0.5, the
+        shipped design's since issue 33: +-4.4 dB and +-28 deg in both loops at once; 0.3,
+        issue 21's: +-2.6 dB and +-17 deg).
     slip : {"nu", "nu_r", "ln_nu", "ln_nu_r"}
         The measured slip signal, or its logarithm: the slip's response to the clamping
         force varies by orders of magnitude between micro-slip and the flat top of the
@@ -330,8 +330,6 @@ def _design_pi_loop(family, bandwidth_hz, alpha_min, slip, nominal, loop, params
               "nominal": {k: float(v[nominal]) for k, v in family.operating.items()},
               "family_axes": {k: v.tolist() for k, v in family.axes.items()},
               "family_fixed": dict(family.fixed), "slip": slip, "scheduled": schedule,
-              "loop": {"rate_hz": loop.spec.rate, "feedforward": loop.spec.feedforward,
-                       "feedforward_filter_hz": loop.spec.feedforward_filter_hz,
-                       "sensors": loop.sensors is not None}}
+              "loop": loop_specification(loop)}
     return Controller(ctrl.A, ctrl.B, ctrl.C, ctrl.D, measured, outputs, 0.0, "pi", design,
                       ctrl.schedule)

@@ -6,6 +6,7 @@ only, validated on construction.  `empact.nonlinear.scenario` reads it from a sc
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from .._validate import check_bool, check_choice, check_number
@@ -38,7 +39,14 @@ class ControllerSpec:
         Clamping feedforward of a measured torque.
     feedforward_gain : float
         Share of the measured torque the feedforward clamps for (below 1 the belt keeps part
-        of its damping of the driveshaft mode, which a full feedforward cancels).
+        of its damping of the driveshaft mode, which a full feedforward cancels); with
+        `feedforward_gain_table`, its gain at its largest force.
+    feedforward_gain_table : tuple of (float, float), optional
+        The feedforward's incremental gain scheduled over the full feedforward force
+        ``F_full`` (the clamping at gain 1) [N]: pairs ``(F_full, gain)``, forces increasing
+        from 0, gains in [0, 1.5], linear between them and held beyond; the feedforward
+        clamps for ``int_0^F_full gain(F) dF`` (so that the gain of a change is the table's
+        at every load, issue 33).  None: ``feedforward_gain`` at every load.
     feedforward_signal : {"T_ds", "T_l_act"}
         The driveshaft torque a bench measures, or the load motor's torque (a vehicle's
         engine torque estimate plays its part at the input).
@@ -70,6 +78,7 @@ class ControllerSpec:
     rate: float = 1000.0
     feedforward: bool = False
     feedforward_gain: float = 0.9
+    feedforward_gain_table: tuple[tuple[float, float], ...] | None = None
     feedforward_signal: str = "T_ds"
     feedforward_filter_hz: float = 100.0
     traction_error: float = 1.0
@@ -97,6 +106,9 @@ class ControllerSpec:
             "controller.traction_error", self.traction_error, 0.5, 2.0))
         object.__setattr__(self, "feedforward_gain", check_number(
             "controller.feedforward_gain", self.feedforward_gain, 0.0, 1.5, lo_open=False))
+        if self.feedforward_gain_table is not None:
+            object.__setattr__(self, "feedforward_gain_table", _gain_table(
+                self.feedforward_gain_table, self.feedforward_gain))
         object.__setattr__(self, "safety_factor", check_number(
             "controller.safety_factor", self.safety_factor, 1.0, 3.0))
         check_choice("controller.clamping", self.clamping, CLAMPING)
@@ -109,3 +121,24 @@ class ControllerSpec:
         if seed != int(seed):
             raise ParameterError(f"controller.seed = {self.seed!r}: must be a whole number")
         object.__setattr__(self, "seed", int(seed))
+
+
+def _gain_table(table, gain: float) -> tuple[tuple[float, float], ...]:
+    """``controller.feedforward_gain_table`` checked: at least two ``[F_full, gain]`` pairs,
+    forces from 0 increasing, gains in [0, 1.5], the last gain `gain` (``feedforward_gain``)."""
+    name = "controller.feedforward_gain_table"
+    try:
+        rows = tuple((float(f), float(g)) for f, g in table)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} = {table!r}: must be pairs [F_full (N), gain]") from None
+    forces = [f for f, _ in rows]
+    if len(rows) < 2 or forces[0] < 0 or any(b <= a for a, b in zip(forces, forces[1:])) \
+            or not all(map(math.isfinite, forces)):
+        raise ParameterError(f"{name} = {table!r}: at least two pairs, forces from 0 [N] "
+                             "finite and increasing")
+    for _, g in rows:
+        check_number(name, g, 0.0, 1.5, lo_open=False, note="each pair's gain")
+    if rows[-1][1] != gain:
+        raise ParameterError(f"controller.feedforward_gain = {gain!r}: with {name} it is the "
+                             f"table's gain at its largest force ({rows[-1][1]!r})")
+    return rows

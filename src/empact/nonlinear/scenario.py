@@ -36,6 +36,8 @@ and, optionally, a controller and its references::
     feedforward = true        # clamping feedforward of a measured torque:
     feedforward_signal = "T_ds"   # the driveshaft torque, or "T_l_act" (the load motor's)
     feedforward_gain = 0.9    # the share of it clamped for
+    feedforward_gain_table = [[0.0, 0.5], [4000.0, 0.5], [8000.0, 0.9]]  # optional: the
+                              # gain of a change over the full feedforward force [N, -]
     feedforward_filter_hz = 100.0 # its low-pass corner [Hz]
     traction_error = 1.0      # factor on the feedforward's traction coefficient
     clamping = "feedback"     # or "safety-factor" (open-loop clamping, the slip loop off)

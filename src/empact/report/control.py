@@ -83,7 +83,11 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
         "of [operating]; test bench: drive speed-, load torque-controlled). The loop that "
         f"runs is sampled at {spec.rate:g} Hz with the parameter set's sensors (one sample of "
         "delay, shaft speeds counted over 10 ms) and servo limits, the clamping feedforward "
-        f"of the driveshaft torque at {spec.feedforward_gain:g} of it, the primary servo "
+        f"of the driveshaft torque at {spec.feedforward_gain:g} of it"
+        + (" above " + f"{spec.feedforward_gain_table[-1][0] / 1e3:g} kN of full feedforward "
+           f"force ({spec.feedforward_gain_table[0][1]:g} at light load)"
+           if spec.feedforward_gain_table is not None else "")
+        + ", the primary servo "
         f"following the feedforward's clamping through a {spec.decoupling_filter_hz:g} Hz "
         "low-pass (the decoupler) and, on shifts, the feedforward of the reference's ratio "
         "rate; its linear model (empact.control.loop: the same law linearised, the machine "
@@ -103,6 +107,12 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
                      "control_robustness",
                      "The multiloop disk margin (the smaller of servo torques and errors) "
                      "at every plant of the family; 0 where unstable")
+        + ctx.figure(plot_robustness_maps(res.margin_maps, title="Stability and disk margin "
+                                          "over clamping force x ratio"),
+                     "control_margin_map",
+                     "The same margins over clamping force x ratio, one panel per torque "
+                     "ratio: where the shipped controllers are stable (0: unstable) and with "
+                     "what margin, down to light-load overdrive cruising")
         + ctx.table("control_designs", ["controller", "states", "scheduled", "stable",
                                         "worst disk margin [-]", "at the servos [-]",
                                         "at the errors [-]"], design_rows,

@@ -25,7 +25,14 @@ from ..control.closed_loop import (
 from ..control.controller import Controller, load_controller
 from ..control.family import DESIGN_GRID, PlantFamily, design_family
 from ..control.law import SHIPPED_LOOP, LoopConfig
-from ..control.loop import LoopModel, LoopPrediction, family_loops, predict_scenario
+from ..control.loop import (
+    DiskMarginMap,
+    LoopModel,
+    LoopPrediction,
+    disk_margin_map,
+    family_loops,
+    predict_scenario,
+)
 from ..control.shifting import ShiftEnvelope, shift_envelope
 from ..efficiency import run_energy
 from ..montecarlo.spread import load_spread
@@ -38,12 +45,14 @@ from .claims import Claim
 __all__ = ["DESIGN_GRID", "SHIPPED_DESIGNS", "ControlSection", "StudiesSection", "control",
            "control_studies", "shipped_controller", "MC_RUNS", "MC_SCENARIO"]
 
-#: how the shipped controllers (``data/control/pi.json``, ``hinf.json``) are designed on the
-#: design family (`empact.control.family.design_family`): ``empact control design --method pi
-#: --schedule --bandwidth 0.5,1 --alpha-min 0.3`` on the shipped loop
-#: (`empact.control.law.SHIPPED_LOOP`), and ``--method hinf --bandwidth 0.1,0.05`` (on the
+#: how the shipped controllers (``data/control/pi.json``, ``hinf.json``) are designed:
+#: ``empact control design --method pi --schedule --bandwidth 0.5,1 --alpha-min 0.5 --out
+#: src/empact/data/control/pi.json --force`` on the design family
+#: (`empact.control.family.design_family`, the command's default grid) and the shipped loop
+#: (`empact.control.law.SHIPPED_LOOP`, with its feedforward gain table), and ``--method hinf
+#: --bandwidth 0.1,0.05`` on issue 21's family (`empact.control.family.ISSUE21_GRID`, on the
 #: continuous plant; checked here on the loop it would run in)
-SHIPPED_DESIGNS = {"pi": {"bandwidth_hz": (0.5, 1.0), "alpha_min": 0.3, "schedule": True},
+SHIPPED_DESIGNS = {"pi": {"bandwidth_hz": (0.5, 1.0), "alpha_min": 0.5, "schedule": True},
                    "hinf": {"bandwidth_hz": (0.1, 0.05)}}
 
 #: the Monte Carlo study of issue 21: runs of the shipped spread on this scenario
@@ -120,6 +129,22 @@ class ControlSection:
     predictions: dict[str, Prediction]
     envelope: ShiftEnvelope
     claims: tuple[Claim, ...]
+
+    @property
+    def margin_maps(self) -> dict[str, DiskMarginMap]:
+        """Each shipped controller's stability and multiloop disk margin over clamping force x
+        ratio on the loop that runs (0 where unstable; issue 33): rows ``r_g``, columns
+        ``F_s``, one panel per ``tau`` (the design family's loops, reordered)."""
+        out = {}
+        for name, lm in self.loops.items():
+            m = disk_margin_map(self.family, lm)
+            names = list(m.axes)
+            order = [names.index(n) for n in ("r_g", "F_s", "tau") if n in names]
+            order += [i for i in range(len(names)) if i not in order]
+            out[name] = DiskMarginMap({names[i]: m.axes[names[i]] for i in order},
+                                      *(np.transpose(a, order)
+                                        for a in (m.alpha, m.input, m.output)))
+        return out
 
 
 @dataclass(frozen=True, eq=False)
