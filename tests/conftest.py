@@ -119,10 +119,30 @@ class _Tour:
 _TOUR: list = []
 
 
+#: the end-to-end tiers' files: every test in them is marked ``e2e`` (``make test-fast`` leaves
+#: them out; ``make test`` and CI run them)
+E2E_FILES = {"test_readme.py", "test_report.py", "test_interrupt.py", "test_docs_site.py"}
+#: the fixtures of the end-to-end tests (the full report build, the README tour, a Dask
+#: cluster): a test that uses one is ``e2e`` wherever it is
+E2E_FIXTURES = {"full_report", "readme_tour", "cluster"}
+
+
+#: the test that runs last: every signature the session compiled is one `compile_all` loads
+LAST = "test_the_session_compiled_nothing_compile_all_does_not"
+
+
 def pytest_collection_modifyitems(session, config, items):
-    """The tests that read the full report run last (stable order otherwise): the rest of the
-    suite runs while the report builds in the background, instead of waiting for it."""
-    items.sort(key=lambda item: "full_report" in getattr(item, "fixturenames", ()))
+    """Mark the end-to-end tests ``e2e`` (by file, by fixture, or marked so in their file;
+    every other test, a new one included, is in the fast tier), then run the tests that read
+    the full report last (stable order otherwise: the rest of the suite runs while the
+    report builds in the background, instead of waiting for it) and `LAST` after them."""
+    for item in items:
+        if (item.path.name in E2E_FILES
+                or E2E_FIXTURES & set(getattr(item, "fixturenames", ()))):
+            item.add_marker(pytest.mark.e2e)
+    # the check that the session compiled nothing `compile_all` does not runs after the rest
+    items.sort(key=lambda item: (getattr(item, "originalname", "") == LAST,
+                                 "full_report" in getattr(item, "fixturenames", ())))
 
 
 def pytest_collection_finish(session):
