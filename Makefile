@@ -45,14 +45,14 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(BIN)/mypy
 
-# The whole suite (CI runs it): the fast tier and the end-to-end tests (marker e2e).
+# The whole suite (CI runs it): the fast tier and the slow tests (marker slow).
 test: $(STAMP) chromium lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
 # The fast tier while editing: every test but the end-to-end ones (the full report, the
-# README tour, a real Ctrl-C, Dask clusters; tests/conftest.py marks them e2e).
+# README tour, a real Ctrl-C, Dask clusters) and the slow ones (tests/conftest.py marks them slow).
 test-fast: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not docs_site and not e2e"
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not docs_site and not slow"
 
 # The Sphinx site with its gallery (examples/plot_*.py are run); warnings are errors.
 docs: $(STAMP)

@@ -87,7 +87,7 @@ def compile_all_signatures() -> set[tuple[str, str, str]]:
     return {tuple(s) for s in doc["signatures"]}
 
 
-@pytest.mark.e2e
+@pytest.mark.slow
 def test_the_commands_compile_nothing_after_compile_all(compile_all_signatures):
     """A rig (Rodas5P), every shipped scenario and closed loop, a family, a stability map
     and the three Monte Carlo analyses, after `compile_all` in the same process: no
