@@ -214,7 +214,7 @@ def loaded_signatures(roots: tuple[Path, ...] | None = None) -> set[tuple[str, s
         The module, the qualified name and the signature (numba's argument types) of each.
     """
     roots = tuple(Path(r).resolve() for r in (roots or (Path(__file__).resolve().parent,)))
-    out = set()
+    out: set[tuple[str, str, str]] = set()
     for obj in gc.get_objects():
         if issubclass(type(obj), CPUDispatcher) and obj.overloads:  # (not a weak proxy)
             src = Path(obj.py_func.__code__.co_filename).resolve()
