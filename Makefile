@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 OUT ?= report
 DOCS_OUT ?= docs/_build/html
 
-.PHONY: reproduce test lint typecheck docs docs-check bench clean chromium
+.PHONY: reproduce test test-fast lint typecheck docs docs-check bench clean chromium
 
 # The install must build without a warning (a deprecated pyproject key is next year's broken
 # build): the backend's output is kept and searched. The only lines let through are pip's
@@ -45,8 +45,14 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(BIN)/mypy
 
+# The whole suite (CI runs it): the fast tier and the slow tests (marker slow).
 test: $(STAMP) chromium lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+
+# The fast tier while editing: every test but the end-to-end ones (the full report, the
+# README tour, a real Ctrl-C, Dask clusters) and the slow ones (tests/conftest.py marks them slow).
+test-fast: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -m "not docs_site and not slow"
 
 # The Sphinx site with its gallery (examples/plot_*.py are run); warnings are errors.
 docs: $(STAMP)

@@ -119,10 +119,109 @@ class _Tour:
 _TOUR: list = []
 
 
+#: The fast tier (``make test-fast``, ``pytest -m "not slow"``) leaves out the tests marked
+#: ``slow`` here (``make test`` and CI run every test).  Slow are: every test of these files
+#: (the README tour, the full report, a real Ctrl-C, the built site) ...
+SLOW_FILES = {"test_readme.py", "test_report.py", "test_interrupt.py", "test_docs_site.py"}
+#: ... every test that uses one of these fixtures (the full report build, the README tour, a
+#: Dask cluster) ...
+SLOW_FIXTURES = {"full_report", "readme_tour", "cluster"}
+#: ... and these, by file (every parametrization): the CLI in subprocesses or many commands in
+#: process, import checks in fresh interpreters, frozen-law and closed-loop runs, H-infinity
+#: designs, figures laid out; each took >= 0.75 s in a run of the fast tier on the shared
+#: 2-core machine (about 0.3 s of CPU).  Any other test, a new one included, is fast: add a
+#: new test here (or mark it ``@pytest.mark.slow``) when it needs more than that.
+SLOW_TESTS = {
+    "test_cli.py": (
+        "test_bad_input_one_line_exit_2_nothing_written", "test_cli_plot",
+        "test_cli_rootlocus_zeros_frf_map", "test_cli_simulate_linearize_nmp",
+        "test_control_check_strict_gates_a_script",
+        "test_control_simulate_strict_exits_1_on_a_missed_target",
+        "test_estimate_matches_known_filter", "test_frf_json_and_plot",
+        "test_identify_draws_its_figure_only_when_asked",
+        "test_json_has_schema_and_units_for_every_quantity", "test_output_folder_never_clobbered",
+        "test_reproduce_draws_vector_figures_on_request",
+        "test_simulation_that_stops_early_writes_only_when_asked"),
+    "test_control.py": (
+        "test_disk_margin_agrees_with_python_control", "test_hinf_refuses_ill_posed_problems",
+        "test_lpv_interpolation_error", "test_regression_shipped_hinf_is_the_documented_design"),
+    "test_deprecations.py": ("test_each_deprecated_name_warns_with_its_replacement_and_removal",),
+    "test_docs.py": ("test_control_chapter_examples_run",
+                     "test_entry_point_examples_run_as_doctests"),
+    "test_experiments.py": ("test_identified_plant_matches_exact_linearisation",
+                            "test_rig_without_friction_matches_linear_model"),
+    "test_fuzz_options.py": ("test_hostile_option_values",
+                             "test_the_fuzzer_reaches_every_option_and_both_outcomes"),
+    "test_identification.py": (
+        "test_frf_input_noise_h1_biased_h2_unbiased", "test_frf_mimo_h1_recovers_both_columns",
+        "test_realize_noisy_steps_order_and_poles", "test_realize_recovers_order_poles_and_frf"),
+    "test_integrators.py": ("test_order_on_stiff_linear_problem",
+                            "test_sampled_controller_runs_with_every_method"),
+    "test_io.py": ("test_lazy_module_defers_the_import",),
+    "test_layout.py": (
+        "test_cli_start_up_imports_only_what_the_command_needs",
+        "test_control_commands_do_not_import_scipy_signal",
+        "test_figures_of_linear_analyses_and_records_load_no_model",
+        "test_linearize_and_nmp_do_not_import_python_control",
+        "test_no_function_level_imports_outside_the_cli", "test_no_import_circles",
+        "test_the_kernel_stays_inside_nonlinear"),
+    "test_linear.py": ("test_calibration_reproduces_shipped_defaults",),
+    "test_loop.py": (
+        "test_linear_prediction_matches_the_nonlinear_run_for_a_small_step",
+        "test_loop_model_is_stable_where_the_run_settles",
+        "test_plant_response_in_chunks_is_the_one_stack_solve",
+        "test_regression_golden_closed_loop", "test_regression_golden_linear_preprocess",
+        "test_regression_golden_monte_carlo", "test_saturated_step_recovers_without_windup",
+        "test_shift_keeps_its_clamping", "test_smallest_slip_reserve_is_the_per_sample_search",
+        "test_the_compiled_loop_is_the_python_loop", "test_the_compiled_sample_is_update"),
+    "test_nonlinear.py": ("test_energy_conserved_undamped_locked_belt",
+                          "test_power_balance_with_dissipation",
+                          "test_trim_and_trim_grid_agree_point_by_point"),
+    "test_plausibility.py": ("test_fuzzed_parameter_files",),
+    "test_plotting.py": (
+        "test_draws_into_given_axes_and_returns_artists",
+        "test_log_tick_labels_are_plain_text_of_the_tick_values",
+        "test_log_value_axes_over_four_decades_lose_minor_ticks",
+        "test_save_lays_out_once_and_keeps_the_layout", "test_symbols_and_save"),
+    "test_shift_law.py": ("test_creep_power_closes_the_balance",
+                          "test_load_step_with_held_servos_moves_ratio_as_kappa_predicts"),
+    "test_slip.py": ("test_sign_of_largest_real_part_follows_sign_of_the_traction_slope",),
+    "test_sweep.py": (
+        "test_core_never_imports_dask", "test_failed_runs_are_recorded_with_their_reason",
+        "test_montecarlo_cli_local_cluster_equals_serial", "test_montecarlo_closed_loop_cli",
+        "test_plant_analysis_slowest_mode_is_the_slowest_resonance",
+        "test_unreachable_scheduler_one_line_exit_2"),
+    "test_traction_table.py": (
+        "test_control_simulate_with_a_table_meets_its_targets",
+        "test_design_hinf_from_the_cli_uses_the_api_default",
+        "test_mu_max_of_random_many_peaked_tables",
+        "test_the_cli_takes_a_table_from_the_parameter_file"),
+    "test_units.py": ("test_control_simulate_gives_slips_as_fractions",
+                      "test_every_csv_header_has_units_in_one_style"),
+}
+
+#: the test that runs last: every signature the session compiled is one `compile_all` loads
+LAST = "test_the_session_compiled_nothing_compile_all_does_not"
+
+
 def pytest_collection_modifyitems(session, config, items):
-    """The tests that read the full report run last (stable order otherwise): the rest of the
-    suite runs while the report builds in the background, instead of waiting for it."""
-    items.sort(key=lambda item: "full_report" in getattr(item, "fixturenames", ()))
+    """Mark the slow tests ``slow`` (by file, by fixture, by name: `SLOW_TESTS`; or marked
+    so in their file; every other test, a new one included, is in the fast tier), then run
+    the tests that read the full report last (stable order otherwise: the rest of the suite
+    runs while the report builds in the background, instead of waiting for it) and `LAST`
+    after them."""
+    for item in items:
+        listed = SLOW_TESTS.get(item.path.name, ())
+        for name in listed:  # a renamed test must not drop silently into the fast tier
+            if item.module is not None and not hasattr(item.module, name):
+                raise pytest.UsageError(f"tests/conftest.py SLOW_TESTS names {name!r}, which "
+                                        f"{item.path.name} no longer defines")
+        if (item.path.name in SLOW_FILES or getattr(item, "originalname", "") in listed
+                or SLOW_FIXTURES & set(getattr(item, "fixturenames", ()))):
+            item.add_marker(pytest.mark.slow)
+    # the check that the session compiled nothing `compile_all` does not runs after the rest
+    items.sort(key=lambda item: (getattr(item, "originalname", "") == LAST,
+                                 "full_report" in getattr(item, "fixturenames", ())))
 
 
 def pytest_collection_finish(session):

@@ -1,20 +1,17 @@
 """The simulator's integrators (`empact.nonlinear._rodas`, `empact.nonlinear._rosenbrock`):
 orders, dense output, agreement with a tight reference, stops and status codes, the
 ``method`` choice."""
-import hashlib
-import types
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.linalg as sl
-from numba import njit
 
+from empact import _stiff_linear
+from empact._stiff_linear import A_LIN, B_LIN, T_END, U0, U1
 from empact.control.closed_loop import run_closed_loop
 from empact.errors import ParameterError
 from empact.nonlinear import _kernel as K
-from empact.nonlinear import _rodas
 from empact.nonlinear.equilibrium import trim
 from empact.nonlinear.model import nonlinear_model
 from empact.nonlinear.scenario import example_path, load_scenario, scenario_from_dict
@@ -22,108 +19,14 @@ from empact.nonlinear.simulation import METHODS, STATUS, scenario_model, scenari
 from empact.params import OperatingPoint
 
 NEW = ("rodas5p", "rodas4", "ros2")
-TABLEAU = {"rodas5p": (_rodas.R5P_A, _rodas.R5P_C, _rodas.R5P_c, _rodas.R5P_d, _rodas.R5P_H,
-                       _rodas.R5P_GAMMA, 5.0),
-           "rodas4": (_rodas.R4_A, _rodas.R4_C, _rodas.R4_c, _rodas.R4_d, _rodas.R4_H,
-                      _rodas.R4_GAMMA, 4.0),
-           "ros2": (_rodas.ROS2_A, _rodas.ROS2_C, _rodas.ROS2_c, _rodas.ROS2_d, _rodas.ROS2_H,
-                    _rodas.ROS2_GAMMA, 3.0)}
 
 
 # -- the stepper's own code on a stiff linear problem with a known solution ---------------------
-# x' = A x + B u(t), u = u0 + u1 t: a damped oscillator (eigenvalues -1 +- 9.95i) drives a stiff
-# follower (-1e4) that drives a very stiff one (-1e7, also fed by u); the solution is
-# expm of the augmented matrix.  `_rodas._run`'s Python code is compiled once more with this
-# problem's right-hand side, Jacobian, input direction and stop test in place of the kernel's.
-@njit
-def _lin_eval(x, u, p, ix, dx, y):
-    n = x.shape[0]
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += p[i * n + j] * x[j]
-        for k in range(u.shape[0]):
-            acc += p[n * n + i * u.shape[0] + k] * u[k]
-        dx[i] = acc
-    for i in range(y.shape[0]):
-        y[i] = x[i]
-
-
-@njit
-def _lin_jacobian(x, u, p, ix, J, cols):
-    n = x.shape[0]
-    for j in cols:
-        for i in range(n):
-            J[i, j] = p[i * n + j]
-
-
-@njit
-def _lin_direction(x, u, du, p, ix, out):
-    n = x.shape[0]
-    for i in range(n):
-        acc = 0.0
-        for k in range(u.shape[0]):
-            acc += p[n * n + i * u.shape[0] + k] * du[k]
-        out[i] = acc
-
-
-@njit
-def _lin_stop(y, p, omega_min):
-    for i in range(y.shape[0]):
-        if not np.isfinite(y[i]):
-            return 4
-    return 0
-
-
-W_N, ZETA, LAM1, LAM2 = 10.0, 0.1, -1e4, -1e7
-A_LIN = np.array([[0.0, 1.0, 0.0, 0.0], [-W_N ** 2, -2 * ZETA * W_N, 0.0, 0.0],
-                  [-LAM1, 0.0, LAM1, 0.0], [0.0, 0.0, -LAM2, LAM2]])
-B_LIN = np.array([[0.0], [1.0], [0.0], [-LAM2]])
-U0, U1, T_END = 1.0, 20.0, 1.0
-
-
+# (`empact._stiff_linear`: `_rodas._run`'s Python code compiled once more with the problem's
+# right-hand side, Jacobian, input direction and stop test; `compile_all` compiles it)
 @pytest.fixture(scope="module")
 def linear_stepper():
-    f = _rodas._run.py_func
-    g = dict(f.__globals__, _eval=_lin_eval, _state_jacobian=_lin_jacobian,
-             _input_direction=_lin_direction, stop_status=_lin_stop, NY=4)
-    # cached beside `_rodas`'s own (about 10 s to compile): under a name of its own that
-    # carries a hash of this problem's functions, so that an edited problem compiles anew;
-    # numba's index checks `_run`'s bytecode and `_rodas.py`'s stamp, and the session's
-    # `drop_stale_cache` drops it with the rest when a source of `empact.nonlinear` changes
-    problem = hashlib.sha256(b"".join(
-        fn.py_func.__code__.co_code + repr(fn.py_func.__code__.co_consts).encode()
-        for fn in (_lin_eval, _lin_jacobian, _lin_direction, _lin_stop))).hexdigest()[:16]
-    name = f"_run_linear_test_{problem}"
-    code = f.__code__.replace(co_name=name, co_qualname=name)
-    run = njit(cache=True)(types.FunctionType(code, g, name, f.__defaults__, f.__closure__))
-    # start on the slow manifold (the polynomial particular solution plus the oscillator's
-    # modes), so that the solution is smooth: no fast transient of the stiff components
-    b = -np.linalg.solve(A_LIN, B_LIN[:, 0] * U1)
-    a = np.linalg.solve(A_LIN, b - B_LIN[:, 0] * U0)
-    ev, V = np.linalg.eig(A_LIN)
-    slow = np.argsort(np.abs(ev))[:2]
-    x0 = a + np.real(V[:, slow] @ np.ones(2))
-    M = np.zeros((6, 6))
-    M[:4, :4], M[:4, 4:5], M[4, 5] = A_LIN, B_LIN, 1.0
-
-    def exact(t):
-        return (sl.expm(M * t) @ np.concatenate([x0, [U0, U1]]))[:4]
-
-    def solve(method, h, samples, t_end=T_END):
-        """Fixed steps h (tolerances 1e6, largest step h); returns (status tuple, x, X)."""
-        x = x0.copy()
-        X = np.full((len(samples), 4), np.nan)
-        Y = np.full((len(samples), 4), np.nan)
-        huge = np.full(4, 1e6)
-        out = run(*TABLEAU[method], x, 0.0, t_end, h, np.asarray(samples, float),
-                  np.concatenate([A_LIN.ravel(), B_LIN.ravel()]), np.full(4, -1, np.int64),
-                  np.array([[0.0, T_END]]), np.array([[U0, U0 + U1 * T_END]]),
-                  np.array([2], np.int64), np.array([T_END]), huge, huge, 1e-14, h, 0.0,
-                  10 ** 7, X, Y, np.arange(4, dtype=np.int64), np.zeros((4, 4)), True)
-        return out, x, X
-
-    return solve, exact
+    return _stiff_linear.stepper()
 
 
 def _order(errors):

@@ -181,13 +181,15 @@ def test_the_kernel_stays_inside_nonlinear():
     law's compiled sample (`empact.control._law_core`: the kernel's traction peak and creep
     law) and the compiled closed loop (`empact.control._loop_core`: the law's sample and the
     integrator in one loop; the model must not import the control layer), which nothing
-    but the loop law imports."""
+    but the loop law imports; and the compile step (`empact._compile`, which calls every
+    compiled entry point once, with the integrators' test problem `empact._stiff_linear`)."""
     graph = _graph()
     compiled = {"empact.nonlinear._kernel", "empact.nonlinear._tangent",
                 "empact.nonlinear._batch", "empact.nonlinear._rosenbrock",
                 "empact.nonlinear._rodas"}
     users = sorted(k for k, deps in graph.items()
                    if deps & compiled and not k.startswith("empact.nonlinear"))
-    assert users == ["empact.control._law_core", "empact.control._loop_core"]
+    assert users == ["empact._compile", "empact._stiff_linear", "empact.control._law_core",
+                     "empact.control._loop_core"]
     assert sorted(k for k, deps in graph.items() if "empact.control._loop_core" in deps) == \
         ["empact.control.law"]

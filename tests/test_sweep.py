@@ -56,9 +56,9 @@ def test_chunks_cover_the_items_in_order():
     assert chunk_count(400, 4e-5, 1) == 1
     # 200 runs of 0.5 s: one run per chunk (each already >= 50 ms)
     assert chunk_count(200, 0.5, 2) == 200
-    # the parallelism the chunks are planned for: 1 in process, else the workers
+    # the parallelism the chunks are planned for: the workers (in process by default)
     assert SweepOptions().parallelism == 1
-    assert SweepOptions("none", workers=4).parallelism == 1
+    assert SweepOptions("none", workers=4).parallelism == 4  # forked workers
     assert SweepOptions("local", workers=3).parallelism == 3
     # 20000 points of 40 us (0.8 s) on 3 workers: 16 chunks of 50 ms, in order; in process
     # the same arithmetic with one worker
@@ -143,6 +143,38 @@ def test_montecarlo_does_not_depend_on_workers_or_chunks(cluster, monkeypatch):
         np.testing.assert_array_equal(serial.values, other.values)
         np.testing.assert_array_equal(serial.ok, other.ok)
         assert serial.reasons == other.reasons
+
+
+def test_forked_workers_are_bitwise_the_serial_run(monkeypatch):
+    """Two forked workers on this machine (the CLI's default): the same table to the bit as
+    the serial run, failures (out-of-range samples) included with the same reasons, in run
+    order although the chunks complete in any order (one run per chunk: 40 chunks)."""
+    from empact.montecarlo import analyses
+
+    spread = spread_from_dict(FAILING, P)
+    serial = monte_carlo(P, spread, 40, "slip", seed=7)
+    monkeypatch.setitem(analyses.SECONDS_PER_RUN, "slip", 1.0)  # one run per chunk
+    forked = monte_carlo(P, spread, 40, "slip", seed=7, sweep=SweepOptions(workers=2))
+    assert 0 < serial.failures < 40
+    np.testing.assert_array_equal(serial.samples, forked.samples)
+    np.testing.assert_array_equal(serial.values, forked.values)
+    np.testing.assert_array_equal(serial.ok, forked.ok)
+    assert serial.reasons == forked.reasons
+
+
+def test_forked_workers_raise_a_chunks_error_and_run_the_first_chunk_here():
+    """A chunk that raises in a forked worker raises here; the first chunk runs in this
+    process (the workers inherit what it loaded), the others in the workers."""
+    pids = run_chunks(_pid_or_fail, [0, 1, 2, 3], SweepOptions(workers=2))
+    assert pids[0] == os.getpid() and os.getpid() not in pids[1:]
+    with pytest.raises(ValueError, match="chunk 3 fails"):
+        run_chunks(_pid_or_fail, [0, 1, 2, -3], SweepOptions(workers=2))
+
+
+def _pid_or_fail(k: int) -> int:
+    if k < 0:
+        raise ValueError(f"chunk {-k} fails")
+    return os.getpid()
 
 
 # -- Monte Carlo itself ----------------------------------------------------------------------

@@ -1,32 +1,46 @@
 """Compile the package's numba code once, ahead of the first command (private).
 
 `compile_all` calls every compiled entry point of `empact.nonlinear` with the argument types
-the package uses (real and complex right-hand sides, Jacobians, the integrator, the batch
-routines of trims and families) and the sampled loop law's core (`empact.control._law_core`),
-so that numba writes its cache (``cache=True``) beside the sources.  It sits above both
-subpackages (the model must not import the control layer).  ``make`` runs it right after
-installing; a later first command then loads the cache (about 1 s) instead of compiling
-(about 20 s).
+the package and its tests use (real and complex right-hand sides, Jacobians and their
+complex-step references, the three integrators, the batch routines of trims and families),
+the sampled loop law's core (`empact.control._law_core`) and the integrators' stiff linear
+test problem (`empact._stiff_linear`), so that numba writes its cache (``cache=True``) beside
+the sources.  It sits above both subpackages (the model must not import the control layer).
+``make`` runs it right after installing; a later first command or test run then loads the
+cache (about 1 s) instead of compiling (about 20 s for a command, more for the tests).
+`loaded_signatures` lists what a process holds compiled: ``tests/test_compile.py`` checks
+that a run of the commands and of the test suite loads nothing `compile_all` does not
+(``python -m empact._compile --json`` prints what it loads).
 """
 from __future__ import annotations
 
+import gc
+import json
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from numba.core.registry import CPUDispatcher
 
+from . import _stiff_linear
 from .control import _law_core
 from .control.closed_loop import build_law, control_example_path, run_closed_loop
+from .nonlinear import _batch as KB
+from .nonlinear import _kernel as K
+from .nonlinear import _tangent as KT
 from .nonlinear.equilibrium import trim
 from .nonlinear.linearization import linearize_many, plant
 from .nonlinear.model import nonlinear_model
 from .nonlinear.scenario import load_scenario
 from .nonlinear.simulation import simulate
 from .params import OperatingPoint, default_params
+from .variator import _traction_table as TT
 from .variator.geometry import secondary_radius
+from .variator.thrust_ratio import TabulatedThrustRatio
 from .variator.traction import TabulatedTraction
 
-__all__ = ["compile_all", "drop_stale_cache"]
+__all__ = ["compile_all", "drop_stale_cache", "loaded_signatures"]
 
 
 def drop_stale_cache(folder: Path | None = None) -> int:
@@ -88,6 +102,51 @@ def _drop_stale(cache: Path, pattern: str, sources: list[Path]) -> int:
     return len(stale)
 
 
+def _complex_step_references(model, x: np.ndarray, u: np.ndarray) -> None:
+    """The kernel's entry points the tests call directly (the complex-step references, the
+    forward-mode routines, the laws' piecewise helpers for real and complex arguments), at
+    the trimmed point (x, u) of `model`."""
+    n, p, ix = model.n, model.p, model.ix
+    dx, y = np.empty(n), np.empty(K.NY)
+    K._eval(x, u, p, ix, dx, y)
+    Sx, Su, Fd, Yd = (np.zeros((n, n + 4)), np.zeros((4, n + 4)), np.empty((n, n + 4)),
+                      np.empty((K.NY, n + 4)))
+    KT._eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd)
+    for jacobian in (KT._jacobian, K._jacobian_cs):
+        jacobian(x, u, p, ix, np.empty((n, n)), np.empty((n, 4)), np.empty((K.NY, n)),
+                 np.empty((K.NY, 4)))
+    for state_jacobian in (KT._state_jacobian, K._state_jacobian_cs):
+        state_jacobian(x, u, p, ix, np.zeros((n, n)), np.arange(n))
+    for direction in (KT._input_direction, K._input_direction_cs):
+        direction(x, u, np.zeros(4), p, ix, np.empty(n))
+    X, U = x[None], u[None]
+    for batch in (KB.linearize_batch, KB.linearize_batch_cs):
+        batch(X, U, p, ix, np.empty((1, n)), np.empty((1, n, n)), np.empty((1, n, 4)),
+              np.empty((1, K.NY, n)), np.empty((1, K.NY, 4)))
+    knots = np.array([-0.8, 0.1, 0.8, 2.0, 3.0, 1.5])
+    table = TabulatedThrustRatio((0.5, 2.0), (np.array([0.0, 1.0]), np.array([0.0, 1.0])),
+                                 (np.array([1.0, 1.1]), np.array([1.2, 1.3])),
+                                 source="compile").encode()
+    for v in (0.1, 0.1 + 1e-30j):
+        K.law.knots_at(v, knots, 0, 3, 3)
+        K.law.table_at(v, v, table, 0)
+    KT._full_seeds(n, 4)
+    # the traction and creep laws alone (the tests check them against the NumPy model)
+    K.traction_mu(0.01, 1.0, p)
+    K.traction_mu_d(0.01, 1.0, p)
+    K.mu_peak(1.0, 0.0, p)
+    K.creep_coefficient(1.0, 0.06, 1e4, p)
+    K.log_kappa_eq(0.5, 0.0, 1.0, p)
+    # the tabulated traction law's helpers, real and complex (against the complex step)
+    curves = TabulatedTraction.from_curves({0.5: ([0.0, 0.01, 0.02], [0.0, 0.05, 0.08]),
+                                            2.0: ([0.0, 0.01, 0.02], [0.0, 0.04, 0.07])},
+                                           source="compile").encode()
+    TT.table_mu(0.01 + 1e-30j, 1.0 + 0j, curves, 0)
+    TT.table_mu_d(0.01, 1.0, curves, 0)
+    TT.table_mu_max(1.0 + 1e-30j, curves, 0)
+    TT.table_peak(1.0, curves, 0)
+
+
 def compile_all() -> float:
     """Compile (or load from the cache) every compiled routine; returns the wall time [s]."""
     t0 = time.perf_counter()
@@ -99,8 +158,10 @@ def compile_all() -> float:
         op = (OperatingPoint(r_g=1.0, omega_p=300.0, F_s=1e4, T_l=10.0) if options.get("belt")
               else params.operating)
         tr = trim(model, op)
+        if not options:
+            base = (model, tr.x, tr.u)
         model.jacobian(tr.x, tr.u)
-        for method in ("rodas4", "ros2") if not options else ("rodas4",):
+        for method in ("rodas4", "rodas5p", "ros2") if not options else ("rodas4",):
             simulate(model, tr.x, {model.inputs[1]: np.array([[0.0, tr.u[1]],
                                                                 [0.002, tr.u[1]]])},
                      0.002, u0=tr.u, method=method)
@@ -108,6 +169,10 @@ def compile_all() -> float:
             linearize_many(model, tr.x[None], tr.u[None], np.array([tr.r_g]),
                            np.array([tr.nu]))
     plant(params)
+    _complex_step_references(*base)
+    # the integrators' stiff linear test problem on the driver's own code
+    solve, _ = _stiff_linear.stepper()
+    solve("rodas4", 0.5, [0.5])
     # the tabulated traction law's own entry point (`TabulatedTraction.peak`)
     TabulatedTraction.from_curves({1.0: ([0.0, 0.01, 0.02], [0.0, 0.05, 0.08])}).mu_max(1.0)
     # the compiled belt-length Newton solve a sampled law's Python path calls
@@ -130,5 +195,38 @@ def compile_all() -> float:
     return time.perf_counter() - t0
 
 
-if __name__ == "__main__":  # pragma: no cover - ``python -m empact._compile``
-    print(f"compiled the nonlinear model and the loop law in {compile_all():.1f} s")
+def loaded_signatures(roots: tuple[Path, ...] | None = None) -> set[tuple[str, str, str]]:
+    """What this process holds compiled: ``(module, function, signature)`` of every
+    signature of every numba dispatcher whose source lies under `roots`.
+
+    A signature is held once it was compiled or loaded from the cache; one that a process
+    holds after `compile_all` and that `compile_all` alone does not is compiled on a fresh
+    install's first use (a callee compiled into its caller is held by neither).
+
+    Parameters
+    ----------
+    roots : tuple of Path, optional
+        Folders whose dispatchers count (default: the package's).
+
+    Returns
+    -------
+    set of (str, str, str)
+        The module, the qualified name and the signature (numba's argument types) of each.
+    """
+    roots = tuple(Path(r).resolve() for r in (roots or (Path(__file__).resolve().parent,)))
+    out: set[tuple[str, str, str]] = set()
+    for obj in gc.get_objects():
+        if issubclass(type(obj), CPUDispatcher) and obj.overloads:  # (not a weak proxy)
+            src = Path(obj.py_func.__code__.co_filename).resolve()
+            if any(r in src.parents for r in roots):
+                out.update((obj.py_func.__module__, obj.py_func.__qualname__, str(sig))
+                           for sig in obj.overloads)
+    return out
+
+
+if __name__ == "__main__":  # pragma: no cover - ``python -m empact._compile [--json]``
+    seconds = compile_all()
+    if "--json" in sys.argv[1:]:  # what it loaded (``tests/test_compile.py``)
+        print(json.dumps({"seconds": seconds, "signatures": sorted(loaded_signatures())}))
+    else:
+        print(f"compiled the nonlinear model and the loop law in {seconds:.1f} s")

@@ -68,26 +68,33 @@ def sigint_held() -> Iterator[None]:
         raise KeyboardInterrupt
 
 
-def _call(task: tuple[Callable[..., Any], int, tuple[Any, ...]]) -> tuple[int, Any]:
-    fn, index, args = task
-    return index, fn(*args)
+#: the function and calls of the running `run_forked`, inherited by its forked workers: a
+#: task sends only its index (nothing is pickled on the way out, only results come back)
+_FORKED: list[tuple[Callable[..., Any], Sequence[tuple[Any, ...]]]] = []
+
+
+def _call(index: int) -> tuple[int, Any]:
+    fn, calls = _FORKED[-1]
+    return index, fn(*calls[index])
 
 
 def run_forked(fn: Callable[..., Any], calls: Sequence[tuple[Any, ...]], workers: int,
                done: Callable[[int, Any], None] | None = None) -> list[Any]:
     """``[fn(*args) for args in calls]`` in `workers` forked processes, started in the order
-    given; `done(index, result)` is called in this process as each completes.
+    given; `done(index, result)` is called in this process as each completes.  The workers
+    inherit `fn` and `calls` (forked after they are set): neither needs to be picklable, only
+    the results travel back.
 
     An exception in a call is raised here; an exception here (a Ctrl-C, one from `done`)
     terminates the workers at once.
     """
     results: list[Any] = [None] * len(calls)
     pool = None
+    _FORKED.append((fn, [tuple(args) for args in calls]))
     try:
         with sigint_held():
             pool = multiprocessing.get_context("fork").Pool(workers, initializer=_worker_init)
-        for index, result in pool.imap_unordered(
-                _call, [(fn, k, tuple(args)) for k, args in enumerate(calls)], chunksize=1):
+        for index, result in pool.imap_unordered(_call, range(len(calls)), chunksize=1):
             results[index] = result
             if done is not None:
                 done(index, result)
@@ -99,4 +106,5 @@ def run_forked(fn: Callable[..., Any], calls: Sequence[tuple[Any, ...]], workers
     finally:
         if pool is not None:
             pool.join()
+        _FORKED.pop()
     return results

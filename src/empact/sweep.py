@@ -1,10 +1,15 @@
-"""One sweep layer for embarrassingly parallel work: in process, or on Dask.
+"""One sweep layer for embarrassingly parallel work: in process, in forked workers, or on Dask.
 
 A sweep is a list of *chunks*, each a picklable argument of a module-level function; the
 results come back in chunk order.  Schedulers:
 
 ``"none"`` (default)
-    In process, one chunk after another: no Dask import, today's behaviour and speed.
+    This machine, no Dask: with ``workers`` of 1 (the default of `SweepOptions`), in process,
+    one chunk after another; with ``workers`` N > 1 (the CLI's default: one per core), N
+    forked worker processes (`empact._parallel.run_forked`).  The first chunk runs in this
+    process before the fork, so that the workers inherit what it loaded (imports, numba's
+    compiled code, lazy tables) and start computing at once: no start-up tax (a 200-run
+    closed-loop Monte Carlo on two workers: ``bench/bench_sweep.py``).
 ``"local"``
     A `distributed.LocalCluster` with ``workers`` single-threaded worker *processes*, started
     for the sweep and closed after it (about 3 s to start).
@@ -40,7 +45,7 @@ from typing import Any, Callable, Sequence
 
 from threadpoolctl import ThreadpoolController
 
-from ._parallel import sigint_held
+from ._parallel import run_forked, sigint_held
 from ._progress import progress as progress_bar
 from ._validate import check_int, check_number
 from .errors import ParameterError
@@ -61,7 +66,8 @@ class SweepOptions:
     ----------
     scheduler : "none", "local" or a scheduler address
     workers : int, optional
-        Worker processes of a local cluster (default: one per CPU core).
+        Worker processes: forked ones on this machine (``"none"``; default 1, in process), or
+        those of a local cluster (``"local"``; default one per CPU core).
     timeout : float
         Seconds to wait for a remote scheduler.
     retries : int
@@ -91,9 +97,10 @@ class SweepOptions:
 
     @property
     def parallelism(self) -> int:
-        """Chunks that run at once: 1 in process, else `workers` (default one per core)."""
+        """Chunks that run at once: `workers` (``"none"``: default 1, in process; a local
+        cluster: default one per core)."""
         if self.scheduler == "none":
-            return 1
+            return self.workers or 1
         return self.workers or os.cpu_count() or 1
 
 
@@ -249,11 +256,27 @@ def run_chunks(fn: Callable[[Any], Any], chunks: Sequence[Any],
     opts = options or SweepOptions()
     chunks = list(chunks)
     if opts.scheduler == "none":
-        out = []
-        for c in progress_bar(chunks, desc=desc, unit="chunk", enabled=opts.progress):
-            out.append(_one_thread(fn, c))
-        return out
+        return _run_here(fn, chunks, opts.parallelism, opts.progress, desc)
     return _run_dask(fn, chunks, opts, desc)
+
+
+def _run_here(fn: Callable[[Any], Any], chunks: list[Any], workers: int, progress: bool,
+              desc: str) -> list[Any]:
+    """The chunks on this machine: in process, or the first one here and the rest in
+    `workers` forked processes (they inherit what the first one loaded)."""
+    out: list[Any] = [None] * len(chunks)
+    with progress_bar(total=len(chunks), desc=desc, unit="chunk", enabled=progress) as bar:
+        for k, c in enumerate(chunks if workers <= 1 else chunks[:1]):
+            out[k] = _one_thread(fn, c)
+            bar.update(1)
+        if workers > 1 and len(chunks) > 1:
+            def done(index: int, result: Any) -> None:
+                out[index + 1] = result
+                bar.update(1)
+
+            run_forked(_one_thread, [(fn, c) for c in chunks[1:]],
+                       min(workers, len(chunks) - 1), done=done)
+    return out
 
 
 #: Dask settings of the clusters `run_chunks` starts itself (``"local"``): a batch sweep needs

@@ -600,13 +600,14 @@ def sweep_options(fn: Callable) -> Callable:
     fn = click.option("--scheduler-timeout", "scheduler_timeout", type=float, default=10.0,
                       show_default=True, help="Seconds to wait for a scheduler ADDRESS.")(fn)
     fn = click.option("--workers", type=int, default=None,
-                      help="Worker processes of --scheduler local (in process, 'slip map' "
-                           "uses this many threads); default: one per core.")(fn)
+                      help="Worker processes: forked on this machine (--scheduler none; 1 "
+                           "computes in this process; 'slip map' uses this many threads) "
+                           "or of --scheduler local; default: one per core.")(fn)
     fn = click.option("--scheduler", default="none", show_default=True,
                       metavar="none|local|ADDRESS",
-                      help="Where the sweep runs: in process, a local Dask cluster, or a "
-                           "running Dask scheduler (tcp://host:8786); Dask is the optional "
-                           "'dask' extra.")(fn)
+                      help="Where the sweep runs: this machine (--workers forked "
+                           "processes), a local Dask cluster, or a running Dask scheduler "
+                           "(tcp://host:8786); Dask is the optional 'dask' extra.")(fn)
     return fn
 
 
@@ -614,7 +615,8 @@ def sweep_from_options(scheduler: str, workers: int | None, timeout: float,
                        progress: bool | None = None):
     """The `empact.sweep.SweepOptions` of the sweep options (each checked under its name);
     a progress bar on stderr unless `progress` is false (off a terminal the bar writes lines
-    only once the sweep has run a second: `empact._progress`)."""
+    only once the sweep has run a second: `empact._progress`); on this machine
+    (``--scheduler none``) the workers default to one forked process per core."""
     from ..sweep import SweepOptions
 
     if workers is not None:
@@ -622,6 +624,8 @@ def sweep_from_options(scheduler: str, workers: int | None, timeout: float,
     check_number("--scheduler-timeout", timeout, 0.1, 3600.0, unit="s")
     if progress is None:
         progress = True
+    if workers is None and scheduler.strip() == "none":  # parallel by default: forked workers
+        workers = os.cpu_count() or 1
     return SweepOptions(scheduler=scheduler, workers=workers, timeout=timeout,
                         progress=progress)
 
