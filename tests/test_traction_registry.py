@@ -24,6 +24,7 @@ from empact.errors import ParameterError
 from empact.nonlinear import ModelOptions, nonlinear_model
 from empact.nonlinear import _kernel as K
 from empact.nonlinear.equilibrium import trim
+from empact.params import OperatingPoint
 from empact.variator import _compiled, _laws
 from empact.variator.traction import TRACTION_LAWS, traction_from_params
 
@@ -113,9 +114,9 @@ def test_options_and_the_cli_offer_every_law(params, name):
     assert bad.exit_code == 2 and "no-such-law" in bad.output
     res = runner.invoke(main, ["linearize", "--traction-law", name])
     assert res.exit_code == 0, res.output
-    options = json.loads(res.output)["metadata"]["model_options"] \
-        if "metadata" in json.loads(res.output) else json.loads(res.output)["model_options"]
-    assert options.get("traction_law", LAWS[0]) == name
+    text = res.stdout
+    assert ('"traction_law": "%s"' % name in text) == (name != LAWS[0])
+    assert json.loads(text)["schema"]["name"] == "empact.linearize"
 
 
 TOY = '''
@@ -149,7 +150,7 @@ from empact.cli import main
 from empact.nonlinear import ModelOptions, nonlinear_model
 from empact.nonlinear import _kernel as K
 from empact.nonlinear.equilibrium import trim
-from empact.params import default_params
+from empact.params import OperatingPoint, default_params
 from empact.variator._compiled import TRACTION_SOURCE
 from empact.variator.traction import traction_from_params
 from test_jacobian import _check, _pair
@@ -169,8 +170,8 @@ assert np.allclose(m.mu_max(r), tr.mu_max(r), rtol=1e-12, atol=0)
 # not the magic formula: the line lies above the curve it touches at nu = 0
 magic = nonlinear_model(params)
 assert np.all(np.abs(mu) > np.abs(magic.traction(nu, r)))
-op = trim(m, params.operating)
-assert abs(op.nu - params.operating.nu) < 1e-12 and op.r_g > 0
+op = trim(m, OperatingPoint(r_g=1.2, omega_p=300.0, nu=0.004, F_s=1.2e4))
+assert abs(op.nu - 0.004) < 1e-9 and abs(op.r_g - 1.2) < 1e-9
 x = op.x.copy()
 x[16] *= 0.999
 _check(*_pair(m, x, op.u), "micro-slip-line")
@@ -215,8 +216,9 @@ def test_a_law_from_elsewhere_needs_its_own_cache(monkeypatch):
 
 
 def test_trim_on_every_law(params):
-    """Every law trims at the shipped operating point to its slip (the law reaches the
+    """Every law trims at an operating point to its slip (the law reaches the
     equilibrium solver, not only the right-hand side)."""
+    point = OperatingPoint(r_g=1.2, omega_p=300.0, nu=0.004, F_s=1.2e4)
     for name in LAWS:
-        op = trim(nonlinear_model(params, traction_law=name), params.operating)
-        assert abs(op.nu - params.operating.nu) < 1e-9, name
+        op = trim(nonlinear_model(params, traction_law=name), point)
+        assert abs(op.nu - 0.004) < 1e-9 and abs(op.r_g - 1.2) < 1e-9, name

@@ -4,7 +4,9 @@ Private: the public interface, the state ordering and the sign conventions are d
 `empact.nonlinear`.  Everything here works on flat arrays:
 
 * ``x`` state, shape (n,); ``u`` inputs, shape (4,);
-* ``p`` float parameters, shape (NP + n_tables,), laid out by the ``P_*`` indices below and
+* ``p`` float parameters, shape (NP + n_tables,), laid out by the ``P_*`` indices below, then
+  the traction laws' part generated from their registry (`P_TRACTION`: the analytic law's
+  index, the knots' log-ratios, every law's coefficients; `empact.variator._laws`), and
   followed by the optional tabulated maps (a measured thrust-ratio map and a measured
   shift-speed map, `empact.variator._tables.encode_curves`; measured traction curves,
   `empact.variator._traction_table`), each found at the offset that ``p[P_TAB]`` /
@@ -128,8 +130,8 @@ def pack_parameters(values: Mapping[str, float], thrust_table: np.ndarray,
 
 def constants(p: np.ndarray) -> KernelConstants:
     """The kernel parameters of ``p`` by name (the traction laws' part as a dict)."""
-    return KernelConstants(*map(float, p[:P_TRACTION]), traction=dict(
-        zip(PARAMETER_NAMES[P_TRACTION:], map(float, p[P_TRACTION:NP]))))
+    return KernelConstants._make([*map(float, p[:P_TRACTION]), dict(
+        zip(PARAMETER_NAMES[P_TRACTION:], map(float, p[P_TRACTION:NP])))])
 
 
 def state_layout(locked_belt: bool, drive_speed: bool, load_speed: bool,

@@ -698,7 +698,7 @@ def traction_from_params(params: _HasTraction | TractionParams,
     ratios = tuple(getattr(section, f"r_{k}") for k in _laws.TRACTION_KNOTS)
     knots = tuple(tuple(getattr(section, f"{c}_{k}") for k in _laws.TRACTION_KNOTS)
                   for c in _laws.TRACTION_LAWS[law].coefficients)
-    return AnalyticTraction(law, ratios, knots)  # type: ignore[arg-type]
+    return AnalyticTraction(law, ratios, knots)
 
 
 # --------------------------------------------------------------------------------------------
