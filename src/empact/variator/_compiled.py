@@ -13,7 +13,9 @@ compiled callers are dropped by `empact._compile.drop_stale_cache` when ``_laws.
 The dispatch (`traction_law_mu`, `traction_law_mu_d`, `traction_law_peak`,
 `traction_law_peak_d`) is source generated here from the registry, one branch per law on the
 law's index ``p[k]`` (none with one law), each branch the law's coefficients interpolated at
-their knots (`empact.variator._laws.knots_at`) and the law's function; it is compiled with
+their knots (`empact.variator._laws.knots_at`) and the law's function (the value passes,
+`traction_law_mu` and `traction_law_peak`, without the slopes' divisions, as the kernel's
+value pass had them: a division's error path costs the kernel); it is compiled with
 ``inline="always"``: only ever inlined into the kernel's functions, whose numba cache holds
 it (the kernel's sources include ``_laws.py``, where laws are registered).
 """
@@ -92,9 +94,10 @@ def _source() -> str:
                 lines.append(f"{pad}c{j} = knots_at(lr, p, k + 1, k + {o}, 3)")
             value = ", ".join(f"c{j}[0]" for j in range(len(offsets)))
             slope = ", ".join(f"c{j}[1] / c{j}[2]" for j in range(len(offsets)))
+            zeros = ", ".join("0.0" for _ in offsets)  # the value alone: no division
             call = {"traction_law_mu": f"{law.mu.__name__}(nu, {value})",
                     "traction_law_mu_d": f"{law.mu_d.__name__}(nu, {value}, {slope})",
-                    "traction_law_peak": f"{law.peak_d.__name__}({value}, {slope})[0]",
+                    "traction_law_peak": f"{law.peak_d.__name__}({value}, {zeros})[0]",
                     "traction_law_peak_d": f"{law.peak_d.__name__}({value}, {slope})"}[fname]
             lines.append(f"{pad}return {call}")
         lines.append("")
