@@ -13,14 +13,16 @@ compiled callers are dropped by `empact._compile.drop_stale_cache` when ``_laws.
 The dispatch (`traction_law_mu`, `traction_law_mu_d`, `traction_law_peak`,
 `traction_law_peak_d`) is source generated here from the registry, one branch per law on the
 law's index ``p[k]`` (none with one law), each branch the law's coefficients interpolated at
-their knots (`empact.variator._laws.knots_at`) and the law's function (the value passes,
-`traction_law_mu` and `traction_law_peak`, without the slopes' divisions, as the kernel's
-value pass had them: a division's error path costs the kernel); it is compiled with
+their knots (`empact.variator._laws.knots_at`) and the law's function: only the
+coefficients the function reads, and the value passes (`traction_law_mu`,
+`traction_law_peak`) without the slopes' divisions, so that the kernel computes what the
+hand-written dispatch did and no more; it is compiled with
 ``inline="always"``: only ever inlined into the kernel's functions, whose numba cache holds
 it (the kernel's sources include ``_laws.py``, where laws are registered).
 """
 from __future__ import annotations
 
+import dis
 import linecache
 import types
 from typing import Any, Callable, Literal
@@ -74,9 +76,18 @@ def traction_layout() -> dict[str, tuple[int, tuple[int, ...]]]:
             for i, law in enumerate(_laws.TRACTION_LAWS.values())}
 
 
+def _used(f: Callable[..., Any], skip: int) -> list[bool]:
+    """Whether each coefficient argument of `f` (after the first `skip`) is read by its code:
+    the dispatch interpolates only those (the magic formula's peak reads D alone)."""
+    read = {ins.argval for ins in dis.get_instructions(f) if ins.opname.startswith("LOAD_FAST")}
+    return [name in read for name in f.__code__.co_varnames[skip:f.__code__.co_argcount]]
+
+
 def _source() -> str:
     """The dispatch's source: for each quantity, one branch per law on ``p[k]`` (the law's
-    index; the first law without a test, so that one law has no branch at all)."""
+    index; the first law without a test, so that one law has no branch at all); only the
+    coefficients the law's function reads are interpolated (a value or slope it does not read
+    is passed as 0.0)."""
     layout = traction_layout()
     laws = list(_laws.TRACTION_LAWS.values())
     heads = {"traction_law_mu": "(nu, lr, p, k)", "traction_law_mu_d": "(nu, lr, p, k)",
@@ -90,16 +101,22 @@ def _source() -> str:
             if i:
                 lines.append(f"    if p[k] == {float(i)!r}:")
             offsets = layout[law.name][1]
+            m = len(offsets)
+            f = {"traction_law_mu": law.mu, "traction_law_mu_d": law.mu_d,
+                 "traction_law_peak": law.peak_d, "traction_law_peak_d": law.peak_d}[fname]
+            used = _used(f, 1 if f in (law.mu, law.mu_d) else 0)
+            slopes = fname in ("traction_law_mu_d", "traction_law_peak_d")
+            need = [used[j] or (slopes and len(used) > m and used[m + j]) for j in range(m)]
             for j, o in enumerate(offsets):
-                lines.append(f"{pad}c{j} = knots_at(lr, p, k + 1, k + {o}, 3)")
-            value = ", ".join(f"c{j}[0]" for j in range(len(offsets)))
-            slope = ", ".join(f"c{j}[1] / c{j}[2]" for j in range(len(offsets)))
-            zeros = ", ".join("0.0" for _ in offsets)  # the value alone: no division
-            call = {"traction_law_mu": f"{law.mu.__name__}(nu, {value})",
-                    "traction_law_mu_d": f"{law.mu_d.__name__}(nu, {value}, {slope})",
-                    "traction_law_peak": f"{law.peak_d.__name__}({value}, {zeros})[0]",
-                    "traction_law_peak_d": f"{law.peak_d.__name__}({value}, {slope})"}[fname]
-            lines.append(f"{pad}return {call}")
+                if need[j]:
+                    lines.append(f"{pad}c{j} = knots_at(lr, p, k + 1, k + {o}, 3)")
+            value = ", ".join(f"c{j}[0]" if need[j] else "0.0" for j in range(m))
+            slope = ", ".join(f"c{j}[1] / c{j}[2]" if need[j] and slopes else "0.0"
+                              for j in range(m))
+            args = value if f in (law.mu,) else f"{value}, {slope}"
+            call = f"{f.__name__}(nu, {args})" if f in (law.mu, law.mu_d) \
+                else f"{f.__name__}({args})"
+            lines.append(f"{pad}return {call}" + ("[0]" if fname == "traction_law_peak" else ""))
         lines.append("")
     return "\n".join(lines)
 
