@@ -222,6 +222,7 @@ NOT_RESULTS = {
     "empact.variator.shift_law.CreepMap": "a law (tabulated creep)",
     "empact.variator.thrust_ratio.AnalyticThrustRatio": "a law",
     "empact.variator.thrust_ratio.TabulatedThrustRatio": "a law (table)",
+    "empact.variator.traction.AnalyticTraction": "a law",
     "empact.variator.traction.MagicFormulaTraction": "a law",
     "empact.variator.traction.TabulatedTraction": "a law (table)",
     "empact.variator.traction.TractionCurves": "a law's measured curves (input)",

@@ -8,6 +8,7 @@ import numpy as np
 
 from .._validate import check_number
 from ..variator.geometry import check_ratio
+from ..variator.traction import DEFAULT_TRACTION_LAW, TRACTION_LAWS
 from ._common import (
     PLOT_SUFFIXES,
     UNITS,
@@ -107,9 +108,11 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
 
 def _options(drive: str, load: str, damping: str, kinematics: str, shift_law: str,
              thrust_ratio: str | None, creep_map: str | None = None,
-             traction_table: Any = None) -> dict:
+             traction_table: Any = None, traction_law: str = DEFAULT_TRACTION_LAW) -> dict:
     opts: dict[str, Any] = {"drive": drive, "load": load, "damping": damping,
                             "kinematics": kinematics, "shift_law": shift_law}
+    if traction_law != DEFAULT_TRACTION_LAW:  # (the default: the JSON as before)
+        opts["traction_law"] = traction_law
     if traction_table is not None:
         opts["traction"] = traction_table
     if thrust_ratio:
@@ -159,6 +162,11 @@ def model_options_for(drive: str = "torque") -> list:
                      default=None, help="Measured shift-speed map K_c(r_g, F_s), .csv "
                      "(r_g,F_s,K_c) or .toml (default: the analytic creep law of [shift])."),
         traction_option,
+        click.option("--traction-law", "traction_law", type=click.Choice(list(TRACTION_LAWS)),
+                     default=DEFAULT_TRACTION_LAW, show_default=True,
+                     help="The analytic traction law of [traction] (the registry "
+                          "empact.variator._laws.TRACTION_LAWS), unless --traction gives "
+                          "measured curves."),
     ]
 
 
@@ -195,6 +203,7 @@ def _add(options):
 @force_option
 def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, as_json, damping, drive,
                   load, kinematics, shift_law, thrust_ratio, creep_map, traction_table,
+                  traction_law,
                   params_file, force) -> None:
     """Exact linear plant at an operating point: A, B, C, D.
 
@@ -221,7 +230,7 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, as_json, da
     point = operating_point(params, trim=True, traction=traction_table, ratio=r_g, slip=nu,
                             tau=tau, clamp=F_s, load_torque=T_l, speed=omega_p)
     opts = _options(drive, load, damping, kinematics, shift_law, thrust_ratio, creep_map,
-                    traction_table)
+                    traction_table, traction_law)
     model = nonlinear_model(params, **opts)
     op = trim(model, point)
     dist = disturbance_input(model)
@@ -296,8 +305,8 @@ def _plant_summary(sys_: Any, units: dict[str, list[str]], point: dict[str, Any]
 @json_options
 @force_option
 def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, damping, drive, load,
-            kinematics, shift_law, thrust_ratio, creep_map, traction_table, params_file, as_json,
-            json_out, force) -> None:
+            kinematics, shift_law, thrust_ratio, creep_map, traction_table, traction_law,
+            params_file, as_json, json_out, force) -> None:
     """Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio (Sec 2.3)."""
     from ..nonlinear.nmp import nmp_analysis
 
@@ -309,7 +318,7 @@ def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, dampin
     check_ratio(r, params.variator, "--ratios")
     res = nmp_analysis(params, r, base=base, f_max_hz=f_max, slip=slip_signal,
                        **_options(drive, load, damping, kinematics, shift_law, thrust_ratio,
-                                  creep_map, traction_table))
+                                  creep_map, traction_table, traction_law))
     if plot:
         from ..plotting import plot_nmp
 

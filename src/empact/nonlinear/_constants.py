@@ -1,7 +1,8 @@
 """The kernel's parameters by name, typed (private).
 
 `KernelConstants` is `empact.nonlinear._kernel.constants`' answer: one float per entry of
-`empact.nonlinear._kernel.PARAMETER_NAMES`, in its order (the kernel asserts that the fields
+`empact.nonlinear._kernel.PARAMETER_NAMES` up to the traction laws' part, in its order, and
+that part (generated from the laws' registry) as one dict (the kernel asserts that the fields
 equal the names, so a parameter added there must be added here).  Written out rather than
 generated so that a type checker knows the fields.
 """
@@ -14,7 +15,8 @@ __all__ = ["KernelConstants"]
 
 class KernelConstants(NamedTuple):
     """The kernel's parameters read back by name (`constants`): the fields of
-    `PARAMETER_NAMES`, in its order, each a float (SI; the table offsets as floats)."""
+    `PARAMETER_NAMES`, in its order, each a float (SI; the table offsets as floats), and the
+    traction laws' part as a dict."""
 
     a: float
     tan_beta: float
@@ -53,21 +55,6 @@ class KernelConstants(NamedTuple):
     k_tc: float
     k_ds: float
     k_belt_driveline: float
-    ln_r_low: float
-    ln_r_med: float
-    ln_r_od: float
-    B_low: float
-    B_med: float
-    B_od: float
-    C_low: float
-    C_med: float
-    C_od: float
-    D_low: float
-    D_med: float
-    D_od: float
-    E_low: float
-    E_med: float
-    E_od: float
     drive_kp: float
     drive_ki: float
     load_kp: float
@@ -94,3 +81,6 @@ class KernelConstants(NamedTuple):
     thrust_table: float
     creep_table: float
     traction_table: float
+    #: the traction laws' part by name (generated from their registry: the law's index
+    #: ``traction_law``, the knots' ``ln_r_*``, the coefficients ``<c>_low`` ...)
+    traction: dict[str, float]

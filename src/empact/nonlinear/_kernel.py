@@ -4,7 +4,9 @@ Private: the public interface, the state ordering and the sign conventions are d
 `empact.nonlinear`.  Everything here works on flat arrays:
 
 * ``x`` state, shape (n,); ``u`` inputs, shape (4,);
-* ``p`` float parameters, shape (NP + n_tables,), laid out by the ``P_*`` indices below and
+* ``p`` float parameters, shape (NP + n_tables,), laid out by the ``P_*`` indices below, then
+  the traction laws' part generated from their registry (`P_TRACTION`: the analytic law's
+  index, the knots' log-ratios, every law's coefficients; `empact.variator._laws`), and
   followed by the optional tabulated maps (a measured thrust-ratio map and a measured
   shift-speed map, `empact.variator._tables.encode_curves`; measured traction curves,
   `empact.variator._traction_table`), each found at the offset that ``p[P_TAB]`` /
@@ -39,6 +41,7 @@ import numpy as np
 from numba import njit
 
 from ..variator import _compiled as law
+from ..variator._laws import TRACTION_KNOTS, traction_parameter_names
 from ..variator._traction_table import table_mu, table_mu_d, table_mu_max, table_peak
 from ._constants import KernelConstants
 
@@ -49,14 +52,14 @@ from ._constants import KernelConstants
  P_ALPHA, P_CMP, P_CMS, P_CSP, P_CSS, P_CSH,
  P_TCSP, P_TCSS, P_WC,
  P_JD, P_JP, P_JS, P_JL, P_KTC, P_KDS, P_KBD,
- P_LLOW, P_LMED, P_LOD,
- P_B0, P_B1, P_B2, P_C0, P_C1, P_C2, P_D0, P_D1, P_D2, P_E0, P_E1, P_E2,
  P_DKP, P_DKI, P_LKP, P_LKI, P_RKP, P_RKD, P_RKI, P_SIG, P_RS0,
  P_LAW, P_DREF, P_FREF, P_KD, P_A1, P_A2, P_GAIN, P_W0, P_XSAT, P_GBETA,
- P_KP0, P_KB0, P_KB1, P_RREF, P_TAB, P_CTAB, P_MTAB) = range(78)
-NP = 78
+ P_KP0, P_KB0, P_KB1, P_RREF, P_TAB, P_CTAB, P_MTAB) = range(63)
 
-#: names of the parameter vector's entries, in the order of the ``P_*`` indices
+#: names of the parameter vector's entries, in the order of the ``P_*`` indices, then the
+#: traction laws' part generated from their registry (`empact.variator._laws`): the law's
+#: index ``traction_law`` (at `P_TRACTION`), the knots' log-ratios and every law's
+#: coefficients at the knots
 PARAMETER_NAMES = (
     "a", "tan_beta", "cos_beta", "R_min", "R_max", "L_belt",
     "J_mp", "J_ms", "J_sp", "J_ss", "m_p", "m_s", "i_w", "i_c", "i_e", "s",
@@ -64,18 +67,18 @@ PARAMETER_NAMES = (
     "alpha", "c_mp", "c_ms", "c_sp", "c_ss", "c_shafai",
     "coulomb_sp", "coulomb_ss", "coulomb_omega",
     "J_d", "J_p", "J_s", "J_l", "k_tc", "k_ds", "k_belt_driveline",
-    "ln_r_low", "ln_r_med", "ln_r_od",
-    "B_low", "B_med", "B_od", "C_low", "C_med", "C_od", "D_low", "D_med", "D_od",
-    "E_low", "E_med", "E_od",
     "drive_kp", "drive_ki", "load_kp", "load_ki", "ratio_kp", "ratio_kd", "ratio_ki",
     "sheave_sense", "R_s0",
     "shift_law", "D_ref", "F_ref", "k_D", "a1", "a2", "gain", "omega_0", "xi_sat", "g_beta",
     "kappa_p0", "kappa_b0", "kappa_b1", "r_ref", "thrust_table", "creep_table",
-    "traction_table")
-assert len(PARAMETER_NAMES) == NP
+    "traction_table") + traction_parameter_names()
+NP = len(PARAMETER_NAMES)
+#: the traction law's index in ``p``; its parameters follow (`traction_parameter_names`)
+P_TRACTION = PARAMETER_NAMES.index("traction_law")
+P_LLOW, P_LMED, P_LOD = (PARAMETER_NAMES.index(f"ln_r_{k}") for k in TRACTION_KNOTS)
 
 #: the kernel's parameters read back by name (`constants`; typed in `_constants`)
-assert KernelConstants._fields == PARAMETER_NAMES
+assert KernelConstants._fields == PARAMETER_NAMES[:P_TRACTION] + ("traction",)
 
 #: the base states (actuation 12, driveline 6; see `empact.nonlinear.model`) and the optional
 #: ones, each appended when its option is on (``ix`` holds their positions)
@@ -126,8 +129,9 @@ def pack_parameters(values: Mapping[str, float], thrust_table: np.ndarray,
 
 
 def constants(p: np.ndarray) -> KernelConstants:
-    """The kernel parameters of ``p`` by name."""
-    return KernelConstants(*map(float, p[:NP]))
+    """The kernel parameters of ``p`` by name (the traction laws' part as a dict)."""
+    return KernelConstants._make([*map(float, p[:P_TRACTION]), dict(
+        zip(PARAMETER_NAMES[P_TRACTION:], map(float, p[P_TRACTION:NP])))])
 
 
 def state_layout(locked_belt: bool, drive_speed: bool, load_speed: bool,
@@ -145,22 +149,13 @@ def state_layout(locked_belt: bool, drive_speed: bool, load_speed: bool,
 
 # -- the variator's laws on the parameter vector (the laws: `empact.variator._laws`) ----------
 @njit(cache=True, inline="always")
-def _coefficients(lr, p):
-    """The magic formula's ``B, C, D, E`` at log-ratio `lr` (linear in ln r_g between the
-    LOW, MED and OD knots, constant outside), each with its rise and run (slope d/d(lr) =
-    rise / run)."""
-    return (law.knots_at(lr, p, P_LLOW, P_B0, 3), law.knots_at(lr, p, P_LLOW, P_C0, 3),
-            law.knots_at(lr, p, P_LLOW, P_D0, 3), law.knots_at(lr, p, P_LLOW, P_E0, 3))
-
-
-@njit(cache=True, inline="always")
 def traction_mu(nu, r_g, p):
-    """Traction coefficient mu(nu, r_g) (scalar; real or complex): the magic formula, or the
-    measured curves at ``p[P_MTAB]`` (`empact.variator._traction_table`)."""
+    """Traction coefficient mu(nu, r_g) (scalar; real or complex): the analytic law
+    ``p[P_TRACTION]`` (`empact.variator._compiled.traction_law_mu`, generated from the
+    registry), or the measured curves at ``p[P_MTAB]`` (`empact.variator._traction_table`)."""
     if p[P_MTAB] != 0.0:
         return table_mu(nu, r_g, p, int(p[P_MTAB]))
-    B, C, D, E = _coefficients(np.log(r_g), p)
-    return law.magic_formula(nu, B[0], C[0], D[0], E[0])
+    return law.traction_law_mu(nu, np.log(r_g), p, P_TRACTION)
 
 
 @njit(cache=True, inline="always")
@@ -168,18 +163,17 @@ def traction_mu_d(nu, r_g, p):
     """``(mu, dmu/dnu, dmu/d ln r_g)``: `traction_mu` and its partials."""
     if p[P_MTAB] != 0.0:
         return table_mu_d(nu, r_g, p, int(p[P_MTAB]))
-    B, C, D, E = _coefficients(np.log(r_g), p)
-    return law.magic_formula_d(nu, B[0], C[0], D[0], E[0], B[1] / B[2], C[1] / C[2],
-                               D[1] / D[2], E[1] / E[2])
+    return law.traction_law_mu_d(nu, np.log(r_g), p, P_TRACTION)
 
 
 @njit(cache=True, inline="always")
 def mu_peak(r_g, lr, p):
-    """The traction curve's peak value at ratio `r_g` (log-ratio `lr`): the magic formula's D,
-    or the measured curves' exact peak (`empact.variator._traction_table.table_mu_max`)."""
+    """The traction curve's peak value at ratio `r_g` (log-ratio `lr`): the analytic law's
+    (the magic formula's D), or the measured curves' exact peak
+    (`empact.variator._traction_table.table_mu_max`)."""
     if p[P_MTAB] != 0.0:
         return table_mu_max(r_g, p, int(p[P_MTAB]))
-    return law.knots_at(lr, p, P_LLOW, P_D0, 3)[0]
+    return law.traction_law_peak(lr, p, P_TRACTION)
 
 
 @njit(cache=True, inline="always")
@@ -188,8 +182,7 @@ def mu_max_d(r_g, lr, p):
     if p[P_MTAB] != 0.0:
         _, mu_max, mm_lr = table_peak(r_g, p, int(p[P_MTAB]))
         return mu_max, mm_lr
-    D, rise, run = law.knots_at(lr, p, P_LLOW, P_D0, 3)
-    return D, rise / run
+    return law.traction_law_peak_d(lr, p, P_TRACTION)
 
 
 @njit(cache=True, inline="always")

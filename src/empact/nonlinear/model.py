@@ -115,9 +115,10 @@ from ..params import Params
 from ..variator import _laws
 from ..variator.shift_law import g_beta
 from ..variator.traction import (
-    MagicFormulaTraction,
+    AnalyticTraction,
     TabulatedTraction,
     traction_from_params,
+    traction_parameters,
 )
 from . import _batch as KB
 from . import _kernel as K
@@ -364,12 +365,13 @@ class EmpactModel:
         return out.reshape(nu.shape)
 
     @property
-    def traction_law(self) -> MagicFormulaTraction | TabulatedTraction:
+    def traction_law(self) -> AnalyticTraction | TabulatedTraction:
         """The traction law the kernel evaluates: the option ``traction`` (measured curves) or
-        the magic formula of ``params.traction``."""
+        the analytic law ``options.traction_law`` (default the magic formula) of
+        ``params.traction``."""
         if self.options.traction is not None:
             return self.options.traction
-        return traction_from_params(self.params)
+        return traction_from_params(self.params, self.options.traction_law)
 
     def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
         """Peak traction coefficient ``mu_max(r_g)`` of the kernel's curve [-] (the torque
@@ -521,10 +523,7 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
         c_ss=lvl.c_ss, c_shafai=lvl.c_shafai, coulomb_sp=o.coulomb_sp,
         coulomb_ss=o.coulomb_ss, coulomb_omega=o.coulomb_omega, J_d=d.J_d, J_p=d.J_p,
         J_s=d.J_s, J_l=d.J_l, k_tc=d.k_tc, k_ds=d.k_ds, k_belt_driveline=d.k_belt,
-        ln_r_low=np.log(t.r_low), ln_r_med=np.log(t.r_med), ln_r_od=np.log(t.r_od),
-        B_low=t.B_low, B_med=t.B_med, B_od=t.B_od, C_low=t.C_low, C_med=t.C_med,
-        C_od=t.C_od, D_low=t.D_low, D_med=t.D_med, D_od=t.D_od, E_low=t.E_low,
-        E_med=t.E_med, E_od=t.E_od, sheave_sense=sig,
+        **traction_parameters(t, o.traction_law), sheave_sense=sig,
         R_s0=(v.R_max if sig > 0 else v.R_min),
         shift_law={"shafai": K.LAW_SHAFAI, "carbone": K.LAW_CARBONE,
                    "ide": K.LAW_IDE}[o.shift_law],

@@ -15,7 +15,12 @@ from ..errors import ParameterError
 from ..params import DAMPING_LEVELS
 from ..variator.shift_law import SHIFT_LAWS, CreepMap, load_creep_map
 from ..variator.thrust_ratio import TabulatedThrustRatio, load_thrust_ratio
-from ..variator.traction import TabulatedTraction, load_traction
+from ..variator.traction import (
+    DEFAULT_TRACTION_LAW,
+    TRACTION_LAWS,
+    TabulatedTraction,
+    load_traction,
+)
 
 __all__ = ["KINEMATICS", "ModelOptions"]
 
@@ -76,7 +81,11 @@ class ModelOptions:
         Measured traction curves ``mu(nu, r_g)`` (`empact.variator.traction.load_traction`;
         a path is loaded): the kernel evaluates their interpolant (PCHIP in slip, linear in
         ``r_g``) and ``mu_max(r_g)`` is its peak (`TabulatedTraction.mu_max`); default the
-        analytic magic formula of ``[traction]``.
+        analytic law of ``[traction]`` (`traction_law`).
+    traction_law : str
+        The analytic traction law the kernel evaluates without measured curves, one of the
+        registered laws (`empact.variator.traction.TRACTION_LAWS`: ``"magic-formula"``,
+        the default, ...), its coefficients from ``[traction]``.
     reference_ratio : float, optional
         Ratio of the output ``nu_r = 1 - omega_s / (r_ref omega_p)`` (the slip of eq. 3 and
         Fig. 12, at a fixed operating ratio); default ``params.operating.r_g``.  The
@@ -101,6 +110,7 @@ class ModelOptions:
     reference_ratio: float | None = None
     creep_map: CreepMap | None = None
     traction: TabulatedTraction | None = None
+    traction_law: str = DEFAULT_TRACTION_LAW
     drive_bandwidth: InitVar[float | None] = None
     load_bandwidth: InitVar[float | None] = None
     ratio_bandwidth: InitVar[float | None] = None
@@ -117,6 +127,7 @@ class ModelOptions:
         check_choice("damping", self.damping, DAMPING_LEVELS)
         check_choice("kinematics", self.kinematics, KINEMATICS)
         check_choice("shift_law", self.shift_law, SHIFT_LAWS)
+        check_choice("traction_law", self.traction_law, TRACTION_LAWS)
         if self.thrust_ratio is not None and not isinstance(self.thrust_ratio,
                                                             TabulatedThrustRatio):
             raise ParameterError(f"thrust_ratio = {self.thrust_ratio!r}: must be a "

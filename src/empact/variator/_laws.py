@@ -16,16 +16,37 @@ compiled nonlinear kernel (`empact.nonlinear._kernel`) and the sampled loop law'
   holds the same rule with `lerp` on a vectorised search
   (`empact.variator._tables.interp_knots`), tested equal to the compiled law.
 
+The analytic traction laws are a registry (`TRACTION_LAWS`, `register_traction`): a law is
+its three functions here and one `register_traction` call; everything else is generated from
+the registry (the compiled twins and the kernel's dispatch, `empact.variator._compiled`; the
+law's part of the kernel's parameter vector, `traction_parameter_names`; the NumPy model,
+`empact.variator.traction.AnalyticTraction`; the choices of
+`empact.nonlinear.ModelOptions` ``traction_law`` and of the command line's
+``--traction-law``).  Its coefficients are the fields ``<c>_low``, ``<c>_med``, ``<c>_od`` of
+``[traction]`` (`empact.variator.traction.TractionParams`), interpolated linearly in
+``ln r_g`` between the section's three ratios (`knots_at`), as the magic formula's are.
+
 Equation numbers are the paper's (`empact.variator.geometry`).  SI units.
 """
 from __future__ import annotations
 
+import os
+from typing import Any, Callable, NamedTuple
+
 import numpy as np
 
-__all__ = ["wrap_angle", "belt_geometry", "belt_newton_step", "radius_at_zero_wrap",
-           "secondary_radius", "kappa_geo", "magic_angle", "magic_formula", "magic_formula_d",
-           "lerp", "knots_at", "table_at", "log_kappa_eq", "creep_factors", "creep_coefficient",
-           "creep_coefficient_d"]
+#: the laws, each compiled by `empact.variator._compiled` (with the helpers they call)
+LAWS = ("wrap_angle", "belt_geometry", "belt_newton_step", "radius_at_zero_wrap",
+        "secondary_radius", "kappa_geo", "magic_angle", "magic_formula", "magic_formula_d",
+        "magic_peak_d", "lerp", "knots_at", "_curve_at", "table_at", "log_kappa_eq",
+        "creep_factors", "creep_coefficient", "creep_coefficient_d")
+#: those compiled as calls rather than inlined into their callers (the loops and the tables'
+#: rare path: inlined, they would crowd the kernel's common path)
+NOT_INLINED = ("secondary_radius", "_curve_at", "table_at")
+
+__all__ = [name for name in LAWS if not name.startswith("_")] + [
+    "LAWS", "NOT_INLINED", "TractionLaw", "TRACTION_LAWS", "TRACTION_KNOTS",
+    "register_traction", "traction_parameter_names"]
 
 
 # -- eqs. 4 and 6: wrap angle, belt length, the running radii ---------------------------------
@@ -102,6 +123,12 @@ def magic_formula_d(nu, B, C, D, E, B_l, C_l, D_l, E_l):
     return D * sn, mu_nu, mu_l
 
 
+def magic_peak_d(B, C, D, E, B_l, C_l, D_l, E_l):
+    """``(mu_max, d mu_max / dl)``: the magic formula's peak, its coefficient ``D`` (reached
+    where ``C arctan(phi) = pi / 2``, for ``C >= 1``), and its slope."""
+    return D, D_l
+
+
 # -- interpolation of coefficients and tabulated maps -----------------------------------------
 def lerp(x, x0, x1, y0, y1):
     """``y0 + (x - x0) / (x1 - x0) (y1 - y0)``: the straight line through two samples."""
@@ -176,3 +203,118 @@ def creep_coefficient_d(r_g, R_p, F_s, lr, a, gain, G_beta, D_ref, k_D, F_ref, a
     return (creep_coefficient(r_g, R_p, F_s, lr, a, gain, G_beta, D_ref, k_D, F_ref, a1, a2),
             cg * D_ref * k_D * r_g * R_p * Q, cg * D * R_p * Q, cg * D * r_g * Q,
             cg * D * r_g * R_p * 2.0 * a2 * lr)
+
+
+# -- the registry of analytic traction laws ------------------------------------------------------
+#: the ratios at which a law's coefficients are given: the fields ``<c>_low``, ``<c>_med``,
+#: ``<c>_od`` of ``[traction]``, at its ``r_low``, ``r_med``, ``r_od``
+TRACTION_KNOTS = ("low", "med", "od")
+
+
+class TractionLaw(NamedTuple):
+    """An analytic traction law ``mu(nu, c_1(r_g), .., c_m(r_g))`` of the registry.
+
+    Every function is plain Python in the subset numba compiles, without branches
+    (arithmetic and numpy ufuncs), so that the same code runs compiled on scalars (real or
+    complex: the kernel's complex step) and on numpy arrays (the NumPy model).
+
+    Attributes
+    ----------
+    name : str
+        The law's name: the choice of ``ModelOptions(traction_law=...)`` and
+        ``--traction-law``.
+    coefficients : tuple of str
+        The coefficients' names ``c``; each is given at the knots (`TRACTION_KNOTS`) by the
+        ``[traction]`` fields ``<c>_low``, ``<c>_med``, ``<c>_od`` (a name two laws share is
+        one set of fields).
+    mu : callable
+        ``mu(nu, *c)`` [-]: the traction coefficient at slip `nu` [-].
+    mu_d : callable
+        ``mu_d(nu, *c, *c_l) -> (mu, dmu/dnu, dmu/dl)``: the value and its partials in the
+        slip and in a variable ``l`` the coefficients move with at slopes ``c_l`` (the
+        kernel's ``ln r_g``; zeros for the slope in nu alone).
+    peak_d : callable
+        ``peak_d(*c, *c_l) -> (mu_max, d mu_max / dl)``: the curve's peak [-] (the torque
+        ratio is ``tau = mu / mu_max``) and its slope.
+    """
+
+    name: str
+    coefficients: tuple[str, ...]
+    mu: Callable[..., Any]
+    mu_d: Callable[..., Any]
+    peak_d: Callable[..., Any]
+
+
+#: the analytic traction laws by name, in registration order (the kernel's law index)
+TRACTION_LAWS: dict[str, TractionLaw] = {}
+_FROZEN: list[str] = []  # set when the compiled dispatch is generated (`_compiled`)
+
+
+def register_traction(name: str, coefficients: tuple[str, ...], mu: Callable[..., Any],
+                      mu_d: Callable[..., Any], peak_d: Callable[..., Any]) -> TractionLaw:
+    """Add an analytic traction law to the registry (see `TractionLaw`).
+
+    Call it in this module, below the law's functions: the compiled kernel's dispatch is
+    generated from the registry when `empact.variator._compiled` is first imported, and numba
+    caches the kernel by its source files (a law registered elsewhere is refused once the
+    dispatch exists, and needs its own numba cache, ``NUMBA_CACHE_DIR``).
+
+    Parameters
+    ----------
+    name : str
+        The law's name (lower case, digits and ``-``), new.
+    coefficients : tuple of str
+        The coefficients' names (identifiers), as the law's functions take them.
+    mu, mu_d, peak_d : callable
+        The law's value, its partials and its peak (`TractionLaw`).
+
+    Returns
+    -------
+    TractionLaw
+        The registered law.
+    """
+    if _FROZEN:
+        raise RuntimeError(f"traction law {name!r}: registered after the compiled dispatch "
+                           f"was generated (by {_FROZEN[0]}); register it in "
+                           "empact.variator._laws")
+    if any(getattr(f, "__module__", __name__) != __name__ for f in (mu, mu_d, peak_d)) \
+            and not os.environ.get("NUMBA_CACHE_DIR"):
+        raise RuntimeError(f"traction law {name!r}: a law registered outside "
+                           "empact.variator._laws needs its own numba cache (set "
+                           "NUMBA_CACHE_DIR): the package's cache holds the kernel compiled "
+                           "with the laws of _laws.py")
+    if not (isinstance(name, str) and name and name.replace("-", "").isalnum()
+            and name == name.lower()):
+        raise ValueError(f"traction law name {name!r}: lower-case letters, digits and '-'")
+    if name in TRACTION_LAWS:
+        raise ValueError(f"traction law {name!r}: already registered")
+    coefficients = tuple(coefficients)
+    if not coefficients or not all(isinstance(c, str) and c.isidentifier()
+                                   for c in coefficients) \
+            or len(set(coefficients)) != len(coefficients):
+        raise ValueError(f"traction law {name!r}: coefficients {coefficients!r} must be "
+                         "distinct identifiers, at least one")
+    for f in (mu, mu_d, peak_d):
+        if not callable(f):
+            raise ValueError(f"traction law {name!r}: {f!r} is not a function")
+    law = TractionLaw(name, coefficients, mu, mu_d, peak_d)
+    TRACTION_LAWS[name] = law
+    return law
+
+
+def traction_parameter_names() -> tuple[str, ...]:
+    """The traction laws' part of the kernel's parameter vector, from the registry:
+    ``traction_law`` (the law's index in `TRACTION_LAWS`), ``ln_r_low``, ``ln_r_med``,
+    ``ln_r_od`` (the knots' log-ratios), then every coefficient at every knot
+    (``<c>_low``, ``<c>_med``, ``<c>_od``), each name once, in registration order."""
+    names = ["traction_law"] + [f"ln_r_{k}" for k in TRACTION_KNOTS]
+    for law in TRACTION_LAWS.values():
+        for c in law.coefficients:
+            for k in TRACTION_KNOTS:
+                if f"{c}_{k}" not in names:
+                    names.append(f"{c}_{k}")
+    return tuple(names)
+
+
+register_traction("magic-formula", ("B", "C", "D", "E"), magic_formula, magic_formula_d,
+                  magic_peak_d)

@@ -13,10 +13,17 @@ The belt torque (paper eq. 1) is ``T_b = 2 mu(nu, r_g) F_s R_s / cos(beta)``; it
     ``(nu_min, nu_max)``, the slips where the model is valid; both methods raise
     `~empact.params.ParameterError` naming the value and the range for a slip outside it.
 
-Two models are provided:
+The models provided:
+
+`AnalyticTraction`
+    Any analytic law of the registry (`empact.variator._laws.TRACTION_LAWS`; the law's own
+    plain-Python functions evaluated on arrays), its coefficients given at the LOW, MED and
+    OD ratios of ``[traction]`` and interpolated linearly in ``log(r_g)`` between them.
+    `traction_from_params` builds it for a law by name (default ``"magic-formula"``).
 
 `MagicFormulaTraction`
-    A Pacejka-type "magic formula", smooth and odd in ``nu``::
+    The registry's ``"magic-formula"``, by its four coefficients: a Pacejka-type "magic
+    formula", smooth and odd in ``nu``::
 
         phi(nu) = B nu - E (B nu - arctan(B nu))
         mu(nu)  = D sin(C arctan(phi))
@@ -65,9 +72,17 @@ interpolate = lazy_module("scipy.interpolate")
 #: the compiled law (numba: loaded when a peak is first asked for)
 _compiled = lazy_module("empact.variator._traction_table")
 
-__all__ = ["TractionParams", "TractionModel", "MagicFormulaTraction", "TabulatedTraction",
-           "TractionCurves", "traction_from_params", "load_traction", "traction_curves",
+__all__ = ["TractionParams", "TractionModel", "AnalyticTraction", "MagicFormulaTraction",
+           "TabulatedTraction", "TractionCurves", "traction_from_params", "traction_parameters",
+           "load_traction", "traction_curves", "TRACTION_LAWS", "DEFAULT_TRACTION_LAW",
            "MAGIC_NU_MAX"]
+
+#: the analytic traction laws by name (the registry, `empact.variator._laws.TRACTION_LAWS`),
+#: the first the default: the choices of ``ModelOptions(traction_law=...)`` and
+#: ``--traction-law``
+TRACTION_LAWS = _laws.TRACTION_LAWS
+#: the default analytic traction law (the first registered)
+DEFAULT_TRACTION_LAW = "magic-formula"
 
 
 @dataclass(frozen=True)
@@ -189,8 +204,133 @@ def _check_inputs(nu: ArrayLike, r_g: ArrayLike, nu_range: tuple[float, float],
 # Analytic model
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class MagicFormulaTraction:
-    """Magic-formula traction curve with coefficients interpolated over the ratio.
+class AnalyticTraction:
+    """A registered analytic traction law with coefficients interpolated over the ratio.
+
+    Parameters
+    ----------
+    law : str
+        The law's name, one of `TRACTION_LAWS` (`empact.variator._laws.TRACTION_LAWS`).
+    ratios : tuple of float, length 3
+        LOW, MED, OD ratios [-] where the coefficients hold (strictly increasing).
+    knots : tuple of tuples of float, shape (m, 3)
+        Each of the law's coefficients (its order) at those ratios.
+    nu_max : float
+        Valid slip range is ``[-nu_max, nu_max]`` [-].
+
+    Examples
+    --------
+    >>> from empact.params import default_params
+    >>> tr = traction_from_params(default_params(), "magic-formula")
+    >>> float(tr.mu(0.0, 1.0))
+    0.0
+    """
+
+    law: str
+    ratios: tuple[float, float, float]
+    knots: tuple[tuple[float, float, float], ...]
+    nu_max: float = MAGIC_NU_MAX
+
+    def __post_init__(self) -> None:
+        spec = _laws.TRACTION_LAWS.get(self.law)
+        if spec is None:
+            raise ParameterError(f"traction law {self.law!r}: choose from "
+                                 f"{', '.join(_laws.TRACTION_LAWS)}")
+        if len(self.knots) != len(spec.coefficients):
+            raise ParameterError(f"traction law {self.law!r}: need {len(spec.coefficients)} "
+                                 f"coefficients ({', '.join(spec.coefficients)}), got "
+                                 f"{len(self.knots)}")
+        for name, values in zip(("ratios",) + spec.coefficients, (self.ratios,) + self.knots):
+            value = tuple(float(x) for x in values)
+            if len(value) != 3 or not all(math.isfinite(x) for x in value):
+                raise ParameterError(f"{type(self).__name__}.{name} = {value!r}: need three "
+                                     "finite values (LOW, MED, OD)")
+        object.__setattr__(self, "ratios", tuple(float(x) for x in self.ratios))
+        object.__setattr__(self, "knots", tuple(tuple(float(x) for x in k) for k in self.knots))
+        if not 0 < self.ratios[0] < self.ratios[1] < self.ratios[2]:
+            raise ParameterError(f"{type(self).__name__}.ratios = {self.ratios!r}: must be "
+                                 "positive and strictly increasing")
+        if not (math.isfinite(self.nu_max) and 0 < self.nu_max < 1):
+            raise ParameterError(f"{type(self).__name__}.nu_max = {self.nu_max!r}: allowed "
+                                 "range is (0, 1)")
+
+    @property
+    def nu_range(self) -> tuple[float, float]:
+        """Valid slip range ``(-nu_max, nu_max)`` [-]."""
+        return (-self.nu_max, self.nu_max)
+
+    def coefficients(self, r_g: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+        """The law's coefficients at ratio(s) `r_g`, each shaped like `r_g` (its order: for
+        the magic formula ``(B, C, D, E)``).
+
+        Linear interpolation in ``log(r_g)`` between the LOW, MED and OD values, constant
+        outside (`empact.variator._tables.interp_knots`: the compiled kernel's numbers).
+
+        Parameters
+        ----------
+        r_g : array_like
+            Geometric ratio(s) [-].
+        """
+        r = np.asarray(r_g, float)
+        if np.any(~np.isfinite(r) | (r <= 0)):
+            bad = r[~np.isfinite(r) | (r <= 0)] if r.ndim else r
+            raise ParameterError(f"r_g = {float(np.ravel(bad)[0]):g}: must be a positive finite "
+                                 "ratio")
+        x, xp = np.log(r), np.log(self.ratios)
+        seg = knot_segments(x, xp)
+        return tuple(interp_knots(x, xp, k, seg) for k in self.knots)
+
+    def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
+        """The curve's peak value [-] (the law's ``peak_d``; the magic formula's ``D(r_g)``):
+        the torque ratio is ``tau = mu / mu_max``, as the compiled model computes it.
+
+        Parameters
+        ----------
+        r_g : array_like
+            Geometric ratio(s) [-].
+        """
+        c = self.coefficients(r_g)
+        return np.asarray(self._spec.peak_d(*c, *(0.0 * x for x in c))[0], float)
+
+    def mu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
+        """Traction coefficient [-] (the law's ``mu``), shape of ``broadcast(nu, r_g)``.
+
+        Parameters
+        ----------
+        nu : array_like
+            Slip [-], within `nu_range`.
+        r_g : array_like
+            Geometric ratio [-] (broadcast against `nu`).
+        """
+        nu_a, c = self._at(nu, r_g)
+        return self._spec.mu(nu_a, *c)
+
+    def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
+        """Slope ``d mu / d nu`` [-] (analytic: the law's ``mu_d``), shape of
+        ``broadcast(nu, r_g)``.
+
+        Parameters
+        ----------
+        nu, r_g : array_like
+            Slip [-] within `nu_range` and geometric ratio [-], broadcast together.
+        """
+        nu_a, c = self._at(nu, r_g)
+        return self._spec.mu_d(nu_a, *c, *(0.0 for _ in c))[1]
+
+    @property
+    def _spec(self) -> _laws.TractionLaw:
+        return _laws.TRACTION_LAWS[self.law]
+
+    def _at(self, nu: ArrayLike, r_g: ArrayLike) \
+            -> tuple[NDArray[np.float64], tuple[NDArray[np.float64], ...]]:
+        """``(nu, coefficients)`` at the checked, broadcast slips and ratios."""
+        nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, f"the {self.law} traction curve")
+        return nu_a, self.coefficients(r_a)
+
+
+class MagicFormulaTraction(AnalyticTraction):
+    """The magic-formula traction curve (the registry's ``"magic-formula"``) by its
+    coefficients, interpolated over the ratio.
 
     Parameters
     ----------
@@ -209,26 +349,35 @@ class MagicFormulaTraction:
     0.0
     """
 
-    ratios: tuple[float, float, float]
-    B: tuple[float, float, float]
-    C: tuple[float, float, float]
-    D: tuple[float, float, float]
-    E: tuple[float, float, float]
-    nu_max: float = MAGIC_NU_MAX
+    def __init__(self, ratios: Sequence[float], B: Sequence[float], C: Sequence[float],
+                 D: Sequence[float], E: Sequence[float], nu_max: float = MAGIC_NU_MAX) -> None:
+        for name, value in (("ratios", ratios), ("B", B), ("C", C), ("D", D), ("E", E)):
+            if len(tuple(value)) != 3:
+                raise ParameterError(f"MagicFormulaTraction.{name} = {tuple(value)!r}: need "
+                                     "three finite values (LOW, MED, OD)")
+        super().__init__("magic-formula", tuple(ratios),  # type: ignore[arg-type]
+                         (tuple(B), tuple(C), tuple(D), tuple(E)),  # type: ignore[arg-type]
+                         nu_max)
 
-    def __post_init__(self) -> None:
-        for name in ("ratios", "B", "C", "D", "E"):
-            value = tuple(float(x) for x in getattr(self, name))
-            if len(value) != 3 or not all(math.isfinite(x) for x in value):
-                raise ParameterError(f"MagicFormulaTraction.{name} = {value!r}: need three finite "
-                                     "values (LOW, MED, OD)")
-            object.__setattr__(self, name, value)
-        if not 0 < self.ratios[0] < self.ratios[1] < self.ratios[2]:
-            raise ParameterError(f"MagicFormulaTraction.ratios = {self.ratios!r}: must be positive "
-                                 "and strictly increasing")
-        if not (math.isfinite(self.nu_max) and 0 < self.nu_max < 1):
-            raise ParameterError(f"MagicFormulaTraction.nu_max = {self.nu_max!r}: allowed range "
-                                 "is (0, 1)")
+    @property
+    def B(self) -> tuple[float, float, float]:
+        """Stiffness factor [-] at LOW, MED, OD."""
+        return self.knots[0]
+
+    @property
+    def C(self) -> tuple[float, float, float]:
+        """Shape factor [-] at LOW, MED, OD."""
+        return self.knots[1]
+
+    @property
+    def D(self) -> tuple[float, float, float]:
+        """Peak traction coefficient [-] at LOW, MED, OD."""
+        return self.knots[2]
+
+    @property
+    def E(self) -> tuple[float, float, float]:
+        """Curvature factor [-] at LOW, MED, OD."""
+        return self.knots[3]
 
     @classmethod
     def from_params(cls, traction: TractionParams, nu_max: float = MAGIC_NU_MAX) \
@@ -241,79 +390,44 @@ class MagicFormulaTraction:
             The ``[traction]`` section.
         nu_max : float, optional
             The valid slip range is ``[-nu_max, nu_max]`` [-] (default 0.2).
+
+        Returns
+        -------
+        MagicFormulaTraction
+            The magic formula at the section's three ratios.
         """
         t = traction
         return cls(ratios=(t.r_low, t.r_med, t.r_od), B=(t.B_low, t.B_med, t.B_od),
                    C=(t.C_low, t.C_med, t.C_od), D=(t.D_low, t.D_med, t.D_od),
                    E=(t.E_low, t.E_med, t.E_od), nu_max=nu_max)
 
-    @property
-    def nu_range(self) -> tuple[float, float]:
-        """Valid slip range ``(-nu_max, nu_max)`` [-]."""
-        return (-self.nu_max, self.nu_max)
 
-    def coefficients(self, r_g: ArrayLike) -> tuple[NDArray[np.float64], ...]:
-        """``(B, C, D, E)`` at ratio(s) `r_g`, each shaped like `r_g`.
+def traction_parameters(traction: TractionParams, law: str) -> dict[str, float]:
+    """The traction laws' part of the nonlinear kernel's parameter vector, by name
+    (`empact.variator._laws.traction_parameter_names`): the law's index, the knots'
+    log-ratios and every registered law's coefficients from the section's fields.
 
-        Linear interpolation in ``log(r_g)`` between the LOW, MED and OD values, constant
-        outside (`empact.variator._tables.interp_knots`: the compiled kernel's numbers).
+    Parameters
+    ----------
+    traction : TractionParams
+        The ``[traction]`` section.
+    law : str
+        The analytic law the kernel evaluates, one of `TRACTION_LAWS`.
 
-        Parameters
-        ----------
-        r_g : array_like
-            Geometric ratio(s) [-].
-        """
-        r = np.asarray(r_g, float)
-        if np.any(~np.isfinite(r) | (r <= 0)):
-            bad = r[~np.isfinite(r) | (r <= 0)] if r.ndim else r
-            raise ParameterError(f"r_g = {float(np.ravel(bad)[0]):g}: must be a positive finite "
-                                 "ratio")
-        x, xp = np.log(r), np.log(self.ratios)
-        seg = knot_segments(x, xp)
-        return tuple(interp_knots(x, xp, getattr(self, name), seg)
-                     for name in ("B", "C", "D", "E"))
-
-    def mu_max(self, r_g: ArrayLike) -> NDArray[np.float64]:
-        """The curve's peak value ``D(r_g)`` [-] (reached where ``C arctan(phi) = pi / 2``,
-        for ``C >= 1``): the torque ratio is ``tau = mu / mu_max``, as the compiled model
-        computes it.
-
-        Parameters
-        ----------
-        r_g : array_like
-            Geometric ratio(s) [-].
-        """
-        return self.coefficients(r_g)[2]
-
-    def mu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-        """Traction coefficient ``D sin(C arctan(phi))`` [-], shape of ``broadcast(nu, r_g)``.
-
-        Parameters
-        ----------
-        nu : array_like
-            Slip [-], within `nu_range`.
-        r_g : array_like
-            Geometric ratio [-] (broadcast against `nu`).
-        """
-        return _laws.magic_formula(*self._at(nu, r_g))
-
-    def dmu(self, nu: ArrayLike, r_g: ArrayLike) -> NDArray[np.float64]:
-        """Slope ``d mu / d nu`` [-] (analytic), shape of ``broadcast(nu, r_g)``.
-
-        Parameters
-        ----------
-        nu, r_g : array_like
-            Slip [-] within `nu_range` and geometric ratio [-], broadcast together.
-        """
-        return _laws.magic_formula_d(*self._at(nu, r_g), 0.0, 0.0, 0.0, 0.0)[1]
-
-    def _at(self, nu: ArrayLike, r_g: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64],
-                                                          NDArray[np.float64], NDArray[np.float64],
-                                                          NDArray[np.float64]]:
-        """``(nu, B, C, D, E)`` at the checked, broadcast slips and ratios."""
-        nu_a, r_a = _check_inputs(nu, r_g, self.nu_range, "the magic-formula traction curve")
-        B, C, D, E = self.coefficients(r_a)
-        return nu_a, B, C, D, E
+    Returns
+    -------
+    dict of str to float
+        ``traction_law`` (the law's index), ``ln_r_low`` ... and ``<c>_low`` ... [SI].
+    """
+    if law not in _laws.TRACTION_LAWS:
+        raise ParameterError(f"traction_law = {law!r}: choose from "
+                             f"{', '.join(_laws.TRACTION_LAWS)}")
+    values = {"traction_law": float(list(_laws.TRACTION_LAWS).index(law))}
+    for knot in _laws.TRACTION_KNOTS:
+        values[f"ln_r_{knot}"] = float(np.log(getattr(traction, f"r_{knot}")))
+    for name in _laws.traction_parameter_names()[1 + len(_laws.TRACTION_KNOTS):]:
+        values[name] = float(getattr(traction, name))
+    return values
 
 
 # --------------------------------------------------------------------------------------------
@@ -560,7 +674,8 @@ def load_traction(path: str | os.PathLike[str]) -> TabulatedTraction:
     return TabulatedTraction.from_curves(curves, source=str(Path(path)))
 
 
-def traction_from_params(params: _HasTraction | TractionParams) -> MagicFormulaTraction:
+def traction_from_params(params: _HasTraction | TractionParams,
+                         law: str = DEFAULT_TRACTION_LAW) -> AnalyticTraction:
     """The analytic traction model of a parameter set (its ``[traction]`` section), or of the
     section itself.
 
@@ -568,14 +683,22 @@ def traction_from_params(params: _HasTraction | TractionParams) -> MagicFormulaT
     ----------
     params : Params or TractionParams
         A parameter set (its ``[traction]`` block is read) or the block itself.
+    law : str, optional
+        The registered law (`TRACTION_LAWS`; default ``"magic-formula"``).
 
     Returns
     -------
-    MagicFormulaTraction
-        ``mu(nu, r_g)`` [-] and its slope, by the magic formula at the block's three ratios.
+    AnalyticTraction
+        ``mu(nu, r_g)`` [-] and its slope, by the law at the block's three ratios.
     """
     section = params if isinstance(params, TractionParams) else params.traction
-    return MagicFormulaTraction.from_params(section)
+    if law not in _laws.TRACTION_LAWS:
+        raise ParameterError(f"traction_law = {law!r}: choose from "
+                             f"{', '.join(_laws.TRACTION_LAWS)}")
+    ratios = tuple(getattr(section, f"r_{k}") for k in _laws.TRACTION_KNOTS)
+    knots = tuple(tuple(getattr(section, f"{c}_{k}") for k in _laws.TRACTION_KNOTS)
+                  for c in _laws.TRACTION_LAWS[law].coefficients)
+    return AnalyticTraction(law, ratios, knots)
 
 
 # --------------------------------------------------------------------------------------------
