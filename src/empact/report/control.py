@@ -15,7 +15,7 @@ from ..plotting import (
 from ..reproduction import control as rep
 from .context import Context
 
-__all__ = ["control", "studies"]
+__all__ = ["control", "studies", "estimate_table"]
 
 
 def _fmt(v) -> str:
@@ -70,17 +70,6 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
                                 "met" if chk.met else "MISSED",
                                 f"{m['peak_T_mp']:.2f} / {m['T_mp_max']:g}",
                                 f"{m['peak_T_ms']:.2f} / {m['T_ms_max']:g}"])
-    est_cols = next(iter(res.estimate.values()), {})
-    est_rows = []
-    for n, by_ff in res.estimate.items():
-        for i, chk in enumerate(by_ff["T_ds"]):
-            row = [n, chk.name, chk.describe().split("(")[1].split(")")[0]]
-            for checks in by_ff.values():
-                c = checks[i]
-                value, unit = shown_metric(c.name, c.value)
-                row.append(_fmt(value) + (f" {unit}" if unit else "") +
-                           (": met" if c.met else ": MISSED"))
-            est_rows.append(row)
     env = res.envelope
     env_rows = [[f"{r:.3g}", rate, b, F / 1e3, T]
                 for r, rate, b, F, T in zip(env.r_g[::3], env.rate[::3], env.binding[::3],
@@ -139,19 +128,55 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
                     "its file); the linear prediction is the loop model's at the scenario's "
                     "start (limits inactive, no noise): close for the load steps, far off for "
                     "the shifts, which leave the operating point the model is linearised at")
-        + (ctx.table("control_estimate", ["scenario", "metric", "target"] +
-                     [f"feedforward on {k}" for k in est_cols], est_rows,
-                     "The scenarios whose clamping feedforward runs, against their targets "
-                     "with the feedforward on the driveshaft torque (a bench's sensor, as "
-                     "shipped) and on an engine-torque estimate (the torque source's, "
-                     "here the load motor's, as its controller reports it: "
-                     f"{1e3 * res.loop.sensors.engine_torque_delay:g} ms late and 15 % "
-                     "low or high; no torque sensor)") if est_rows and res.loop.sensors
-           else "")
+        + estimate_table(ctx, res)
         + ctx.table("control_envelope", ["r_g", "largest rate [1/s]", "limit that binds",
                                          "F_s at it [kN]", "|T_mp| at it [N m]"], env_rows,
                     "The shift-rate envelope (quasi-static; empact.control.shifting)")
         + ctx.claims(res.claims))
+
+
+def estimate_table(ctx: Context, res: rep.ControlSection) -> str:
+    """The table of the scenarios' targets with the clamping feedforward on the driveshaft
+    torque and on the engine-torque estimate (`empact.reproduction.control.estimate_targets`,
+    issue 33).
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build (the table is also written as CSV).
+    res : ControlSection
+        Its ``estimate`` and ``loop`` (the parameter set's sensors: the estimate's delay).
+
+    Returns
+    -------
+    str
+        HTML: one row per scenario and target, a column per feedforward signal ("value:
+        met" or "value: MISSED"); empty without estimate runs or sensors.
+    """
+    cols = next(iter(res.estimate.values()), {})
+    rows = []
+    for n, by_ff in res.estimate.items():
+        for i, chk in enumerate(by_ff["T_ds"]):
+            row = [n, chk.name, chk.describe().split("(")[1].split(")")[0]]
+            for checks in by_ff.values():
+                got = checks[i]
+                value, unit = shown_metric(got.name, got.value)
+                row.append(_fmt(value) + (f" {unit}" if unit else "") +
+                           (": met" if got.met else ": MISSED"))
+            rows.append(row)
+    sensors = res.loop.sensors
+    if not rows or sensors is None:
+        return ""
+    return ctx.table(
+        "control_estimate", ["scenario", "metric", "target"] +
+        [f"feedforward on {k}" for k in cols], rows,
+        "The scenarios whose clamping feedforward runs, against their targets with the "
+        "feedforward on the driveshaft torque (a bench's sensor, as shipped) and on an "
+        "engine-torque estimate (the torque source's, here the load motor's, as its "
+        f"controller reports it: {1e3 * sensors.engine_torque_delay:g} ms late and 15 % low "
+        "or high; no torque sensor). On the bench a load step excites the driveline's "
+        "shuffle mode (the driveshaft torque swings about 20 % past its new value), which "
+        "the driveshaft torque's feedforward follows and a torque estimate cannot")
 
 
 def studies(ctx: Context, res: rep.StudiesSection) -> str:
