@@ -69,6 +69,29 @@ def test_the_engine_torque_estimate_is_late_and_off(params):
         linear_preprocess(law)
 
 
+def test_the_driveshaft_torque_observer_integrates_the_twist_rate(params):
+    """``T_ds_est``: the law reads the wheel speed after its sensors; at rest it holds its
+    state; a wheel speed ``dw`` below the output speed raises the observed torque by ``k_ds
+    dt dw`` in one sample (the driveline's stiffness times the twist; to 1e-9 relative) and
+    the clamping feedforward follows it."""
+    sc = _scenario(feedforward_signal="T_ds_est")
+    law = build_law(sc, params, ideal=True)
+    assert law.measured == RAW_SIGNALS + ("omega_l",)
+    n = law.n_pre
+    o = n - 1  # the observer's state, last of the pre-processing's
+    s0, raw0 = law.z0[:n], law.raw0
+    s1, _, _, _ = law.preprocess(s0, raw0, 0, ideal=True)
+    np.testing.assert_allclose(s1, s0, rtol=1e-12, atol=0)
+    raw = raw0.copy()
+    dw = 0.01
+    raw[-1] -= dw
+    s1, _, _, _ = law.preprocess(s0, raw, 0, ideal=True)
+    k_ds = params.driveline.k_ds
+    np.testing.assert_allclose(s1[o] - s0[o], k_ds * law.dt * dw, rtol=1e-9, atol=0)
+    nb = len(RAW_SIGNALS) * law._n_buf
+    assert s1[nb] > s0[nb]  # the feedforward's filter moves with it
+
+
 def test_the_torque_request_is_what_the_servo_can_clamp(params):
     """The request is the secondary-shaft torque the servo's torque limit less its margin
     clamps for at the set-point's traction coefficient, ``F_cap 2 mu* R_s / cos(beta)``,
@@ -135,7 +158,8 @@ def test_the_report_shows_the_targets_with_the_torque_estimate(params, tmp_path)
     sc = load_scenario(control_example_path(name))
     shipped = check_targets(run_closed_loop(sc, params).metrics, sc.targets)
     est = estimate_targets(params, {name: sc}, {name: shipped})
-    assert list(est[name]) == ["T_ds", estimate_label(-0.15), estimate_label(0.15)]
+    assert list(est[name]) == ["T_ds"] + [estimate_label(sig, err) for sig in
+                                          ("T_e_est", "T_ds_est") for err in (-0.15, 0.15)]
     peak = {k: v[0].value for k, v in est[name].items()}
     assert peak["T_ds"] < min(peak["T_e_est -15 %"], peak["T_e_est +15 %"])
     res = SimpleNamespace(estimate=est, loop=LoopConfig.of(params))

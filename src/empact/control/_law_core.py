@@ -88,6 +88,9 @@ class LawConstants(NamedTuple):
     ff_est: bool  #: the feedforward's torque is the torque source's estimate
     n_est: int  #: the estimate's buffer [samples]: its delay + 1 (0 without it)
     est_gain: float  #: the estimate over the truth, ``1 + engine_torque_error`` [-]
+    obs: bool  #: the driveshaft-torque observer (state after the estimate's buffer)
+    obs_k: float  #: its driveline stiffness times the sample period [N m / rad * s]
+    obs_a: float  #: its correction's share per sample, ``1 - exp(-omega_c dt)`` [-]
     # the torque request of a saturating secondary servo (issue 33)
     request: bool  #: compute the torque request
     honour: bool  #: the bench's load torque follows it (the law commands ``T_l``)
@@ -370,11 +373,11 @@ def pre(law, s, out, raw, k, ideal):
     schedule's gains) and the servo torques without the controller's share.  `ideal` drops
     noise and quantisation."""
     c, tb, wk = law.c, law.tb, law.wk
-    nb = c.n_pre - 2 - c.n_est
+    nb = c.n_pre - 2 - c.n_est - (1 if c.obs else 0)
     nbuf = c.n_buf
     n_last = tb.r_g.shape[0] - 1
     kk = k if k < n_last else n_last
-    n_raw = raw.shape[0]
+    n_raw = tb.noise.shape[1]  # the sensors' signals (the observer's wheel speed after them)
     m = wk.meas
     # the buffers, newest first: every row moves on by one, the new samples in front
     for j in range(nb - 1, 0, -1):
@@ -420,6 +423,13 @@ def pre(law, s, out, raw, k, ideal):
     elif c.feedforward:
         if c.ff_est:  # the torque source's torque as its controller reports it: late, off
             T_b = c.est_gain * out[nb + 2 + c.n_est - 1]
+            if c.obs:  # the driveshaft torque: the twist rate integrated (output speed
+                # less wheel speed, raw), pulled slowly to the estimate
+                o = nb + 2 + c.n_est
+                T_h = s[o]
+                T_h = T_h + c.obs_k * (out[2 * nbuf] - raw[n_raw]) + c.obs_a * (T_b - T_h)
+                out[o] = T_h
+                T_b = T_h
         else:
             T_b = T_ds if c.ff_t_ds else m[6]
         if c.shift_ff:  # the secondary pulley's acceleration torque

@@ -138,6 +138,9 @@ SHIPPED_LOOP = {"feedforward": True, "feedforward_gain": 0.9, "feedforward_filte
 
 #: what the law reads from the machine, in this order (model outputs)
 RAW_SIGNALS = ("r_g", "omega_p", "omega_s", "T_ds", "omega_mp", "omega_ms", "T_l_act")
+#: what the driveshaft-torque observer (``feedforward_signal = "T_ds_est"``) reads after
+#: `RAW_SIGNALS`: the wheel (load) speed, which a car's wheel-speed sensors give
+OBSERVER_SIGNAL = "omega_l"
 _SPEEDS = (1, 2)  # RAW_SIGNALS indices counted by encoders
 
 
@@ -346,7 +349,9 @@ class LoopLaw:
         self._n_buf = self._delay + self._window
         self._speed_quantum = (2 * np.pi / (s.speed_counts * self._window * dt)
                                if s is not None else 0.0)
-        self._estimate = spec.feedforward and spec.feedforward_signal == "T_e_est"
+        self._observer = spec.feedforward and spec.feedforward_signal == "T_ds_est"
+        self._estimate = self._observer or (spec.feedforward
+                                            and spec.feedforward_signal == "T_e_est")
         self._n_est = 0
         if self._estimate:
             est_delay = s.engine_torque_delay if s is not None else 0.0
@@ -362,7 +367,7 @@ class LoopLaw:
         # the law's state: buffers, feedforward filter, controller
         self._nb = len(RAW_SIGNALS) * self._n_buf
         self._R_s_last = (float("nan"), float("nan"))
-        self.n_state = self._nb + 2 + self._n_est + cd.n
+        self.n_state = self._nb + 2 + self._n_est + self._observer + cd.n
         self._alpha_ff = float(np.exp(-2 * np.pi * spec.feedforward_filter_hz * dt))
         self._alpha_dec = float(np.exp(-2 * np.pi * spec.decoupling_filter_hz * dt))
         self._decoupling0 = float(self.refs.decoupling[0])
@@ -415,6 +420,8 @@ class LoopLaw:
             band=SPEED_BAND, anti_windup=spec.anti_windup,
             ff_est=self._estimate, n_est=self._n_est,
             est_gain=self._c_est_gain() if self._estimate else 1.0,
+            obs=self._observer, obs_k=p.driveline.k_ds * self.dt,
+            obs_a=-float(np.expm1(-2 * np.pi * spec.observer_hz * self.dt)),
             request=self._request, honour=self._honour, F_cap=self._F_cap)
         # the shift feedforward's geometry at the reference ratio where it moves
         geo = [np.full(self.n_k, np.nan) for _ in range(4)]
@@ -521,17 +528,22 @@ class LoopLaw:
             The steady operating point (``r_g``, ``omega_p``, ... in SI units).
         """
         w_p = point["omega_p"]
-        return np.array([point["r_g"], w_p, point["r_g"] * w_p * (1 - point["nu"]),
-                         point["T_l"], 0.0, 0.0, point["T_l"]])
+        w_s = point["r_g"] * w_p * (1 - point["nu"])
+        raw = [point["r_g"], w_p, w_s, point["T_l"], 0.0, 0.0, point["T_l"]]
+        if self._observer:
+            raw.append(w_s)  # the wheel speed at rest: the output speed (no final drive)
+        return np.array(raw)
 
     def initial_state(self) -> NDArray[np.float64]:
         """The law's state at rest at the starting point (buffers full of the point's
         measurements, the feedforward filter settled, the controller state zero)."""
         z = np.zeros(self.n_state)
-        z[:self._nb] = np.repeat(self.raw0, self._n_buf)
+        z[:self._nb] = np.repeat(self.raw0[:len(RAW_SIGNALS)], self._n_buf)
         z[self._nb] = self._ff_force(self._ff_torque0(), self.raw0[0], self.refs.mu[0])
         if self._n_est:  # the estimate at rest: its value of the start, settled
             z[self._nb + 2:self._nb + 2 + self._n_est] = self.raw0[6]
+        if self._observer:  # the observer at rest: the estimate's torque
+            z[self._nb + 2 + self._n_est] = self._ff_torque0()
         return z
 
     def reset(self) -> None:
@@ -542,8 +554,9 @@ class LoopLaw:
 
     @property
     def measured(self) -> tuple[str, ...]:
-        """What the simulator hands the law at each sample (`RAW_SIGNALS`)."""
-        return RAW_SIGNALS
+        """What the simulator hands the law at each sample (`RAW_SIGNALS`, then
+        `OBSERVER_SIGNAL` for the driveshaft-torque observer)."""
+        return RAW_SIGNALS + ((OBSERVER_SIGNAL,) if self._observer else ())
 
     # -- the law ---------------------------------------------------------------------------
     def _R_s(self, r_g: float) -> float:
@@ -652,7 +665,7 @@ class LoopLaw:
     def n_pre(self) -> int:
         """Size of the sensor, feedforward and decoupler state (`preprocess`; with the
         engine-torque estimate's buffer)."""
-        return self._nb + 2 + self._n_est
+        return self._nb + 2 + self._n_est + self._observer
 
     @property
     def output_mask(self) -> NDArray[np.float64]:

@@ -107,7 +107,8 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
         feedforward servo torques ``(T_mp, T_ms)`` [N m] per unit deviation (SI units of
         each signal); ``n_pre`` is ``law.n_pre``.
     """
-    if law.config.spec.feedforward and law.config.spec.feedforward_signal == "T_e_est":
+    if law.config.spec.feedforward and law.config.spec.feedforward_signal in ("T_e_est",
+                                                                              "T_ds_est"):
         raise ParameterError(f"feedforward_signal = {law.config.spec.feedforward_signal!r}: "
                              "the loop's linear model covers the feedforward of T_ds or "
                              "T_l_act (not the engine-torque estimate's delay)")

@@ -21,7 +21,7 @@ MU_DESIGN = ("ratio-blind", "ratio-aware")
 #: what the clamping feedforward may use: the driveshaft torque, the load motor's torque, or
 #: an engine-torque estimate (the torque source's torque as its controller reports it: late
 #: and off by the ``[sensors]`` ``engine_torque_delay`` and ``engine_torque_error``)
-FF_SIGNALS = ("T_ds", "T_l_act", "T_e_est")
+FF_SIGNALS = ("T_ds", "T_l_act", "T_e_est", "T_ds_est")
 #: the torque request of a saturating secondary servo: none, requested (computed and
 #: reported, nobody honours it), or honoured (the bench's load torque follows it)
 TORQUE_REQUEST = ("off", "requested", "honoured")
@@ -51,6 +51,13 @@ class ControllerSpec:
         engine_torque_error)`` times the truth (`empact.hardware.SensorParams`); on the test
         bench (drive speed-, load torque-controlled) the source is the load motor, which
         sets the torque the belt carries as a car's engine does; no torque sensor.
+        ``"T_ds_est"``: the driveshaft torque observed without a torque sensor, the
+        driveline's twist rate (the output speed less the wheel speed, which a car's
+        wheel-speed sensors give) times its stiffness integrated, pulled to the
+        engine-torque estimate below ``observer_hz``.
+    observer_hz : float
+        Corner of the driveshaft-torque observer's correction by the engine-torque estimate
+        [Hz] (``"T_ds_est"``).
     feedforward_filter_hz : float
         Corner of the feedforward's first-order low-pass [Hz].
     traction_error : float
@@ -93,6 +100,7 @@ class ControllerSpec:
     feedforward_gain: float = 0.9
     feedforward_signal: str = "T_ds"
     feedforward_filter_hz: float = 100.0
+    observer_hz: float = 0.5
     traction_error: float = 1.0
     clamping: str = "feedback"
     safety_factor: float = 1.3
@@ -116,6 +124,9 @@ class ControllerSpec:
         object.__setattr__(self, "decoupling_filter_hz", check_number(
             "controller.decoupling_filter_hz", self.decoupling_filter_hz, 0.0, 0.5 * rate,
             lo_open=True, unit="Hz", note="below the Nyquist frequency"))
+        object.__setattr__(self, "observer_hz", check_number(
+            "controller.observer_hz", self.observer_hz, 0.0, 0.5 * rate, lo_open=True,
+            unit="Hz", note="below the Nyquist frequency"))
         object.__setattr__(self, "traction_error", check_number(
             "controller.traction_error", self.traction_error, 0.5, 2.0))
         object.__setattr__(self, "feedforward_gain", check_number(

@@ -171,12 +171,14 @@ def estimate_table(ctx: Context, res: rep.ControlSection) -> str:
         "control_estimate", ["scenario", "metric", "target"] +
         [f"feedforward on {k}" for k in cols], rows,
         "The scenarios whose clamping feedforward runs, against their targets with the "
-        "feedforward on the driveshaft torque (a bench's sensor, as shipped) and on an "
-        "engine-torque estimate (the torque source's, here the load motor's, as its "
-        f"controller reports it: {1e3 * sensors.engine_torque_delay:g} ms late and 15 % low "
-        "or high; no torque sensor). On the bench a load step excites the driveline's "
-        "shuffle mode (the driveshaft torque swings about 20 % past its new value), which "
-        "the driveshaft torque's feedforward follows and a torque estimate cannot")
+        "feedforward on the driveshaft torque (a bench's sensor, as shipped) and without a "
+        "torque sensor: on an engine-torque estimate alone (T_e_est: the torque source's, "
+        "here the load motor's, as its controller reports it, "
+        f"{1e3 * sensors.engine_torque_delay:g} ms late and 15 % low or high), and on the "
+        "driveshaft torque observed from it and the driveline's twist rate, output less "
+        "wheel speed (T_ds_est). A load step excites the driveline's shuffle mode (the "
+        "driveshaft torque swings about 20 % past its new value), which the estimate alone "
+        "cannot follow")
 
 
 def studies(ctx: Context, res: rep.StudiesSection) -> str:

@@ -36,7 +36,7 @@ from .claims import Claim
 
 __all__ = ["DESIGN_GRID", "SHIPPED_DESIGNS", "ControlSection", "StudiesSection", "control",
            "control_studies", "shipped_controller", "MC_RUNS", "MC_SCENARIO",
-           "ESTIMATE_ERRORS", "estimate_targets", "estimate_label"]
+           "ESTIMATE_ERRORS", "ESTIMATE_SIGNALS", "estimate_targets", "estimate_label"]
 
 #: how the shipped controllers (``data/control/pi.json``, ``hinf.json``) are designed on the
 #: design family (`empact.control.family.design_family`): ``empact control design --method pi
@@ -62,6 +62,10 @@ PREDICTION_TOLERANCE = 0.15
 #: estimate is 10-15 % off, of either sign; its delay is the parameter set's
 #: ``sensors.engine_torque_delay``, 20 ms)
 ESTIMATE_ERRORS = (-0.15, 0.15)
+#: the clamping feedforward's signals without a torque sensor (`empact.control.law`): the
+#: engine-torque estimate alone, and the driveshaft torque observed from it and the
+#: driveline's twist rate (output and wheel speeds)
+ESTIMATE_SIGNALS = ("T_e_est", "T_ds_est")
 
 SRC = "issue 21 (beyond the paper)"
 
@@ -228,11 +232,14 @@ def control(params: Params) -> ControlSection:
                           tuple(claims), estimate_targets(params, scenarios, targets))
 
 
-def estimate_label(error: float) -> str:
-    """The column name of the engine-torque estimate `error` [-] in `estimate_targets`.
+def estimate_label(signal: str, error: float) -> str:
+    """The column name of a feedforward `signal` on the engine-torque estimate `error` [-]
+    in `estimate_targets`.
 
     Parameters
     ----------
+    signal : str
+        ``controller.feedforward_signal`` (one of `ESTIMATE_SIGNALS`).
     error : float
         ``sensors.engine_torque_error`` [-].
 
@@ -241,7 +248,7 @@ def estimate_label(error: float) -> str:
     str
         E.g. ``"T_e_est -15 %"``.
     """
-    return f"T_e_est {100 * error:+g} %"
+    return f"{signal} {100 * error:+g} %"
 
 
 def estimate_targets(params: Params, scenarios: dict[str, Scenario],
@@ -249,9 +256,9 @@ def estimate_targets(params: Params, scenarios: dict[str, Scenario],
                                                                             list[TargetCheck]]]:
     """Each shipped scenario whose clamping feedforward runs (``feedback`` clamping with
     ``feedforward``) against its targets with the feedforward on the driveshaft torque (its
-    checks `targets`, as shipped) and on the engine-torque estimate (``feedforward_signal =
-    "T_e_est"``: the drive's torque ``sensors.engine_torque_delay`` late, at each error of
-    `ESTIMATE_ERRORS`).
+    checks `targets`, as shipped) and on each signal of `ESTIMATE_SIGNALS` (the engine-torque
+    estimate ``sensors.engine_torque_delay`` late, alone or in the driveshaft-torque
+    observer), at each error of `ESTIMATE_ERRORS`.
 
     Parameters
     ----------
@@ -265,7 +272,7 @@ def estimate_targets(params: Params, scenarios: dict[str, Scenario],
     Returns
     -------
     dict of str to dict of str to list of TargetCheck
-        ``{scenario: {"T_ds": checks, estimate_label(error): checks, ...}}``.
+        ``{scenario: {"T_ds": checks, estimate_label(signal, error): checks, ...}}``.
     """
     out: dict[str, dict[str, list[TargetCheck]]] = {}
     for n, sc in scenarios.items():
@@ -273,11 +280,12 @@ def estimate_targets(params: Params, scenarios: dict[str, Scenario],
         if spec is None or not spec.feedforward or spec.clamping != "feedback":
             continue
         out[n] = {"T_ds": targets[n]}
-        for err in ESTIMATE_ERRORS:
-            est = replace(sc, controller=replace(spec, feedforward_signal="T_e_est"),
-                          sensors={**sc.sensors, "engine_torque_error": err})
-            out[n][estimate_label(err)] = check_targets(run_closed_loop(est, params).metrics,
-                                                        sc.targets)
+        for sig in ESTIMATE_SIGNALS:
+            for err in ESTIMATE_ERRORS:
+                est = replace(sc, controller=replace(spec, feedforward_signal=sig),
+                              sensors={**sc.sensors, "engine_torque_error": err})
+                out[n][estimate_label(sig, err)] = check_targets(
+                    run_closed_loop(est, params).metrics, sc.targets)
     return out
 
 
