@@ -37,6 +37,7 @@ and, optionally, a controller and its references::
     feedforward_signal = "T_ds"   # the driveshaft torque, "T_l_act" (the load motor's), or
                               # "T_e_est" (an engine-torque estimate: no torque sensor)
                               # or "T_ds_est" (observed from it and the twist rate)
+    observer_hz = 0.1         # the observer's correction by the estimate [Hz]
     feedforward_gain = 0.9    # the share of it clamped for
     feedforward_filter_hz = 100.0 # its low-pass corner [Hz]
     traction_error = 1.0      # factor on the feedforward's traction coefficient
