@@ -140,6 +140,13 @@ class SensorParams(Section):
     torque_noise : float
         White noise on the driveshaft torque (standard deviation) [N m], in [0, 1000]
         (default 0.25).
+    engine_torque_delay : float
+        Delay of the engine-torque estimate [s], in [0, 0.5] (default 0.02): what an engine
+        controller's torque signal lags the engine by (the clamping feedforward on
+        ``feedforward_signal = "T_e_est"``), rounded to whole samples.
+    engine_torque_error : float
+        Relative error of the engine-torque estimate [-], in [-0.5, 0.5] (default 0): the
+        estimate is ``(1 + engine_torque_error)`` times the engine's torque.
     """
 
     _name = "sensors"
@@ -156,6 +163,10 @@ class SensorParams(Section):
                                  lo_open=False, default=2e-4)
     torque_noise: float = param("N m", "white noise on the driveshaft torque (standard "
                                 "deviation)", 0.0, 1e3, lo_open=False, default=0.25)
+    engine_torque_delay: float = param("s", "delay of the engine-torque estimate", 0.0, 0.5,
+                                       lo_open=False, default=0.02)
+    engine_torque_error: float = param("-", "relative error of the engine-torque estimate",
+                                       -0.5, 0.5, lo_open=False, default=0.0)
 
     def __post_init__(self) -> None:
         super().__post_init__()

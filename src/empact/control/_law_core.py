@@ -84,6 +84,17 @@ class LawConstants(NamedTuple):
     v_max: float  #: [rad/s]
     band: float  #: the speed limiter's band [-]
     anti_windup: bool
+    # the engine-torque estimate (issue 33; `ff_est` False: none, ``n_est`` 0)
+    ff_est: bool  #: the feedforward's torque is the torque source's estimate
+    n_est: int  #: the estimate's buffer [samples]: its delay + 1 (0 without it)
+    est_gain: float  #: the estimate over the truth, ``1 + engine_torque_error`` [-]
+    obs: bool  #: the driveshaft-torque observer (state after the estimate's buffer)
+    obs_k: float  #: its driveline stiffness times the sample period [N m / rad * s]
+    obs_a: float  #: its correction's share per sample, ``1 - exp(-omega_c dt)`` [-]
+    # the torque request of a saturating secondary servo (issue 33)
+    request: bool  #: compute the torque request
+    honour: bool  #: the bench's load torque follows it (the law commands ``T_l``)
+    F_cap: float  #: the clamping the secondary servo holds within its margin [N]
 
 
 class LawTables(NamedTuple):
@@ -110,6 +121,7 @@ class LawTables(NamedTuple):
     L: np.ndarray  #: the anti-windup gain (n_c, 2)
     ff_table: np.ndarray  #: (3, n) the feedforward gain table (`ff_table`); n = 0: none
     p: np.ndarray  #: the model's parameter vector (`EmpactModel.p`)
+    load: np.ndarray  #: the bench's load-torque demand [N m] (an honoured torque request)
 
 
 class LawWork(NamedTuple):
@@ -119,6 +131,7 @@ class LawWork(NamedTuple):
     meas: np.ndarray  #: (n_raw,) the measurements the controller saw
     u: np.ndarray  #: (2,) the servo torques [N m]
     one: np.ndarray  #: (2,) the traction peak's argument and value
+    trace: np.ndarray  #: (n_k, 2) per sample the torque request and the load applied [N m]
 
 
 #: each constant's type
@@ -137,9 +150,11 @@ def tables(**arrays: object) -> LawTables:
                         for k, v in arrays.items()})
 
 
-def work(n_raw: int) -> LawWork:
-    """Fresh work arrays for a law reading `n_raw` signals."""
-    return LawWork(np.full(2, np.nan), np.zeros(n_raw), np.zeros(2), np.zeros(2))
+def work(n_raw: int, n_cmd: int = 2, n_trace: int = 1) -> LawWork:
+    """Fresh work arrays for a law reading `n_raw` signals and commanding `n_cmd` inputs,
+    with `n_trace` samples of the torque request's trace (NaN until written)."""
+    return LawWork(np.full(2, np.nan), np.zeros(n_raw), np.zeros(n_cmd), np.zeros(2),
+                   np.full((n_trace, 2), np.nan))
 
 
 @structref.register
@@ -359,17 +374,22 @@ def pre(law, s, out, raw, k, ideal):
     schedule's gains) and the servo torques without the controller's share.  `ideal` drops
     noise and quantisation."""
     c, tb, wk = law.c, law.tb, law.wk
-    nb = c.n_pre - 2
+    nb = c.n_pre - 2 - c.n_est - (1 if c.obs else 0)
     nbuf = c.n_buf
     n_last = tb.r_g.shape[0] - 1
     kk = k if k < n_last else n_last
-    n_raw = raw.shape[0]
+    n_raw = tb.noise.shape[1]  # the sensors' signals (the observer's wheel speed after them)
     m = wk.meas
     # the buffers, newest first: every row moves on by one, the new samples in front
     for j in range(nb - 1, 0, -1):
         out[j] = s[j - 1]
     for i in range(n_raw):
         out[i * nbuf] = raw[i] if ideal else raw[i] + tb.noise[kk, i]
+    if c.n_est:  # the torque estimate's buffer (of the torque source, T_l_act), after
+        e0_ = nb + 2  # the filters' state
+        for j in range(c.n_est - 1, 0, -1):
+            out[e0_ + j] = s[e0_ + j - 1]
+        out[e0_] = raw[6]
     sense(out, n_raw, c, ideal, m)
     r_ref, slip_ref, mu_ref, rdot = tb.r_g[kk], tb.slip[kk], tb.mu[kk], tb.rdot[kk]
     r_m, w_p, w_s, T_ds = m[0], m[1], m[2], m[3]
@@ -402,7 +422,17 @@ def pre(law, s, out, raw, k, ideal):
         if wk.radius[1] != wk.radius[1]:
             return 1, e0, e1, c.bias0, u1
     elif c.feedforward:
-        T_b = T_ds if c.ff_t_ds else m[6]
+        if c.ff_est:  # the torque source's torque as its controller reports it: late, off
+            T_b = c.est_gain * out[nb + 2 + c.n_est - 1]
+            if c.obs:  # the driveshaft torque: the twist rate integrated (output speed
+                # less wheel speed, raw), pulled slowly to the estimate
+                o = nb + 2 + c.n_est
+                T_h = s[o]
+                T_h = T_h + c.obs_k * (out[2 * nbuf] - raw[n_raw]) + c.obs_a * (T_b - T_h)
+                out[o] = T_h
+                T_b = T_h
+        else:
+            T_b = T_ds if c.ff_t_ds else m[6]
         if c.shift_ff:  # the secondary pulley's acceleration torque
             T_b = T_b + c.J_s * w_p * rdot
         a = c.alpha_ff
@@ -526,4 +556,28 @@ def sample(law, z, z_next, raw, k, ideal):
         u0, u1 = s0, s1
     wk.u[0] = u0
     wk.u[1] = u1
+    if c.request:
+        torque_request(c, tb, wk, k)
     return 0
+
+
+@njit(cache=True)
+def torque_request(c, tb, wk, k):
+    """The torque request of sample `k` (``wk.trace[k, 0]``) [N m]: the secondary-shaft
+    torque the clamping ``F_cap`` (the secondary servo's torque limit less its margin)
+    holds at the set-point's traction coefficient (the feedforward's estimate) and the
+    measured ratio's radius, ``F_cap 2 mu_hat R_s / cos(beta)``; honoured, the bench's
+    load torque ``T_l`` (``wk.u[2]``, ``wk.trace[k, 1]``): its demand, its size at most the
+    request."""
+    n_last = tb.r_g.shape[0] - 1
+    kk = k if k < n_last else n_last
+    R_s = _radius(wk.meas[0], c.L_belt, c.a, wk.radius)
+    T_req = c.F_cap * c.ff_den * tb.mu[kk] * R_s / c.cosb
+    wk.trace[kk, 0] = T_req
+    if c.honour:
+        T_dem = tb.load[kk]
+        T_app = T_dem
+        if abs(T_dem) > T_req:
+            T_app = math.copysign(T_req, T_dem)
+        wk.u[2] = T_app
+        wk.trace[kk, 1] = T_app

@@ -31,7 +31,8 @@ from .law import LoopConfig, LoopLaw
 
 __all__ = ["LoopLaw", "ClosedLoopResult", "run_closed_loop", "build_law", "metrics",
            "resolve_controller", "control_examples", "control_example_path",
-           "safety_factor_twin", "check_targets", "SLIP_METRICS", "shown_metric"]
+           "safety_factor_twin", "check_targets", "SLIP_METRICS", "shown_metric",
+           "torque_request_metrics"]
 
 
 def __getattr__(name: str) -> Any:
@@ -217,8 +218,15 @@ def build_law(scenario: Scenario, params: Params, controller: Controller | None 
     point = {"r_g": op.r_g, "nu": op.nu, "omega_p": op.omega_p, "T_l": op.T_l, "F_s": op.F_s}
     knows = model if nominal is None else scenario_model(scenario, nominal)[0]
     cfg = LoopConfig.for_scenario(scenario, params if nominal is None else nominal)
+    load = None
+    if scenario.controller.torque_request == "honoured":
+        if "T_l" not in model.inputs:
+            raise ParameterError(f"scenario {scenario.name!r}: controller.torque_request = "
+                                 "'honoured' needs a torque-controlled load (model.load = "
+                                 "'torque')")
+        load = scenario_signals(scenario, model, op).get("T_l", np.array([[0.0, op.T_l]]))
     return LoopLaw(ctrl, knows, point, op.u[:2], cfg.ideal() if ideal else cfg,
-                   scenario.references, scenario.duration)
+                   scenario.references, scenario.duration, load)
 
 
 def run_closed_loop(scenario: Scenario, params: Params, controller: Controller | None = None,
@@ -288,7 +296,9 @@ def metrics(run: ClosedLoopResult) -> dict[str, Any]:
       ``T_b (r_g omega_p - omega_s)`` plus the servos' mechanical power
       ``|T_mp omega_mp| + |T_ms omega_ms|``);
     * ``peak_T_mp``, ``peak_T_ms`` [N m] against ``T_mp_max``, ``T_ms_max`` (NaN without
-      limits), ``saturated``: the share of samples with a servo at its torque limit.
+      limits), ``saturated``: the share of samples with a servo at its torque limit;
+    * with a torque request (``controller.torque_request``; `torque_request_metrics`):
+      what the law did when its secondary servo could not hold the clamping.
 
     Parameters
     ----------
@@ -365,6 +375,55 @@ def metrics(run: ClosedLoopResult) -> dict[str, Any]:
         out["saturated"] = float(np.mean(sat))
     else:
         out["saturated"] = 0.0
+    if run.law is not None and run.law.config.spec.torque_request != "off":
+        out.update(torque_request_metrics(run))
+    return out
+
+
+def torque_request_metrics(run: ClosedLoopResult) -> dict[str, Any]:
+    """What a law with a torque request (``controller.torque_request``) did over a run,
+    from its trace (`LoopLaw.request_trace`) and the machine's driveshaft torque:
+
+    * ``servo_capacity_force`` [N]: the clamping the request is computed for (the secondary
+      servo's torque limit less ``torque_request_margin``);
+    * ``torque_request_min`` [N m]: the smallest request (secondary-shaft torque);
+    * ``torque_request_exceeded`` [-]: the share of samples whose driveshaft torque
+      ``T_ds`` was above the request (the belt asked for more clamping than the servo
+      holds within its margin);
+    * ``torque_request_honoured`` (bool); where honoured, ``torque_limited`` [-]: the share
+      of samples whose load torque the request limited, ``torque_reduction`` [N m]: the
+      largest cut of the load-torque demand, ``torque_limited_time`` [s]: the time under
+      the limit.
+
+    Parameters
+    ----------
+    run : ClosedLoopResult
+        A run whose law had a torque request.
+
+    Returns
+    -------
+    dict str -> object
+        The numbers above (floats [N], [N m], [-], [s]; ``torque_request_honoured`` a bool).
+    """
+    law = run.law
+    assert law is not None
+    tr = law.request_trace
+    ran = np.isfinite(tr[:, 0])
+    req = tr[ran, 0]
+    t_k = law.t_k[:tr.shape[0]][ran]
+    T_ds = np.interp(t_k, run.result.t, run.result.output("T_ds"))
+    out: dict[str, Any] = {
+        "servo_capacity_force": float(law.servo_capacity),
+        "torque_request_min": float(np.min(req)) if req.size else float("nan"),
+        "torque_request_exceeded": float(np.mean(np.abs(T_ds) > req)) if req.size else 0.0,
+        "torque_request_honoured": law.config.spec.torque_request == "honoured"}
+    if out["torque_request_honoured"]:
+        demand = np.abs(law._load[:tr.shape[0]][ran])
+        cut = demand - np.abs(tr[ran, 1])
+        limited = cut > 1e-9 * np.maximum(demand, 1.0)
+        out["torque_limited"] = float(np.mean(limited)) if req.size else 0.0
+        out["torque_reduction"] = float(np.max(cut)) if req.size else 0.0
+        out["torque_limited_time"] = float(np.count_nonzero(limited) * law.dt)
     return out
 
 

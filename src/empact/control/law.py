@@ -15,7 +15,12 @@ At each sample ``k`` (period ``dt = 1 / rate``) the law
 4. adds the **clamping feedforward** (``feedforward``): the secondary servo torque that holds
    the set-point's traction coefficient at the measured driveshaft torque and ratio,
    ``T_ms,ff = (i_e s / i_c) T_ds cos(beta) / (2 mu_hat R_s(r_g))`` with ``mu_hat =
-   traction_error * mu(nu*, r_g*)`` (times ``feedforward_gain``: below 1 it leaves the belt
+   traction_error * mu(nu*, r_g*)`` (``feedforward_signal``: the driveshaft torque a bench
+   measures, the load motor's torque, or, with no torque sensor, an engine-torque estimate:
+   the torque of the machine's torque source as its controller reports it,
+   ``sensors.engine_torque_delay`` late and ``1 + sensors.engine_torque_error`` times the
+   truth; on the test bench the source is the load motor, which sets the torque the belt
+   carries as a car's engine does) (times ``feedforward_gain``: below 1 it leaves the belt
    part of its damping of the driveshaft mode, which a full feedforward of the driveshaft
    torque cancels; with ``feedforward_gain_table``, the integral of the table's gain over
    the full force ``F_full = T_ds cos(beta) / (2 mu_hat R_s)``, so that a change of load
@@ -43,7 +48,14 @@ At each sample ``k`` (period ``dt = 1 / rate``) the law
    the speed limiter) and feeds the difference back to the controller state (observer-form
    anti-windup, Astrom & Wittenmark, *Computer-Controlled Systems*, 3rd ed., Sec. 9.4:
    ``x_c' = A x_c + B e + L (u_applied - u_controller)``, ``L`` the steady Kalman gain of
-   the controller's ``(A, C)``, so that ``A - L C`` is stable).
+   the controller's ``(A, C)``, so that ``A - L C`` is stable);
+8. with ``torque_request``, protects a saturating secondary servo: it requests at most the
+   torque the servo can clamp for, ``T_request = F_cap 2 mu_hat R_s(r_g) / cos(beta)``
+   (secondary shaft; ``r_g T_request`` at the engine), ``F_cap`` the clamping the servo's
+   torque limit holds with ``torque_request_margin`` of it kept for the slip loop; honoured
+   (``"honoured"``) the bench's load torque follows it, ``|T_l| <= T_request``, as an engine
+   honours a transmission's torque request.  The controller knows its servo's limit, the
+   measured ratio and its own traction estimate: no other sensor.
 
 The servo torques are the trim's holding torques plus these terms: the controller starts in
 its steady state at the trim (its integrators hold the holding torques less the
@@ -132,6 +144,9 @@ SHIPPED_LOOP = {"feedforward": True, "feedforward_gain": 0.9,
 
 #: what the law reads from the machine, in this order (model outputs)
 RAW_SIGNALS = ("r_g", "omega_p", "omega_s", "T_ds", "omega_mp", "omega_ms", "T_l_act")
+#: what the driveshaft-torque observer (``feedforward_signal = "T_ds_est"``) reads after
+#: `RAW_SIGNALS`: the wheel (load) speed, which a car's wheel-speed sensors give
+OBSERVER_SIGNAL = "omega_l"
 _SPEEDS = (1, 2)  # RAW_SIGNALS indices counted by encoders
 
 
@@ -280,9 +295,13 @@ class LoopLaw:
         value.
     duration : float
         Length of the run [s] (the references and noise are prepared for it).
+    load : array (k, 2), optional
+        The bench's load-torque demand ``[[t, T_l], ...]`` [s, N m] that an honoured torque
+        request (``torque_request = "honoured"``) limits (default: the point's ``T_l``
+        held); the law then commands ``T_l`` too.
     """
 
-    commands = ("T_mp", "T_ms")
+    commands: tuple[str, ...] = ("T_mp", "T_ms")
     _c: core.LawConstants
     _tb: core.LawTables
     _wk: core.LawWork
@@ -290,7 +309,7 @@ class LoopLaw:
     def __init__(self, controller: Controller, model: EmpactModel, point: Mapping[str, float],
                  u0: NDArray, config: LoopConfig,
                  references: Mapping[str, NDArray] | None = None,
-                 duration: float = 0.0) -> None:
+                 duration: float = 0.0, load: NDArray | None = None) -> None:
         self.config = cfg = config
         self.dt = dt = cfg.dt
         spec = cfg.spec
@@ -336,11 +355,25 @@ class LoopLaw:
         self._n_buf = self._delay + self._window
         self._speed_quantum = (2 * np.pi / (s.speed_counts * self._window * dt)
                                if s is not None else 0.0)
+        self._observer = spec.feedforward and spec.feedforward_signal == "T_ds_est"
+        self._estimate = self._observer or (spec.feedforward
+                                            and spec.feedforward_signal == "T_e_est")
+        self._n_est = 0
+        if self._estimate:
+            est_delay = s.engine_torque_delay if s is not None else 0.0
+            self._n_est = int(round(est_delay / dt)) + 1
+        self._request = spec.torque_request != "off"
+        self._honour = spec.torque_request == "honoured"
+        if self._honour:
+            self.commands = ("T_mp", "T_ms", "T_l")
+        self._load = (reference_table({"T_l": np.asarray(load, float)}, self.t_k)["T_l"]
+                      if self._honour and load is not None else
+                      np.full(self.n_k, self.point["T_l"]) if self._honour else np.zeros(1))
         self._noise = self._make_noise()
         # the law's state: buffers, feedforward filter, controller
         self._nb = len(RAW_SIGNALS) * self._n_buf
         self._R_s_last = (float("nan"), float("nan"))
-        self.n_state = self._nb + 2 + cd.n
+        self.n_state = self._nb + 2 + self._n_est + self._observer + cd.n
         self._alpha_ff = float(np.exp(-2 * np.pi * spec.feedforward_filter_hz * dt))
         self._alpha_dec = float(np.exp(-2 * np.pi * spec.decoupling_filter_hz * dt))
         self._decoupling0 = float(self.refs.decoupling[0])
@@ -348,10 +381,11 @@ class LoopLaw:
         self._L_aw = _antiwindup_gain(cd.A, cd.C) if spec.anti_windup else \
             np.zeros((cd.n, 2))
         self.raw0 = self.raw_at_rest(self.point)
-        F0 = self._ff_force(self.raw0[3], self.raw0[0], self.refs.mu[0])  # T_ds = T_l
+        F0 = self._ff_force(self._ff_torque0(), self.raw0[0], self.refs.mu[0])
         self._F0 = F0 if spec.feedforward else 0.0
         self._bias = np.array([self.u0[0], self.u0[1] - self._tpf * self._F0])
         self._T_ms_start = float(self.u0[1])
+        self._F_cap = self._servo_capacity()
         self._pack()
         if spec.clamping == "safety-factor":
             # the pre-processing's secondary servo torque at rest (the decoupler's zero)
@@ -390,7 +424,12 @@ class LoopLaw:
             tau_ref=self._tau_ref, mask1=self.output_mask[1], limited=lim is not None,
             T_max=lim.T_mp_max if lim else 0.0, w_max=lim.omega_mp_max if lim else 0.0,
             S_max=lim.T_ms_max if lim else 0.0, v_max=lim.omega_ms_max if lim else 0.0,
-            band=SPEED_BAND, anti_windup=spec.anti_windup)
+            band=SPEED_BAND, anti_windup=spec.anti_windup,
+            ff_est=self._estimate, n_est=self._n_est,
+            est_gain=self._c_est_gain() if self._estimate else 1.0,
+            obs=self._observer, obs_k=p.driveline.k_ds * self.dt,
+            obs_a=-float(np.expm1(-2 * np.pi * spec.observer_hz * self.dt)),
+            request=self._request, honour=self._honour, F_cap=self._F_cap)
         # the shift feedforward's geometry at the reference ratio where it moves
         geo = [np.full(self.n_k, np.nan) for _ in range(4)]
         ks = np.flatnonzero(refs.rdot != 0.0) if spec.shift_feedforward else np.zeros(0, int)
@@ -404,8 +443,10 @@ class LoopLaw:
             mu_max=self.model.mu_max(refs.r_g) if sched is not None else np.zeros(self.n_k),
             R_p=geo[0], R_s=geo[1], phi=geo[2], kappa_geo=geo[3], noise=self._noise,
             schedule=sched._packed if sched is not None else np.zeros(2), A=c.A, B=c.B,
-            C=c.C, D=c.D, L=self._L_aw, ff_table=self._ff_table, p=self.model.p)
-        self._wk = core.work(len(RAW_SIGNALS))
+            C=c.C, D=c.D, L=self._L_aw, ff_table=self._ff_table, p=self.model.p,
+            load=self._load)
+        self._wk = core.work(len(self.measured), len(self.commands),
+                             self.n_k if self._request else 1)
 
     def _law_at(self, ref: NDArray, k: int) -> Any:
         """The law on one row of tables: sample `k`'s noise, the references `ref` (``r_g,
@@ -424,7 +465,8 @@ class LoopLaw:
             R_p=one[0], R_s=one[1], phi=one[2], kappa_geo=one[3],
             noise=self._tb.noise[kk:kk + 1], schedule=self._tb.schedule, A=self._tb.A,
             B=self._tb.B, C=self._tb.C, D=self._tb.D, L=self._tb.L,
-            ff_table=self._tb.ff_table, p=self._tb.p), self._wk)
+            ff_table=self._tb.ff_table, p=self._tb.p,
+            load=self._tb.load[min(kk, self._tb.load.shape[0] - 1):][:1]), self._wk)
 
     # -- set-up ----------------------------------------------------------------------------
     def _references(self, references: Mapping[str, NDArray]) -> _Refs:
@@ -495,15 +537,22 @@ class LoopLaw:
             The steady operating point (``r_g``, ``omega_p``, ... in SI units).
         """
         w_p = point["omega_p"]
-        return np.array([point["r_g"], w_p, point["r_g"] * w_p * (1 - point["nu"]),
-                         point["T_l"], 0.0, 0.0, point["T_l"]])
+        w_s = point["r_g"] * w_p * (1 - point["nu"])
+        raw = [point["r_g"], w_p, w_s, point["T_l"], 0.0, 0.0, point["T_l"]]
+        if self._observer:
+            raw.append(w_s)  # the wheel speed at rest: the output speed (no final drive)
+        return np.array(raw)
 
     def initial_state(self) -> NDArray[np.float64]:
         """The law's state at rest at the starting point (buffers full of the point's
         measurements, the feedforward filter settled, the controller state zero)."""
         z = np.zeros(self.n_state)
-        z[:self._nb] = np.repeat(self.raw0, self._n_buf)
-        z[self._nb] = self._ff_force(self.raw0[3], self.raw0[0], self.refs.mu[0])
+        z[:self._nb] = np.repeat(self.raw0[:len(RAW_SIGNALS)], self._n_buf)
+        z[self._nb] = self._ff_force(self._ff_torque0(), self.raw0[0], self.refs.mu[0])
+        if self._n_est:  # the estimate at rest: its value of the start, settled
+            z[self._nb + 2:self._nb + 2 + self._n_est] = self.raw0[6]
+        if self._observer:  # the observer at rest: the estimate's torque
+            z[self._nb + 2 + self._n_est] = self._ff_torque0()
         return z
 
     def reset(self) -> None:
@@ -514,8 +563,9 @@ class LoopLaw:
 
     @property
     def measured(self) -> tuple[str, ...]:
-        """What the simulator hands the law at each sample (`RAW_SIGNALS`)."""
-        return RAW_SIGNALS
+        """What the simulator hands the law at each sample (`RAW_SIGNALS`, then
+        `OBSERVER_SIGNAL` for the driveshaft-torque observer)."""
+        return RAW_SIGNALS + ((OBSERVER_SIGNAL,) if self._observer else ())
 
     # -- the law ---------------------------------------------------------------------------
     def _R_s(self, r_g: float) -> float:
@@ -525,6 +575,44 @@ class LoopLaw:
         if r != self._R_s_last[0]:
             self._R_s_last = (r, secondary_radius(r, self._L, self._a))
         return self._R_s_last[1]
+
+    def _ff_torque0(self) -> float:
+        """The clamping feedforward's torque at rest [N m]: ``T_ds = T_l``, or the torque
+        estimate's ``(1 + engine_torque_error) T_l``."""
+        if not self._estimate:
+            return float(self.raw0[3])
+        return float(self._c_est_gain() * self.raw0[6])
+
+    def _c_est_gain(self) -> float:
+        """The engine-torque estimate over the truth, ``1 + engine_torque_error`` [-]."""
+        s = self.config.sensors
+        return 1.0 + (s.engine_torque_error if s is not None else 0.0)
+
+    def _servo_capacity(self) -> float:
+        """The clamping force [N] the secondary servo holds with ``torque_request_margin``
+        of its torque limit held back: ``(+-(1 - margin) T_ms_max - T_0) / tpf`` (the sign
+        of ``tpf``, the servo torque per N of clamping, which the sheaves' sense sets),
+        ``T_0`` the holding torque's share that does not scale with the clamping (at the
+        start); NaN without limits."""
+        lim = self.config.limits
+        if lim is None:
+            return float("nan")
+        T_0 = self.u0[1] - self._tpf * self.point["F_s"]
+        margin = self.config.spec.torque_request_margin
+        return float((np.copysign((1 - margin) * lim.T_ms_max, self._tpf) - T_0) / self._tpf)
+
+    @property
+    def servo_capacity(self) -> float:
+        """The clamping force [N] the torque request is computed for (`_servo_capacity`:
+        the secondary servo's torque limit less its margin); NaN without limits."""
+        return self._F_cap
+
+    @property
+    def request_trace(self) -> NDArray[np.float64]:
+        """Per sample (`t_k`) the torque request [N m] (secondary shaft) and the load torque
+        the bench applied [N m] (NaN where not honoured, or not reached), shape (n_k, 2);
+        shape (1, 2) of NaN without a torque request."""
+        return self._wk.trace.copy()
 
     def _ff_force(self, T_ds: float, r_g: float, mu_ref: float) -> float:
         """Clamping force [N] that holds the traction coefficient ``traction_error * mu_ref``
@@ -587,8 +675,9 @@ class LoopLaw:
 
     @property
     def n_pre(self) -> int:
-        """Size of the sensor, feedforward and decoupler state (`preprocess`)."""
-        return self._nb + 2
+        """Size of the sensor, feedforward and decoupler state (`preprocess`; with the
+        engine-torque estimate's buffer)."""
+        return self._nb + 2 + self._n_est + self._observer
 
     @property
     def output_mask(self) -> NDArray[np.float64]:
@@ -649,9 +738,9 @@ class LoopLaw:
     def _raw(self, raw: NDArray) -> NDArray[np.float64]:
         """The raw measurements as the compiled sample takes them (float64, shape (7,))."""
         raw = np.ascontiguousarray(raw, dtype=float)
-        if raw.shape != (len(RAW_SIGNALS),):
+        if raw.shape != (len(self.measured),):
             raise ValueError(f"raw measurements of shape {raw.shape}: expected "
-                             f"({len(RAW_SIGNALS)},), {', '.join(RAW_SIGNALS)}")
+                             f"({len(self.measured)},), {', '.join(self.measured)}")
         return raw
 
     def _shift_geometry(self, r: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:

@@ -109,6 +109,11 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
         feedforward servo torques ``(T_mp, T_ms)`` [N m] per unit deviation (SI units of
         each signal); ``n_pre`` is ``law.n_pre``.
     """
+    if law.config.spec.feedforward and law.config.spec.feedforward_signal in ("T_e_est",
+                                                                              "T_ds_est"):
+        raise ParameterError(f"feedforward_signal = {law.config.spec.feedforward_signal!r}: "
+                             "the loop's linear model covers the feedforward of T_ds or "
+                             "T_l_act (not the engine-torque estimate's delay)")
     s0 = law.z0[:law.n_pre]
     y0 = law.raw0
     r0 = np.array([law.refs.r_g[0], law.refs.slip[0], law.refs.mu[0], 0.0])

@@ -12,15 +12,20 @@ from dataclasses import dataclass
 from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
 
-__all__ = ["ControllerSpec", "CLAMPING", "MU_DESIGN", "FF_SIGNALS"]
+__all__ = ["ControllerSpec", "CLAMPING", "MU_DESIGN", "FF_SIGNALS", "TORQUE_REQUEST"]
 
 #: clamping strategies of a closed-loop scenario: the slip loop, or a production CVT's
 #: open-loop safety factor
 CLAMPING = ("feedback", "safety-factor")
 #: the safety-factor strategy's traction coefficient: one for all ratios, or per ratio
 MU_DESIGN = ("ratio-blind", "ratio-aware")
-#: what the clamping feedforward may use: the driveshaft torque, the load motor's torque
-FF_SIGNALS = ("T_ds", "T_l_act")
+#: what the clamping feedforward may use: the driveshaft torque, the load motor's torque, or
+#: an engine-torque estimate (the torque source's torque as its controller reports it: late
+#: and off by the ``[sensors]`` ``engine_torque_delay`` and ``engine_torque_error``)
+FF_SIGNALS = ("T_ds", "T_l_act", "T_e_est", "T_ds_est")
+#: the torque request of a saturating secondary servo: none, requested (computed and
+#: reported, nobody honours it), or honoured (the bench's load torque follows it)
+TORQUE_REQUEST = ("off", "requested", "honoured")
 
 
 @dataclass(frozen=True)
@@ -47,9 +52,22 @@ class ControllerSpec:
         from 0, gains in [0, 1.5], linear between them and held beyond; the feedforward
         clamps for ``int_0^F_full gain(F) dF`` (so that the gain of a change is the table's
         at every load, issue 33).  None: ``feedforward_gain`` at every load.
-    feedforward_signal : {"T_ds", "T_l_act"}
-        The driveshaft torque a bench measures, or the load motor's torque (a vehicle's
-        engine torque estimate plays its part at the input).
+    feedforward_signal : {"T_ds", "T_l_act", "T_e_est", "T_ds_est"}
+        The driveshaft torque a bench measures, the load motor's torque (exact, one sample
+        late), or an engine-torque estimate: the torque of the machine's torque source as
+        its controller reports it, ``engine_torque_delay`` late and ``(1 +
+        engine_torque_error)`` times the truth (`empact.hardware.SensorParams`); on the test
+        bench (drive speed-, load torque-controlled) the source is the load motor, which
+        sets the torque the belt carries as a car's engine does; no torque sensor.
+        ``"T_ds_est"``: the driveshaft torque observed without a torque sensor, the
+        driveline's twist rate (the output speed less the wheel speed, which a car's
+        wheel-speed sensors give) times its stiffness integrated, pulled to the
+        engine-torque estimate below ``observer_hz``.
+    observer_hz : float
+        Corner of the driveshaft-torque observer's correction by the engine-torque estimate
+        [Hz] (``"T_ds_est"``; default 0.1: at 0.5 the estimate's 15 % error reaches the
+        clamping within the load steps' settling window, and the slip misses its 0.2 pp
+        there at r_g 1 and 2; the observer reads the shaft speeds unquantised).
     feedforward_filter_hz : float
         Corner of the feedforward's first-order low-pass [Hz].
     traction_error : float
@@ -67,6 +85,18 @@ class ControllerSpec:
     shift_feedforward : bool
         Coordinated shifting: the primary servo torque of the reference's ratio rate and the
         clamping of the secondary side's acceleration, fed forward.
+    torque_request : {"off", "requested", "honoured"}
+        Protection of a saturating secondary servo: the law computes ``T_request`` [N m],
+        the secondary-shaft torque the servo can clamp for at the slip set-point with
+        ``torque_request_margin`` of its torque limit held back (the engine's share is
+        ``r_g T_request``), and reports it (``"requested"``); ``"honoured"``: the test
+        bench's load torque ``T_l`` follows it (``|T_l| <= T_request``, the load-torque
+        demand otherwise), as an engine honours a transmission's torque request.
+    torque_request_margin : float
+        Share of the secondary servo's torque limit held back from the request for the slip
+        loop's transients [-], in [0, 0.9] (default 0.25: on a 50 % load step at r_g = 0.5
+        the loop's clamping overshoots its new steady value by about 20 %, 33.7 kN for 28
+        kN at 18 kN; at 0.1 that step macro-slips with the servo at its limit).
     anti_windup : bool
     sensors, limits : bool
         The parameter set's (and the scenario's) sensors and servo limits; False: ideal.
@@ -81,6 +111,7 @@ class ControllerSpec:
     feedforward_gain_table: tuple[tuple[float, float], ...] | None = None
     feedforward_signal: str = "T_ds"
     feedforward_filter_hz: float = 100.0
+    observer_hz: float = 0.1
     traction_error: float = 1.0
     clamping: str = "feedback"
     safety_factor: float = 1.3
@@ -88,6 +119,8 @@ class ControllerSpec:
     decoupling: bool = False
     decoupling_filter_hz: float = 5.0
     shift_feedforward: bool = False
+    torque_request: str = "off"
+    torque_request_margin: float = 0.25
     anti_windup: bool = True
     sensors: bool = True
     limits: bool = True
@@ -102,6 +135,9 @@ class ControllerSpec:
         object.__setattr__(self, "decoupling_filter_hz", check_number(
             "controller.decoupling_filter_hz", self.decoupling_filter_hz, 0.0, 0.5 * rate,
             lo_open=True, unit="Hz", note="below the Nyquist frequency"))
+        object.__setattr__(self, "observer_hz", check_number(
+            "controller.observer_hz", self.observer_hz, 0.0, 0.5 * rate, lo_open=True,
+            unit="Hz", note="below the Nyquist frequency"))
         object.__setattr__(self, "traction_error", check_number(
             "controller.traction_error", self.traction_error, 0.5, 2.0))
         object.__setattr__(self, "feedforward_gain", check_number(
@@ -114,6 +150,13 @@ class ControllerSpec:
         check_choice("controller.clamping", self.clamping, CLAMPING)
         check_choice("controller.mu_design", self.mu_design, MU_DESIGN)
         check_choice("controller.feedforward_signal", self.feedforward_signal, FF_SIGNALS)
+        check_choice("controller.torque_request", self.torque_request, TORQUE_REQUEST)
+        object.__setattr__(self, "torque_request_margin", check_number(
+            "controller.torque_request_margin", self.torque_request_margin, 0.0, 0.9,
+            lo_open=False))
+        if self.torque_request != "off" and not self.limits:
+            raise ParameterError(f"controller.torque_request = {self.torque_request!r}: needs "
+                                 "the servo limits (controller.limits = true)")
         for name in ("feedforward", "decoupling", "shift_feedforward", "anti_windup",
                      "sensors", "limits"):
             check_bool(f"controller.{name}", getattr(self, name))

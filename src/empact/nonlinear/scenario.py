@@ -34,7 +34,10 @@ and, optionally, a controller and its references::
     file = "shipped:pi"       # a controller file (relative to this file) or a shipped one
     rate = 1000.0             # sample rate [Hz]; zero-order hold between samples
     feedforward = true        # clamping feedforward of a measured torque:
-    feedforward_signal = "T_ds"   # the driveshaft torque, or "T_l_act" (the load motor's)
+    feedforward_signal = "T_ds"   # the driveshaft torque, "T_l_act" (the load motor's), or
+                              # "T_e_est" (an engine-torque estimate: no torque sensor)
+                              # or "T_ds_est" (observed from it and the twist rate)
+    observer_hz = 0.1         # the observer's correction by the estimate [Hz]
     feedforward_gain = 0.9    # the share of it clamped for
     feedforward_gain_table = [[0.0, 0.5], [4000.0, 0.5], [8000.0, 0.9]]  # optional: the
                               # gain of a change over the full feedforward force [N, -]
@@ -46,6 +49,9 @@ and, optionally, a controller and its references::
     decoupling = true         # the primary servo follows the feedforward's clamping
     decoupling_filter_hz = 5.0    # its low-pass corner [Hz] (also the shift feedforward's)
     shift_feedforward = false # coordinated shifting: feedforward of the ratio reference's rate
+    torque_request = "off"    # a saturating secondary servo: "requested" (T_request computed
+                              # and reported) or "honoured" (the bench's load torque follows it)
+    torque_request_margin = 0.25  # share of the servo's torque limit kept for the slip loop
     anti_windup = true
     sensors = true            # false: ideal sensors (no delay, quantisation, noise)
     limits = true             # false: no servo limits
@@ -53,6 +59,8 @@ and, optionally, a controller and its references::
 
     [sensors]                 # optional: overrides of the parameter set's [sensors]
     delay = 1
+    engine_torque_delay = 0.02    # the engine-torque estimate's delay [s] and error [-]
+    engine_torque_error = 0.15
 
     [limits]                  # optional: overrides of the parameter set's [servo]
     T_ms_max = 15.0

@@ -15,7 +15,7 @@ from ..plotting import (
 from ..reproduction import control as rep
 from .context import Context
 
-__all__ = ["control", "studies"]
+__all__ = ["control", "studies", "estimate_table"]
 
 
 def _fmt(v) -> str:
@@ -138,10 +138,57 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
                     "its file); the linear prediction is the loop model's at the scenario's "
                     "start (limits inactive, no noise): close for the load steps, far off for "
                     "the shifts, which leave the operating point the model is linearised at")
+        + estimate_table(ctx, res)
         + ctx.table("control_envelope", ["r_g", "largest rate [1/s]", "limit that binds",
                                          "F_s at it [kN]", "|T_mp| at it [N m]"], env_rows,
                     "The shift-rate envelope (quasi-static; empact.control.shifting)")
         + ctx.claims(res.claims))
+
+
+def estimate_table(ctx: Context, res: rep.ControlSection) -> str:
+    """The table of the scenarios' targets with the clamping feedforward on the driveshaft
+    torque and on the engine-torque estimate (`empact.reproduction.control.estimate_targets`,
+    issue 33).
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build (the table is also written as CSV).
+    res : ControlSection
+        Its ``estimate`` and ``loop`` (the parameter set's sensors: the estimate's delay).
+
+    Returns
+    -------
+    str
+        HTML: one row per scenario and target, a column per feedforward signal ("value:
+        met" or "value: MISSED"); empty without estimate runs or sensors.
+    """
+    cols = next(iter(res.estimate.values()), {})
+    rows = []
+    for n, by_ff in res.estimate.items():
+        for i, chk in enumerate(by_ff["T_ds"]):
+            row = [n, chk.name, chk.describe().split("(")[1].split(")")[0]]
+            for checks in by_ff.values():
+                got = checks[i]
+                value, unit = shown_metric(got.name, got.value)
+                row.append(_fmt(value) + (f" {unit}" if unit else "") +
+                           (": met" if got.met else ": MISSED"))
+            rows.append(row)
+    sensors = res.loop.sensors
+    if not rows or sensors is None:
+        return ""
+    return ctx.table(
+        "control_estimate", ["scenario", "metric", "target"] +
+        [f"feedforward on {k}" for k in cols], rows,
+        "The scenarios whose clamping feedforward runs, against their targets with the "
+        "feedforward on the driveshaft torque (a bench's sensor, as shipped) and without a "
+        "torque sensor: on an engine-torque estimate alone (T_e_est: the torque source's, "
+        "here the load motor's, as its controller reports it, "
+        f"{1e3 * sensors.engine_torque_delay:g} ms late and 15 % low or high), and on the "
+        "driveshaft torque observed from it and the driveline's twist rate, output less "
+        "wheel speed (T_ds_est). A load step excites the driveline's shuffle mode (the "
+        "driveshaft torque swings about 20 % past its new value), which the estimate alone "
+        "cannot follow")
 
 
 def studies(ctx: Context, res: rep.StudiesSection) -> str:

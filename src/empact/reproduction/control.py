@@ -6,7 +6,7 @@ Monte Carlo study of the parameter spread, the clamping saving against a safety 
 1.3, and the shift-rate envelope.  Compute only: `empact.report` renders."""
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -43,7 +43,8 @@ from ..params import Params
 from .claims import Claim
 
 __all__ = ["DESIGN_GRID", "SHIPPED_DESIGNS", "ControlSection", "StudiesSection", "control",
-           "control_studies", "shipped_controller", "MC_RUNS", "MC_SCENARIO"]
+           "control_studies", "shipped_controller", "MC_RUNS", "MC_SCENARIO",
+           "ESTIMATE_ERRORS", "ESTIMATE_SIGNALS", "estimate_targets", "estimate_label"]
 
 #: how the shipped controllers (``data/control/pi.json``, ``hinf.json``) are designed:
 #: ``empact control design --method pi --schedule --bandwidth 0.5,1 --alpha-min 0.5 --out
@@ -66,6 +67,15 @@ SAVING_TARGET = 0.15
 #: largest difference of the slip's and the clamping force's excursions as a share of the
 #: nonlinear excursion
 PREDICTION_TOLERANCE = 0.15
+#: the engine-torque estimate's errors (``sensors.engine_torque_error``) the shipped
+#: scenarios run at with their clamping feedforward on the estimate (issue 33: a production
+#: estimate is 10-15 % off, of either sign; its delay is the parameter set's
+#: ``sensors.engine_torque_delay``, 20 ms)
+ESTIMATE_ERRORS = (-0.15, 0.15)
+#: the clamping feedforward's signals without a torque sensor (`empact.control.law`): the
+#: engine-torque estimate alone, and the driveshaft torque observed from it and the
+#: driveline's twist rate (output and wheel speeds)
+ESTIMATE_SIGNALS = ("T_e_est", "T_ds_est")
 
 SRC = "issue 21 (beyond the paper)"
 
@@ -118,6 +128,10 @@ class ControlSection:
         The shift-rate envelope of the shift scenario.
     claims : tuple of Claim
         The targets checked.
+    estimate : dict of str to dict of str to list of TargetCheck
+        ``{scenario: {feedforward: [TargetCheck]}}`` (`estimate_targets`): the scenarios
+        whose clamping feedforward runs, with it on the driveshaft torque and on the
+        engine-torque estimate.
     """
 
     family: PlantFamily
@@ -129,6 +143,7 @@ class ControlSection:
     predictions: dict[str, Prediction]
     envelope: ShiftEnvelope
     claims: tuple[Claim, ...]
+    estimate: dict[str, dict[str, list[TargetCheck]]] = field(default_factory=dict)
 
     @property
     def margin_maps(self) -> dict[str, DiskMarginMap]:
@@ -242,7 +257,64 @@ def control(params: Params) -> ControlSection:
                               LoopConfig.for_scenario(shift, params).limits)
     claims = _claims(family, loops, runs, targets, predictions, envelope)
     return ControlSection(family, ctrls, loop, loops, runs, targets, predictions, envelope,
-                          tuple(claims))
+                          tuple(claims), estimate_targets(params, scenarios, targets))
+
+
+def estimate_label(signal: str, error: float) -> str:
+    """The column name of a feedforward `signal` on the engine-torque estimate `error` [-]
+    in `estimate_targets`.
+
+    Parameters
+    ----------
+    signal : str
+        ``controller.feedforward_signal`` (one of `ESTIMATE_SIGNALS`).
+    error : float
+        ``sensors.engine_torque_error`` [-].
+
+    Returns
+    -------
+    str
+        E.g. ``"T_e_est -15 %"``.
+    """
+    return f"{signal} {100 * error:+g} %"
+
+
+def estimate_targets(params: Params, scenarios: dict[str, Scenario],
+                     targets: dict[str, list[TargetCheck]]) -> dict[str, dict[str,
+                                                                            list[TargetCheck]]]:
+    """Each shipped scenario whose clamping feedforward runs (``feedback`` clamping with
+    ``feedforward``) against its targets with the feedforward on the driveshaft torque (its
+    checks `targets`, as shipped) and on each signal of `ESTIMATE_SIGNALS` (the engine-torque
+    estimate ``sensors.engine_torque_delay`` late, alone or in the driveshaft-torque
+    observer), at each error of `ESTIMATE_ERRORS`.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set.
+    scenarios : dict of str to Scenario
+        The shipped closed-loop scenarios by name.
+    targets : dict of str to list of TargetCheck
+        Their checks as shipped (the driveshaft torque's feedforward).
+
+    Returns
+    -------
+    dict of str to dict of str to list of TargetCheck
+        ``{scenario: {"T_ds": checks, estimate_label(signal, error): checks, ...}}``.
+    """
+    out: dict[str, dict[str, list[TargetCheck]]] = {}
+    for n, sc in scenarios.items():
+        spec = sc.controller
+        if spec is None or not spec.feedforward or spec.clamping != "feedback":
+            continue
+        out[n] = {"T_ds": targets[n]}
+        for sig in ESTIMATE_SIGNALS:
+            for err in ESTIMATE_ERRORS:
+                est = replace(sc, controller=replace(spec, feedforward_signal=sig),
+                              sensors={**sc.sensors, "engine_torque_error": err})
+                out[n][estimate_label(sig, err)] = check_targets(
+                    run_closed_loop(est, params).metrics, sc.targets)
+    return out
 
 
 def control_studies(params: Params) -> StudiesSection:
