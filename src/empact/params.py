@@ -14,6 +14,8 @@ A parameter set has one section per concept::
     [thrust_ratio]      torque-dependent equilibrium thrust ratio kappa(tau, r_g)
     [paper_sec21]       stiffnesses of the paper's Sec. 2.1 kinematics (the published variant)
     [servo]             torque and speed limits of the servo drives (`empact.hardware`)
+    [losses]            the variator's losses beside the slip: clamping, load, drag
+                        (`empact.variator.losses`)
     [sensors]           the closed loop's instruments: delay, encoders, noise
     [operating]         the default operating point (r_g, nu, F_s, omega_p), used by every
                         analysis that is not given one (slip model, trim, plants, NMP, Fig. 2)
@@ -48,6 +50,7 @@ from .operating import (
     check_one_slip,
 )
 from .variator.geometry import VariatorParams, ratio_range
+from .variator.losses import LossParams
 from .variator.shift_law import ShiftParams
 from .variator.thrust_ratio import ThrustRatioParams
 from .variator.traction import TabulatedTraction, TractionParams, load_traction
@@ -57,7 +60,8 @@ __all__ = [
     "DrivelineParams", "TractionParams", "ShiftParams", "ThrustRatioParams", "Sec21Stiffness",
     "OperatingPoint", "ResolvedPoint", "Params", "default_params",
     "load_params", "save_params", "dumps_params", "read_toml", "DAMPING_LEVELS",
-    "OPERATING_VARIABLES", "ParameterInfo", "describe_parameters", "parameter_sources",
+    "OPERATING_VARIABLES", "LossParams", "ParameterInfo", "describe_parameters",
+    "parameter_sources",
     "check_clamping", "check_one_slip",
 ]
 
@@ -245,10 +249,10 @@ _SECTIONS = {
     "variator": VariatorParams, "actuation": ActuationParams, "driveline": DrivelineParams,
     "traction": TractionParams, "shift": ShiftParams, "thrust_ratio": ThrustRatioParams,
     "paper_sec21": Sec21Stiffness, "servo": ServoLimits, "sensors": SensorParams,
-    "operating": OperatingPoint,
+    "losses": LossParams, "operating": OperatingPoint,
 }
 #: sections whose every key has a default (a file may leave them out)
-_OPTIONAL_SECTIONS = ("servo", "sensors")
+_OPTIONAL_SECTIONS = ("servo", "sensors", "losses")
 
 
 @dataclass(frozen=True)
@@ -260,9 +264,9 @@ class Params:
     variator, actuation, damping, driveline, traction, shift : Section
         The frozen, validated blocks of the parameter file's tables (``[variator]``, ...;
         SI units, each field's unit and range in ``empact params show --describe``).
-    thrust_ratio, paper_sec21, servo, sensors : Section
-        The same, for the ``[thrust_ratio]``, ``[paper_sec21]``, ``[servo]`` and
-        ``[sensors]`` tables.
+    thrust_ratio, paper_sec21, servo, sensors, losses : Section
+        The same, for the ``[thrust_ratio]``, ``[paper_sec21]``, ``[servo]``, ``[sensors]``
+        and ``[losses]`` tables.
     operating : OperatingPoint
         The default operating point (``[operating]``).
     traction_table_file : str or None
@@ -286,6 +290,7 @@ class Params:
     paper_sec21: Sec21Stiffness
     servo: ServoLimits
     sensors: SensorParams
+    losses: LossParams
     operating: OperatingPoint
     traction_table_file: str | None = None
     traction_table: TabulatedTraction | None = field(default=None, compare=False, repr=False)

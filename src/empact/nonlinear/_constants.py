@@ -94,3 +94,8 @@ class KernelConstants(NamedTuple):
     thrust_table: float
     creep_table: float
     traction_table: float
+    loss_lambda_F: float
+    loss_k_T: float
+    loss_c_v: float
+    loss_c_q: float
+    loss_T_smooth: float
