@@ -277,6 +277,8 @@ UNITS = {
     "mean_losses": "W", "shape": "-", "points": "-", "trimmed": "-",
     "f_slow_hz": "Hz", "zeta_slow": "-", "n_rhp_zeros": "-", "rhp_zero_hz": "Hz", "runs": "-",
     "succeeded": "-", "failures": "-",
+    "energy": "J (every term)", "energy_balance_residual": "- (relative to the input energy)",
+    "duration": "s",
 }
 
 

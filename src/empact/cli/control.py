@@ -436,7 +436,8 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
     if as_json or json_out:  # slips as fractions, as the API gives them
         emit_json({"scenario": sc.name, "metrics": m,
                    "targets": [{"name": c.name, "met": c.met, "target": c.describe()}
-                               for c in checks]}, "control.simulate", json_out)
+                               for c in checks], **run.result.energy_balance()},
+                  "control.simulate", json_out)
     else:  # for people: slips in % and percentage points
         for k, v in m.items():
             v, unit = shown_metric(k, v)

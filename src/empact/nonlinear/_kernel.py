@@ -286,6 +286,17 @@ def _sabs(w):
     return w
 
 
+@njit(cache=True, inline="always")
+def _tanh(w):
+    """tanh(w) for real w, and for complex w of large real part, where numpy's complex tanh
+    overflows (cosh) to NaN: the complex step through a smooth sign at speed."""
+    if w.real < 0:
+        t = np.exp(2.0 * w)
+        return (t - 1.0) / (t + 1.0)
+    t = np.exp(-2.0 * w)
+    return (1.0 - t) / (1.0 + t)
+
+
 # -- what the value pass (`_eval`) and the tangent pass (`_tangent._eval_tangent`) compute
 # alike: each returns the values of its block (and, where the tangent pass needs them, the
 # local slopes), real or complex
@@ -408,10 +419,10 @@ def _losses(x, p, F_s, T_pb, R_p):
     (T_b - T_ls) omega_s``, and their difference is the sum of `VARIATOR_LOSSES`
     (identically, beside the locked belt's elastic power)."""
     wp, ws = x[15], x[16]
-    sg_p = np.tanh(wp / p[P_WC])
-    sg_s = np.tanh(ws / p[P_WC])
+    sg_p = _tanh(wp / p[P_WC])
+    sg_s = _tanh(ws / p[P_WC])
     T_clamp = p[P_LF] * F_s * R_p * sg_p
-    T_load = p[P_LT] * T_pb * np.tanh(T_pb / p[P_LTS]) * sg_p
+    T_load = p[P_LT] * T_pb * _tanh(T_pb / p[P_LTS]) * sg_p
     T_dp = p[P_LV] * wp + p[P_LQ] * wp * wp * sg_p
     T_dss = p[P_LV] * ws + p[P_LQ] * ws * ws * sg_s
     return T_clamp + T_load + T_dp, T_dss, T_clamp, T_load, T_dp, T_dss

@@ -53,12 +53,12 @@ from ._kernel import (
     P_KW,
     P_LAW,
     P_LF,
+    P_LKI,
+    P_LKP,
     P_LQ,
     P_LT,
     P_LTS,
     P_LV,
-    P_LKI,
-    P_LKP,
     P_MP,
     P_MS,
     P_RKD,
@@ -126,6 +126,7 @@ from ._kernel import (
     _finish,
     _losses,
     _springs,
+    _tanh,
     _torque_ratio,
     creep_coefficient_d,
     log_kappa_eq_d,
@@ -239,11 +240,11 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
     T_lp, T_dss, T_clamp, T_load, T_dp, _ = _losses(x, p, F_s, T_pb, R_p)
     wc = p[P_WC]
     lf, lt, lv, lq, lts = p[P_LF], p[P_LT], p[P_LV], p[P_LQ], p[P_LTS]
-    sg_p = np.tanh(wp / wc)
-    sg_s = np.tanh(ws / wc)
+    sg_p = _tanh(wp / wc)
+    sg_s = _tanh(ws / wc)
     sgp_w = (1.0 - sg_p * sg_p) / wc
     sgs_w = (1.0 - sg_s * sg_s) / wc
-    th_T = np.tanh(T_pb / lts)
+    th_T = _tanh(T_pb / lts)
     absT = T_pb * th_T
     absT_T = th_T + T_pb * (1.0 - th_T * th_T) / lts
     c0g = -s * i_e / (i_w * tb)
