@@ -112,9 +112,11 @@ def test_iosystem(params):
 
 # -- energy --------------------------------------------------------------------------------
 def test_energy_conserved_undamped_locked_belt(params):
-    """No damping, no friction, belt locked (no slip), Shafai's law at zero (no creep
-    resistance): the total energy is constant."""
-    m = nonlinear_model(params, damping="none", belt="locked", shift_law="shafai")
+    """No damping, no friction, no variator losses (issue 32's [losses] at zero), belt locked
+    (no slip), Shafai's law at zero (no creep resistance): the total energy is constant."""
+    lossless = params.from_dotted({"losses.lambda_F": 0.0, "losses.k_T": 0.0,
+                                   "losses.c_v": 0.0, "losses.c_q": 0.0})
+    m = nonlinear_model(lossless, damping="none", belt="locked", shift_law="shafai")
     op = trim(m, OperatingPoint(r_g=0.8, omega_p=300.0, F_s=10e3, T_l=0.0))
     x0 = op.x.copy()
     x0[6] += 2.0     # kick the primary servo [rad/s]

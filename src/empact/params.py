@@ -612,7 +612,7 @@ def describe_parameters(params: Params | None = None) -> list[ParameterInfo]:
     out = []
     blocks: list[tuple[str, Any]] = []
     for name in ("variator", "actuation", "damping", "driveline", "traction", "shift",
-                 "thrust_ratio", "paper_sec21", "servo", "sensors", "operating"):
+                 "thrust_ratio", "paper_sec21", "servo", "sensors", "losses", "operating"):
         block = getattr(params, name)
         if name == "damping":
             blocks += [(f"damping.{lvl}", getattr(block, lvl)) for lvl in DAMPING_LEVELS]
