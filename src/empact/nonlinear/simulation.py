@@ -182,6 +182,8 @@ def energy_balance(result: SimulationResult) -> dict[str, Any]:
     energy: dict[str, float] = {}
     for name, (torque, speed) in _POWERS.items():
         energy[name] = _integral(t, result.output(torque) * result.output(speed))
+    # the servos' electrical energy (issue 32 item 2) belongs beside their mechanical energy:
+    # ``energy["servo_electrical"]``, from the servo's electrical model's power output
     energy["input"] = (energy["drive"] + energy["servo_mechanical_primary"]
                        + energy["servo_mechanical_secondary"])
     energy["output"] = energy.pop("load")

@@ -315,15 +315,28 @@ def machine(params: Params) -> MachineSection:
               shown=bool(np.all(reserves < 1)),
               explanation="A shipped set-point sits at the traction limit."),
     )
+    # the variator's efficiency (issue 32)
     eff_rows, clamp_rows = _efficiency(params)
-    claims += _efficiency_claims(params, eff_rows, clamp_rows, src)
+    ec = _efficiency_checks(params, eff_rows, clamp_rows)
+    src32 = "issue 32 (the machine's efficiency, beyond the paper)"
+    claims += (
+        Claim(key="machine.efficiency", source=src32, claim=ec["eff_claim"],
+              computed=ec["eff_computed"], shown=ec["eff_shown"],
+              explanation="An efficiency lies outside the band, or a published trend is "
+                          "missing.", reading=ec["reading"], values=ec["eff_values"]),
+        Claim(key="machine.efficiency_clamping", source=src32, claim=ec["clamp_claim"],
+              computed=ec["clamp_computed"], shown=ec["clamp_shown"],
+              explanation="The maximum lies at an end of the sweep or outside the band of "
+                          "torque ratios.", reading=ec["reading"], values=ec["clamp_values"]),
+    )
     return MachineSection(curves, curve_rows, creep_rows, reserve_rows, smap, eff_rows,
                           clamp_rows, claims)
 
 
-def _efficiency_claims(params: Params, eff_rows: list[list[float]],
-                       clamp_rows: list[list[float]], src: str) -> tuple[Claim, ...]:
-    """The claims of the efficiency table and the clamping sweep (issue 32)."""
+def _efficiency_checks(params: Params, eff_rows: list[list[float]],
+                       clamp_rows: list[list[float]]) -> dict:
+    """What the efficiency claims of `machine` state: the verdicts, the computed texts, the
+    numbers, the reading (issue 32)."""
     lo, hi = (100 * v for v in EFFICIENCY_BANDS["efficiency"])
     e = np.array(eff_rows)
     eta = e[:, 4].reshape(len(EFFICIENCY_TAUS), len(EFFICIENCY_TORQUES),
@@ -335,43 +348,34 @@ def _efficiency_claims(params: Params, eff_rows: list[list[float]],
     k = int(np.argmax(c[:, 2]))
     tau_best = float(c[k, 0])
     t_lo, t_hi = EFFICIENCY_BANDS["tau_best"]
-    interior = 0 < k < len(c) - 1
     ls = params.losses
-    reading = (READING[MACHINE] + f"; [losses] lambda_F = {ls.lambda_F:g}, k_T = {ls.k_T:g}, "
-               f"c_v = {ls.c_v:g} N m s/rad, c_q = {ls.c_q:g} N m s^2/rad^2 (estimates, "
-               "each in its plausible band)")
     by_tau = "; ".join(
         f"tau {tau:.3f}: " + ", ".join(
             f"{T:g} N m {eta[i, j].min():.1f}-{eta[i, j].max():.1f} %"
             for j, T in enumerate(EFFICIENCY_TORQUES))
         for i, tau in enumerate(EFFICIENCY_TAUS))
-    return (
-        Claim(key="machine.efficiency", source=src,
-              claim=f"the variator's efficiency lies in the published {lo:.0f}-{hi:.0f} % over "
-                    "input torque 25-150 N m at 300 rad/s and every ratio 0.5-2, falling at "
-                    "low load and towards overdrive (Narita & Priest 2007; Micklem et al. "
-                    "1996)",
-              computed=f"{by_tau} (over r_g = 0.5, 1, 2); peak {eta.max():.2f} %; lower at "
-                       f"25 than at 150 N m at every ratio: {low_load}; lower at r_g 2 than "
-                       f"at r_g 1 at every torque: {overdrive}",
-              shown=in_band and low_load and overdrive,
-              explanation="An efficiency lies outside the band, or a published trend is "
-                          "missing.",
-              reading=reading,
-              values={"efficiency_min": float(eta.min()) / 100,
-                      "efficiency_max": float(eta.max()) / 100}),
-        Claim(key="machine.efficiency_clamping", source=src,
-              claim="the efficiency over clamping force has an interior maximum (van der "
-                    "Meulen et al., extremum seeking of CVT efficiency), at a torque ratio "
-                    f"between {t_lo:g} and {t_hi:g} at r_g 1, 60 N m",
-              computed=f"maximum {c[k, 2]:.3f} % at tau {tau_best:.2f} (F_s {c[k, 1]:.2f} kN) "
-                       f"over tau {c[0, 0]:.2f}-{c[-1, 0]:.2f} (F_s {c[-1, 1]:.2f}-"
-                       f"{c[0, 1]:.2f} kN): {c[0, 2]:.3f} % at the most clamping, "
-                       f"{c[-1, 2]:.3f} % at the least",
-              shown=interior and t_lo <= tau_best <= t_hi,
-              explanation="The maximum lies at an end of the sweep or outside the band of "
-                          "torque ratios.",
-              reading=reading,
-              values={"tau_best": tau_best, "F_s_best": float(c[k, 1]) * 1e3,
-                      "efficiency_best": float(c[k, 2]) / 100}),
-    )
+    return {
+        "reading": READING[MACHINE] + f"; [losses] lambda_F = {ls.lambda_F:g}, k_T = "
+                   f"{ls.k_T:g}, c_v = {ls.c_v:g} N m s/rad, c_q = {ls.c_q:g} N m s^2/rad^2 "
+                   "(estimates, each in its plausible band)",
+        "eff_claim": f"the variator's efficiency lies in the published {lo:.0f}-{hi:.0f} % "
+                     "over input torque 25-150 N m at 300 rad/s and every ratio 0.5-2, "
+                     "falling at low load and towards overdrive (Narita & Priest 2007; "
+                     "Micklem et al. 1996)",
+        "eff_computed": f"{by_tau} (over r_g = 0.5, 1, 2); peak {eta.max():.2f} %; lower at "
+                        f"25 than at 150 N m at every ratio: {low_load}; lower at r_g 2 than "
+                        f"at r_g 1 at every torque: {overdrive}",
+        "eff_shown": in_band and low_load and overdrive,
+        "eff_values": {"efficiency_min": float(eta.min()) / 100,
+                       "efficiency_max": float(eta.max()) / 100},
+        "clamp_claim": "the efficiency over clamping force has an interior maximum (van der "
+                       "Meulen et al., extremum seeking of CVT efficiency), at a torque ratio "
+                       f"between {t_lo:g} and {t_hi:g} at r_g 1, 60 N m",
+        "clamp_computed": f"maximum {c[k, 2]:.3f} % at tau {tau_best:.2f} (F_s {c[k, 1]:.2f} "
+                          f"kN) over tau {c[0, 0]:.2f}-{c[-1, 0]:.2f} (F_s {c[-1, 1]:.2f}-"
+                          f"{c[0, 1]:.2f} kN): {c[0, 2]:.3f} % at the most clamping, "
+                          f"{c[-1, 2]:.3f} % at the least",
+        "clamp_shown": 0 < k < len(c) - 1 and t_lo <= tau_best <= t_hi,
+        "clamp_values": {"tau_best": tau_best, "F_s_best": float(c[k, 1]) * 1e3,
+                         "efficiency_best": float(c[k, 2]) / 100},
+    }
