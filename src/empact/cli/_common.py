@@ -119,7 +119,8 @@ def announce_compilation() -> None:
     class _Notice(event.Listener):
         def on_start(self, ev: Any) -> None:
             fn = getattr(ev.data.get("dispatcher"), "py_func", None)
-            if getattr(fn, "__module__", "").startswith("empact.") and not _announced.value:
+            if (getattr(fn, "__module__", None) or "").startswith("empact.") \
+                    and not _announced.value:  # (a generated function has no module)
                 _announced.value = 1
                 tqdm.write(COMPILING, file=sys.stderr)  # (a bar on a terminal is redrawn)
 

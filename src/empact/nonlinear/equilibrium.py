@@ -529,9 +529,15 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
     y = np.full((N, len(model.outputs)), nan)
     if g.size:
         _, y[g] = model.evaluate_many(x[g], u[g])
-        Tl = np.where(good, y[:, model.output_index("P_var_out")] / ((1 - nu_) * r * w), Tl)
-        T_d = np.where(good, y[:, model.output_index("P_var_in")] / w, r * Tb)
-        _driveline(model, x, u, T_d, Tl, w, (1 - nu_) * r * w)
+        omega_s = (1 - nu_) * r * w
+        if T_l is None:  # the load torque: the belt's less the secondary's drag
+            Tl = Tb - _drag(c, omega_s)
+        # the drive torque: the belt's on the primary and the primary's losses (each exactly
+        # zero without [losses]: then the trim is the lossless one to the bit)
+        lp = (y[:, model.output_index("P_loss_clamp")]
+              + y[:, model.output_index("P_loss_load")]) / w
+        T_d = np.where(good, r * Tb + lp + _drag(c, w), r * Tb)
+        _driveline(model, x, u, T_d, Tl, w, omega_s)
         dx, y[g] = model.evaluate_many(x[g], u[g])
         residual[g] = _residual(model, dx, y[g], F_p_act[g], u[g])
     for k in np.flatnonzero(good & ~(residual < RESIDUAL_TOL)):
