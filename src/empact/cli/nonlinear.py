@@ -112,7 +112,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
                    **res.energy_balance(),
                    "files": [] if dest is None else [str(dest / f"{sc.name}.csv")]},
                   "simulate", json_out)
-    else:
+    elif dest is not None:
         click.echo(str(dest / f"{sc.name}.csv"))
     if not res.complete:
         raise Failed(f"incomplete: {res.message}")

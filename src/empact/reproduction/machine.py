@@ -275,7 +275,7 @@ def machine(params: Params) -> MachineSection:
                          & (cw[:, 3] <= 1e3 * b["creep_per_rev"][1])))
     ok_c = bool(np.all((cw[:, 4] >= b["c_shift"][0]) & (cw[:, 4] <= b["c_shift"][1])))
     reserves = np.array([row[3] for row in reserve_rows])
-    claims = (
+    claims: tuple[Claim, ...] = (
         Claim(key="machine.traction", source=src,
               claim="the traction curve has a micro-slip slope: mu at 90 % of its peak at 1-2 "
                     "% slip, the peak at 2-4.5 % and 0.09-0.12, falling by 4 % at MED "
