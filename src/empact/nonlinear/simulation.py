@@ -469,7 +469,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     >>> res.complete, res.t.shape                      # 1 kHz samples
     (True, (501,))
     >>> res.output("nu")[[0, -1]].round(4)             # the slip [-] before and after
-    array([0.0144, 0.0242])
+    array([0.0144, 0.0244])
     """
     step = _integrator(method)
     x = np.array(x0, dtype=float)
