@@ -316,9 +316,11 @@ def test_regression_shipped_pi_is_the_documented_design(params):
     """Regression guard (data/control/pi.json): the shipped PI's schedule is the crossover
     gains of the design family at its stored crossovers (`_crossover_gains`, to 1e-9), on the
     design family's axes, with the shipped recipe (SHIPPED_DESIGNS) recorded in its design
-    data."""
+    data.  The PI was designed on the machine without the variator's losses (issue 32:
+    with them the family's crossover gains move by up to 6e-4 relative; a redesign is the
+    integrator's call), so the family is the lossless machine's."""
     c = shipped_controller("pi")
-    fam = design_family(params)
+    fam = design_family(_lossless(params))
     wc = 2 * np.pi * np.array(c.design["crossover_hz"])
     np.testing.assert_allclose(c.schedule.gains, _crossover_gains(fam, c.measured, wc),
                                rtol=1e-9)
@@ -416,6 +418,15 @@ SHIFT_RTOL = 1e-10
 _SHIPPED_RUNS: dict = {}
 
 
+def _lossless(params):
+    """`params` without the variator's losses of issue 32 (``[losses]`` at zero): the machine
+    the golden runs and the shipped PI's design were made on.  The goldens pin the law's
+    implementation, not the physics; with zero losses the model and its trims are the
+    lossless ones to the bit."""
+    return params.from_dotted({"losses.lambda_F": 0.0, "losses.k_T": 0.0,
+                               "losses.c_v": 0.0, "losses.c_q": 0.0})
+
+
 @pytest.fixture(scope="module")
 def golden():
     with np.load(GOLDEN) as g:
@@ -444,7 +455,7 @@ def test_regression_golden_closed_loop(params, golden, name):
     state at the end, the run's length and step count and every scalar metric.  The load
     steps ran compiled then too: bitwise; the shifts within `SHIFT_RTOL` of each signal's
     largest magnitude."""
-    run = run_closed_loop(load_scenario(control_example_path(name)), params)
+    run = run_closed_loop(load_scenario(control_example_path(name)), _lossless(params))
     res = run.result
     _SHIPPED_RUNS[name] = (run.law.model, res)
     g = {k[len(name) + 1:]: v for k, v in golden.items() if k.startswith(name + "/")}
@@ -483,7 +494,7 @@ def test_regression_golden_monte_carlo(params, golden):
         from make_golden import monte_carlo_runs
     finally:
         sys.path.remove(str(GOLDEN.parent))
-    new = monte_carlo_runs(params)
+    new = monte_carlo_runs(_lossless(params))
     assert new["montecarlo/ok"].all()
     for k, v in new.items():
         np.testing.assert_array_equal(v, golden[k], err_msg=k)
@@ -623,7 +634,8 @@ def test_regression_golden_linear_preprocess(params, golden):
     from empact.control.closed_loop import build_law
 
     for name in ("slip-load-step-r1", "shift-low-od"):
-        law = build_law(load_scenario(control_example_path(name)), params, ideal=True)
+        law = build_law(load_scenario(control_example_path(name)), _lossless(params),
+                        ideal=True)
         got = linear_preprocess(law)
         for k, v in got.items():
             np.testing.assert_array_equal(v, golden[f"linear/{name}/{k}"], err_msg=(name, k))

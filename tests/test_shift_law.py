@@ -9,7 +9,7 @@ from empact.errors import ParameterError
 from empact.linear.actuation import actuation_model
 from empact.nonlinear import _kernel as K
 from empact.nonlinear.equilibrium import trim
-from empact.nonlinear.model import nonlinear_model
+from empact.nonlinear.model import VARIATOR_LOSSES, nonlinear_model
 from empact.nonlinear.simulation import simulate
 from empact.params import OperatingPoint
 from empact.variator.shift_law import creep_coefficient, creep_damping, shift_rate
@@ -107,10 +107,13 @@ def test_creep_power_closes_the_balance(params, T_l):
     """Moderate damping and the creep law, a kick of the primary servo: E(t) - E(0) =
     int (P_in - P_diss) to 1e-4 of the dissipated energy.  Unloaded (tau = 0, kappa* =
     kappa_geo) the creep power P_creep = Lambda dr_g/dt is pure dissipation: >= 0 at every
-    sample (to 1e-9 of its peak) and more than 1 % of the total; loaded, its static part
-    (the torque's push on the ratio) also does work, of either sign."""
+    sample (to 1e-9 of its peak) and more than 1 % of the total beside the variator's
+    losses; loaded, its static part
+    (the torque's push on the ratio) also does work, of either sign.  (Unloaded is no belt
+    torque, zero slip: the load motor then carries the secondary's drag of [losses].)"""
     m = nonlinear_model(params, drive="speed")
-    op = trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, F_s=1e4, T_l=T_l))
+    load = {"nu": 0.0} if T_l == 0.0 else {"T_l": T_l}
+    op = trim(m, OperatingPoint(r_g=1.0, omega_p=300.0, F_s=1e4, **load))
     x0 = op.x.copy()
     x0[6] += 50.0
     u = op.u.copy()
@@ -127,7 +130,10 @@ def test_creep_power_closes_the_balance(params, T_l):
     if T_l == 0.0:
         p_creep = Y[:, col["P_creep"]]
         assert p_creep.min() >= -1e-9 * p_creep.max()
-        assert trapezoid(p_creep, sol.t) > 0.01 * dissipated
+        # more than 1 % of what the actuation and the belt's shift dissipate (the
+        # variator's losses of issue 32, which a running machine dissipates anyway, aside)
+        variator = sum(Y[:, m.outputs.index(k)] for k in VARIATOR_LOSSES)
+        assert trapezoid(p_creep, sol.t) > 0.01 * (dissipated - trapezoid(variator, sol.t))
 
 
 def test_linear_creep_damping_is_the_models_jacobian(params):
@@ -193,7 +199,8 @@ def test_tabulated_thrust_ratio_kernel_equals_python(params, tmp_path):
     d = zero_torque_difference(kmap, params.variator, [0.5, 2.0])
     assert abs(d[0]) > 0.01
     # the model trims and runs with it (the static creep force carries the difference)
-    op = trim(m, OperatingPoint(r_g=0.5, omega_p=300.0, F_s=1e4, T_l=0.0))
+    # (zero torque: no slip, tau = 0; the load motor then carries the secondary's drag)
+    op = trim(m, OperatingPoint(r_g=0.5, omega_p=300.0, F_s=1e4, nu=0.0))
     assert op.residual < 1e-8
     y = m.output_dict(op.x, op.u)
     assert y["kappa_eq"] == pytest.approx(0.75, rel=1e-12)

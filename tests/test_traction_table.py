@@ -192,11 +192,13 @@ def test_forward_mode_equals_complex_step_on_a_table(params):
 
 def test_the_analytic_law_is_untouched(params):
     """Without a table the offset is 0 (the analytic branch) and the vector is as long as
-    before plus the new offset entry only (the last of the explicit part, before the
-    traction laws' part generated from their registry)."""
+    before plus the new offset entry only (then issue 32's losses, then the traction laws'
+    part generated from their registry)."""
     m = nonlinear_model(params)
     assert m.p[K.P_MTAB] == 0.0 and m.p.size == K.NP
-    assert K.PARAMETER_NAMES[K.P_MTAB] == "traction_table" and K.P_MTAB == K.P_TRACTION - 1
+    assert K.PARAMETER_NAMES[K.P_MTAB] == "traction_table"
+    assert K.PARAMETER_NAMES[K.P_MTAB + 1:K.P_TRACTION] == (
+        "loss_lambda_F", "loss_k_T", "loss_c_v", "loss_c_q", "loss_T_smooth")
     t = _model(MEASURED)
     assert t.p[K.P_MTAB] == K.NP and t.p.size == K.NP + MEASURED.encode().size
 

@@ -48,6 +48,7 @@ from .actuation_energy import (
     servo_power,
 )
 from .errors import ParameterError
+from .nonlinear import VARIATOR_LOSSES
 from .nonlinear.equilibrium import trim_grid
 from .nonlinear.model import EmpactModel, nonlinear_model
 from .nonlinear.simulation import SimulationResult
@@ -55,7 +56,7 @@ from .params import Params
 from .variator.geometry import check_ratio, ratio_range, secondary_radius
 
 __all__ = ["STRATEGIES", "SAFETY_FACTOR", "EfficiencyMap", "efficiency_map",
-           "strategy_clamping", "run_energy"]
+           "strategy_clamping", "run_energy", "energy_summary"]
 
 #: the clamping strategies (module notes)
 STRATEGIES = ("sf1.3", "sf1.3-aware", "slip", "hydraulic")
@@ -71,14 +72,12 @@ def _variator_powers(y: Mapping[str, NDArray]) -> tuple[NDArray, NDArray, dict[s
     """The variator's input power at the primary, output power at the secondary and losses by
     name [W], from the model's outputs by name (each an array).
 
-    The one place that reads them: today the only variator loss is the kernel's slip power
-    ``T_b (r_g omega_p - omega_s)`` (`empact.nonlinear._kernel._belt_torque`: the belt torque
-    ``T_b`` on the secondary, ``r_g T_b`` on the primary).
+    The one place that reads them: the kernel's outputs ``P_var_in`` (the primary shaft's
+    power into the variator), ``P_var_out`` (the secondary shaft's power out of it) and the
+    loss terms `empact.nonlinear.VARIATOR_LOSSES` (slip, clamping, load, drag), which sum to
+    ``P_var_in - P_var_out``.
     """
-    T_b, r, w_p, w_s = y["T_b"], y["r_g"], y["omega_p"], y["omega_s"]
-    P_in = r * T_b * w_p
-    P_out = T_b * w_s
-    return P_in, P_out, {"P_loss_slip": T_b * (r * w_p - w_s)}
+    return y["P_var_in"], y["P_var_out"], {k: y[k] for k in VARIATOR_LOSSES}
 
 
 def strategy_clamping(model: EmpactModel, strategy: str, T_l: ArrayLike, r_g: ArrayLike,
@@ -403,3 +402,31 @@ def run_energy(result: SimulationResult, params: Params,
             "variator_out": integral(P_out), "variator_losses": sum(terms.values()),
             "losses": terms, "servo_electrical": act.energy["servo_electrical"],
             "pump": act.hydraulic["pump"], "actuation": act}
+
+
+def energy_summary(result: SimulationResult, params: Params,
+                   kinematics: str = "equal-translation") -> dict[str, Any]:
+    """A run's energy balance (`empact.nonlinear.simulation.energy_balance`) with the servos'
+    electrical energy beside their mechanical energy.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        A run of the nonlinear model.
+    params : Params
+        The parameter set whose ``[servo]`` bills the run (`actuation_energy`).
+    kinematics : str, optional
+        The run's model option ``kinematics`` (default the model's default).
+
+    Returns
+    -------
+    dict
+        ``energy`` [J] by term (those of `energy_balance` and ``servo_electrical``: the
+        servos' electrical energy with their drives, copper and transmissions, billed
+        quasi-statically) and ``energy_balance_residual`` [-] (the mechanical balance,
+        relative to the input energy; the electrical side is not part of it).
+    """
+    summary = result.energy_balance()
+    act = actuation_energy(result, params, kinematics)
+    summary["energy"]["servo_electrical"] = act.energy["servo_electrical"]
+    return summary

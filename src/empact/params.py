@@ -17,6 +17,8 @@ A parameter set has one section per concept::
                         drives and transmissions (`empact.hardware`)
     [hydraulic]         a hydraulic actuation of the same variator, the reference to compare
                         with (`empact.hardware`, billed by `empact.actuation_energy`)
+    [losses]            the variator's losses beside the slip: clamping, load, drag
+                        (`empact.variator.losses`)
     [sensors]           the closed loop's instruments: delay, encoders, noise
     [operating]         the default operating point (r_g, nu, F_s, omega_p), used by every
                         analysis that is not given one (slip model, trim, plants, NMP, Fig. 2)
@@ -51,6 +53,7 @@ from .operating import (
     check_one_slip,
 )
 from .variator.geometry import VariatorParams, ratio_range
+from .variator.losses import LossParams
 from .variator.shift_law import ShiftParams
 from .variator.thrust_ratio import ThrustRatioParams
 from .variator.traction import TabulatedTraction, TractionParams, load_traction
@@ -60,7 +63,8 @@ __all__ = [
     "DrivelineParams", "TractionParams", "ShiftParams", "ThrustRatioParams", "Sec21Stiffness",
     "OperatingPoint", "ResolvedPoint", "HydraulicParams", "Params", "default_params",
     "load_params", "save_params", "dumps_params", "read_toml", "DAMPING_LEVELS",
-    "OPERATING_VARIABLES", "ParameterInfo", "describe_parameters", "parameter_sources",
+    "OPERATING_VARIABLES", "LossParams", "ParameterInfo", "describe_parameters",
+    "parameter_sources",
     "check_clamping", "check_one_slip",
 ]
 
@@ -252,10 +256,10 @@ _SECTIONS = {
     "variator": VariatorParams, "actuation": ActuationParams, "driveline": DrivelineParams,
     "traction": TractionParams, "shift": ShiftParams, "thrust_ratio": ThrustRatioParams,
     "paper_sec21": Sec21Stiffness, "servo": ServoLimits, "sensors": SensorParams,
-    "hydraulic": HydraulicParams, "operating": OperatingPoint,
+    "hydraulic": HydraulicParams, "losses": LossParams, "operating": OperatingPoint,
 }
 #: sections whose every key has a default (a file may leave them out)
-_OPTIONAL_SECTIONS = ("servo", "sensors", "hydraulic")
+_OPTIONAL_SECTIONS = ("servo", "sensors", "hydraulic", "losses")
 
 
 @dataclass(frozen=True)
@@ -267,9 +271,9 @@ class Params:
     variator, actuation, damping, driveline, traction, shift : Section
         The frozen, validated blocks of the parameter file's tables (``[variator]``, ...;
         SI units, each field's unit and range in ``empact params show --describe``).
-    thrust_ratio, paper_sec21, servo, sensors : Section
-        The same, for the ``[thrust_ratio]``, ``[paper_sec21]``, ``[servo]`` and
-        ``[sensors]`` tables.
+    thrust_ratio, paper_sec21, servo, sensors, losses : Section
+        The same, for the ``[thrust_ratio]``, ``[paper_sec21]``, ``[servo]``, ``[sensors]``
+        and ``[losses]`` tables.
     hydraulic : HydraulicParams
         The hydraulic reference actuation (``[hydraulic]``; every key has a default).
     operating : OperatingPoint
@@ -295,6 +299,7 @@ class Params:
     paper_sec21: Sec21Stiffness
     servo: ServoLimits
     sensors: SensorParams
+    losses: LossParams
     operating: OperatingPoint
     hydraulic: HydraulicParams = HydraulicParams()
     traction_table_file: str | None = None
@@ -606,7 +611,7 @@ def describe_parameters(params: Params | None = None) -> list[ParameterInfo]:
     out = []
     blocks: list[tuple[str, Any]] = []
     for name in ("variator", "actuation", "damping", "driveline", "traction", "shift",
-                 "thrust_ratio", "paper_sec21", "servo", "sensors", "hydraulic",
+                 "thrust_ratio", "paper_sec21", "servo", "sensors", "hydraulic", "losses",
                  "operating"):
         block = getattr(params, name)
         if name == "damping":

@@ -436,6 +436,8 @@ UNITS = {
     "succeeded": "-", "failures": "-",
     "T_in": "N m", "omega_in": "rad/s", "P_in": "W", "P_out": "W", "losses": "W",
     "actuation": "W", "efficiency": "-", "total_efficiency": "-",
+    "energy": "J (every term)", "energy_balance_residual": "- (relative to the input energy)",
+    "duration": "s",
 }
 
 

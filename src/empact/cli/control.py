@@ -428,6 +428,7 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
         run_closed_loop,
         shown_metric,
     )
+    from ..efficiency import energy_summary
     from ..nonlinear.scenario import check_references, load_scenario
     from ..nonlinear.simulation import write_csv
 
@@ -456,7 +457,9 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
     if as_json or json_out:  # slips as fractions, as the API gives them
         emit_json({"scenario": sc.name, "metrics": m,
                    "targets": [{"name": c.name, "met": c.met, "target": c.describe()}
-                               for c in checks]}, "control.simulate", json_out)
+                               for c in checks],
+                   **energy_summary(run.result, params, sc.options.kinematics)},
+                  "control.simulate", json_out)
     else:  # for people: slips in % and percentage points; every number with its unit
         for k, v in m.items():
             v, unit = shown_metric(k, v)

@@ -48,14 +48,18 @@ MAX_SAMPLES = 5_000_000
               help="When the run stops early, write what was computed (marked INCOMPLETE).")
 @traction_option
 @params_option
+@json_options
 @force_option
 @click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
 def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: str | None,
                  formats: str, duration: float | None, states: bool, keep_partial: bool,
-                 traction_table: Any, params_file: str | None, force: bool,
-                 quiet: bool) -> None:
+                 traction_table: Any, params_file: str | None, as_json: bool,
+                 json_out: str | None, force: bool, quiet: bool) -> None:
     """Simulate SCENARIO.toml (or --example NAME); write CSV (units in the header) and a figure
-    (PNG; --formats png,svg adds the vector figure).
+    (PNG; --formats png,svg adds the vector figure).  With --json (or --json-out) a summary
+    of the run instead (its energy balance: energies by term [J] under ``energy`` and
+    ``energy_balance_residual`` [-], relative to the input energy), and the files only with
+    --out.
 
     Exit status: 0 complete; 1 the run stopped early (nothing written, or with --keep-partial
     the partial result, marked INCOMPLETE); 2 bad input.
@@ -63,6 +67,7 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     from .._io import atomic_folder
     from .._progress import progress as progress_bar
     from ..control.closed_loop import run_closed_loop
+    from ..efficiency import energy_summary
     from ..nonlinear.scenario import check_references, example_path, list_examples, load_scenario
     from ..nonlinear.simulation import csv_text, run_scenario
     from ..plotting import plot_simulation, save_figure
@@ -87,7 +92,9 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     if n_samples > MAX_SAMPLES:
         raise InputError(f"duration x sample rate = {sc.duration:g} s x {sc.sample_rate:g} Hz "
                          f"= {n_samples:.3g} output samples; at most {MAX_SAMPLES}")
-    dest = output_folder(out or f"sim-{sc.name}", "--out", force=force)
+    summary = as_json or json_out
+    dest = output_folder(out or f"sim-{sc.name}", "--out", force=force) \
+        if out or not summary else None
     if sc.closed_loop:
         res = run_closed_loop(sc, params, progress=not quiet).result
     else:
@@ -95,13 +102,21 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     if not res.complete and not keep_partial:
         raise Failed(f"simulation stopped early, nothing written (--keep-partial keeps it): "
                      f"{res.message}")
-    with atomic_folder(dest) as tmp, progress_bar(total=2, desc=f"writing {sc.name}",
-                                                  unit="file", enabled=not quiet) as bar:
-        (tmp / f"{sc.name}.csv").write_text(csv_text(res, states))
-        bar.update(1)
-        save_figure(plot_simulation(res).figure, tmp / sc.name, fmts)
-        bar.update(1)
-    click.echo(str(dest / f"{sc.name}.csv"))
+    if dest is not None:
+        with atomic_folder(dest) as tmp, progress_bar(total=2, desc=f"writing {sc.name}",
+                                                      unit="file", enabled=not quiet) as bar:
+            (tmp / f"{sc.name}.csv").write_text(csv_text(res, states))
+            bar.update(1)
+            save_figure(plot_simulation(res).figure, tmp / sc.name, fmts)
+            bar.update(1)
+    if summary:
+        emit_json({"scenario": sc.name, "complete": res.complete, "message": res.message,
+                   "duration": float(res.t[-1]), "stats": dict(res.stats),
+                   **energy_summary(res, params, sc.options.kinematics),
+                   "files": [] if dest is None else [str(dest / f"{sc.name}.csv")]},
+                  "simulate", json_out)
+    elif dest is not None:
+        click.echo(str(dest / f"{sc.name}.csv"))
     if not res.complete:
         raise Failed(f"incomplete: {res.message}")
 

@@ -20,7 +20,9 @@ from .equilibrium import TrimResult, traction_peak, trim
 from .linearization import PLANT_INPUTS, PLANT_OUTPUTS, linearize, plant, trim_point  # noqa: F401 (deprecated)
 from .model import (
     BASE_STATES,
+    DISSIPATION_TERMS,
     OUTPUTS,
+    VARIATOR_LOSSES,
     EmpactModel,
     ModelOptions,
     nonlinear_model,
@@ -32,7 +34,8 @@ from .scenario import Scenario, example_path, list_examples, load_scenario
 from .simulation import SimulationResult, run_scenario, simulate, write_csv
 
 __all__ = ["ModelOptions", "EmpactModel", "nonlinear_model", "rhs", "shift_inertia",
-           "BASE_STATES", "OUTPUTS", "TrimResult", "trim", "traction_peak", "linearize", "plant",
+           "BASE_STATES", "OUTPUTS", "VARIATOR_LOSSES", "DISSIPATION_TERMS", "TrimResult",
+           "trim", "traction_peak", "linearize", "plant",
            "PLANT_INPUTS", "PLANT_OUTPUTS", "BeltLengthChange", "NmpResult",
            "belt_length_change", "nmp_analysis", "Scenario", "load_scenario", "list_examples",
            "example_path", "SimulationResult", "simulate", "run_scenario", "write_csv"]

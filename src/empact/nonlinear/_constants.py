@@ -81,6 +81,11 @@ class KernelConstants(NamedTuple):
     thrust_table: float
     creep_table: float
     traction_table: float
+    loss_lambda_F: float
+    loss_k_T: float
+    loss_c_v: float
+    loss_c_q: float
+    loss_T_smooth: float
     #: the traction laws' part by name (generated from their registry: the law's index
     #: ``traction_law``, the knots' ``ln_r_*``, the coefficients ``<c>_low`` ...)
     traction: dict[str, float]

@@ -54,7 +54,8 @@ from ._constants import KernelConstants
  P_JD, P_JP, P_JS, P_JL, P_KTC, P_KDS, P_KBD,
  P_DKP, P_DKI, P_LKP, P_LKI, P_RKP, P_RKD, P_RKI, P_SIG, P_RS0,
  P_LAW, P_DREF, P_FREF, P_KD, P_A1, P_A2, P_GAIN, P_W0, P_XSAT, P_GBETA,
- P_KP0, P_KB0, P_KB1, P_RREF, P_TAB, P_CTAB, P_MTAB) = range(63)
+ P_KP0, P_KB0, P_KB1, P_RREF, P_TAB, P_CTAB, P_MTAB,
+ P_LF, P_LT, P_LV, P_LQ, P_LTS) = range(68)
 
 #: names of the parameter vector's entries, in the order of the ``P_*`` indices, then the
 #: traction laws' part generated from their registry (`empact.variator._laws`): the law's
@@ -71,7 +72,9 @@ PARAMETER_NAMES = (
     "sheave_sense", "R_s0",
     "shift_law", "D_ref", "F_ref", "k_D", "a1", "a2", "gain", "omega_0", "xi_sat", "g_beta",
     "kappa_p0", "kappa_b0", "kappa_b1", "r_ref", "thrust_table", "creep_table",
-    "traction_table") + traction_parameter_names()
+    "traction_table",
+    "loss_lambda_F", "loss_k_T", "loss_c_v", "loss_c_q", "loss_T_smooth",
+    ) + traction_parameter_names()
 NP = len(PARAMETER_NAMES)
 #: the traction law's index in ``p``; its parameters follow (`traction_parameter_names`)
 P_TRACTION = PARAMETER_NAMES.index("traction_law")
@@ -98,11 +101,22 @@ OUTPUTS = ("r_g", "nu", "nu_r", "theta_mp", "theta_ms", "F_p", "F_s", "F_p_act",
            "omega_p", "omega_s", "omega_d", "omega_l", "omega_mp", "omega_ms", "T_b", "mu",
            "tau", "kappa", "kappa_eq", "r_g_dot", "F_creep", "R_p", "R_s", "phi", "x_p", "x_s",
            "belt_elongation", "T_mp_act", "T_d_act", "T_l_act", "E", "P_in", "P_diss",
-           "P_creep", "T_ms_act", "T_ds", "mu_max")
+           "P_creep", "T_ms_act", "T_ds", "mu_max",
+           "P_loss_slip", "P_loss_clamp", "P_loss_load", "P_loss_drag", "P_var_in", "P_var_out",
+           "P_diss_servo", "P_diss_spindle", "P_diss_material", "P_diss_sheave")
 NY = len(OUTPUTS)
 (Y_RG, Y_NU, Y_NUR, Y_THMP, Y_THMS, Y_FP, Y_FS, Y_FPA, Y_FSA, Y_WP, Y_WS, Y_WD, Y_WL, Y_WMP,
  Y_WMS, Y_TB, Y_MU, Y_TAU, Y_KAP, Y_KEQ, Y_RDOT, Y_FCR, Y_RP, Y_RS, Y_PHI, Y_XP, Y_XS, Y_E,
- Y_TMP, Y_TD, Y_TL, Y_EN, Y_PIN, Y_PDISS, Y_PCREEP, Y_TMS, Y_TDS, Y_MUMAX) = range(NY)
+ Y_TMP, Y_TD, Y_TL, Y_EN, Y_PIN, Y_PDISS, Y_PCREEP, Y_TMS, Y_TDS, Y_MUMAX,
+ Y_LSLIP, Y_LCLAMP, Y_LLOAD, Y_LDRAG, Y_PVIN, Y_PVOUT,
+ Y_DSERVO, Y_DSPINDLE, Y_DMAT, Y_DSHEAVE) = range(NY)
+
+#: the variator's losses [W] (outputs): their sum is ``P_var_in - P_var_out`` (`_losses`)
+VARIATOR_LOSSES = ("P_loss_slip", "P_loss_clamp", "P_loss_load", "P_loss_drag")
+#: the named terms of ``P_diss`` [W] (outputs): the variator's losses, the creep resistance's
+#: power, and the actuation's viscous, Coulomb and material (proportional) damping
+DISSIPATION_TERMS = VARIATOR_LOSSES + ("P_creep", "P_diss_servo", "P_diss_spindle",
+                                       "P_diss_material", "P_diss_sheave")
 
 
 def pack_parameters(values: Mapping[str, float], thrust_table: np.ndarray,
@@ -266,6 +280,17 @@ def _sabs(w):
     return w
 
 
+@njit(cache=True, inline="always")
+def _tanh(w):
+    """tanh(w) for real w, and for complex w of large real part, where numpy's complex tanh
+    overflows (cosh) to NaN: the complex step through a smooth sign at speed."""
+    if w.real < 0:
+        t = np.exp(2.0 * w)
+        return (t - 1.0) / (t + 1.0)
+    t = np.exp(-2.0 * w)
+    return (1.0 - t) / (1.0 + t)
+
+
 # -- what the value pass (`_eval`) and the tangent pass (`_tangent._eval_tangent`) compute
 # alike: each returns the values of its block (and, where the tangent pass needs them, the
 # local slopes), real or complex
@@ -359,6 +384,45 @@ def _belt_torque(x, p, ix, dx, mu, F_s, F_b, T_b, R_p, R_s, r_g):
 
 
 @njit(cache=True, inline="always")
+def _losses(x, p, F_s, T_pb, R_p):
+    """The variator's losses beside the slip (`_belt_torque`), as torques on the pulley shafts:
+    ``(T_lp, T_ls, T_clamp, T_load, T_dp, T_dss)`` [N m], the whole loss torque on the
+    primary and on the secondary, and its parts (`T_pb`: the belt's torque on the primary,
+    ``r_g T_b``; `F_s`: the secondary clamping force).
+
+    * **Clamping** (band and segment friction, band-band sliding, sheave deflection and
+      misalignment: Akehurst, Vaughan, Parker & Simner, Proc. IMechE D 218 (2004) Parts 1-2;
+      Micklem et al., Proc. IMechE D 210 (1996), the belt's torque loss):
+      ``T_clamp = lambda_F F_s R_p sg(omega_p)`` on the primary, i.e. a sliding power
+      ``lambda_F F_s v_b`` at the belt speed ``v_b = R_p omega_p`` (``lambda_F``: an
+      effective friction coefficient times the sliding fraction of the belt speed).  At a
+      given input torque and torque ratio ``F_s R_p = T_in cos(beta) / (2 tau mu_max)``, so
+      its share of the input torque grows as the clamping reserve grows and where mu_max is
+      small (towards overdrive).
+    * **Load** (the torque-dependent part of the belt's torque loss, segment compression
+      and tilting; Akehurst Part 1): ``T_load = k_T |T_pb| sg(omega_p)`` on the primary,
+      ``|T| ~ T tanh(T / T_smooth)``.
+    * **Drag** (spin loss: bearings, seals, oil churning; the no-load torque ``T_0(omega)``
+      of Micklem et al. and of Narita & Priest, Proc. IMechE J 221 (2007)): ``c_v omega +
+      c_q omega^2 sg(omega)`` on each pulley shaft at its own speed, so that the faster
+      secondary of overdrive drags more.
+
+    ``sg(omega) = tanh(omega / coulomb_omega)``, the kernel's smooth sign of a speed (as its
+    Coulomb terms): each loss opposes its shaft's rotation and the Jacobian exists.  The
+    variator's shaft powers are then ``P_var_in = (T_pb + T_lp) omega_p`` and ``P_var_out =
+    (T_b - T_ls) omega_s``, and their difference is the sum of `VARIATOR_LOSSES`
+    (identically, beside the locked belt's elastic power)."""
+    wp, ws = x[15], x[16]
+    sg_p = _tanh(wp / p[P_WC])
+    sg_s = _tanh(ws / p[P_WC])
+    T_clamp = p[P_LF] * F_s * R_p * sg_p
+    T_load = p[P_LT] * T_pb * _tanh(T_pb / p[P_LTS]) * sg_p
+    T_dp = p[P_LV] * wp + p[P_LQ] * wp * wp * sg_p
+    T_dss = p[P_LV] * ws + p[P_LQ] * ws * ws * sg_s
+    return T_clamp + T_load + T_dp, T_dss, T_clamp, T_load, T_dp, T_dss
+
+
+@njit(cache=True, inline="always")
 def _ratio_servo(x, u, p, ix, dx, R_p, R_s, phi, r_g, F_s_el, F_p_el):
     """``(T_mp, G, err)``: the primary servo torque, direct or by the ratio controller (the
     integral carries the holding torque; its rate into `dx`), with the ratio's gain ``G``
@@ -433,8 +497,9 @@ def _motion(x, p, dx, sp, dm, T_mp, T_ms, T_d, T_l, N, g5, g6, lam, dr5, dr6, T_
 @njit(cache=True, inline="always")
 def _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p, F_s, tau, kap,
              keq, T_b, mu, mu_max, R_p, R_s, phi, T_mp, T_ms, T_d, T_l, T_ds):
-    """The outputs into `y` (`OUTPUTS`), with the stored energy, the input power and the
-    dissipated power (`sp`, `dm`: `_springs`' and `_dampers`' values)."""
+    """The outputs into `y` (`OUTPUTS`), with the stored energy, the input power, and the
+    dissipated power and its terms (`DISSIPATION_TERMS`) but the losses of `_losses`, which
+    `_loss_outputs` adds (`sp`, `dm`: `_springs`' and `_dampers`' values)."""
     e_w, ed_w, e_c, ed_c, d_p, dd_p, d_s, dd_s, _, _, F_tp, F_ts = sp
     c_p, c_s, _, _, Tf_sp, Tf_ss, _, _ = dm
     w1, w2, w3, w4, v5, v6 = x[6], x[7], x[8], x[9], x[10], x[11]
@@ -449,12 +514,15 @@ def _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p,
     if ix[0] >= 0:
         E += 0.5 * p[P_KBD] * x[ix[0]] * x[ix[0]]
     y[Y_PIN] = T_mp * w1 + T_ms * w2 + T_d * wd - T_l * wl
-    y[Y_PDISS] = (p[P_CMP] * w1 * w1 + p[P_CMS] * w2 * w2 + p[P_CSP] * w3 * w3
-                  + p[P_CSS] * w43 * w43 + c_p * v5 * v5 + c_s * v6 * v6
-                  + p[P_ALPHA] * (p[P_KW] * ed_w * ed_w + p[P_KC] * ed_c * ed_c
-                                  + p[P_KBELT] * edot * edot + p[P_KTP] * dd_p * dd_p
-                                  + p[P_KTS] * dd_s * dd_s)
-                  + Tf_sp * w3 + Tf_ss * w43 + P_slip + lam * rdot)
+    y[Y_LSLIP] = P_slip
+    y[Y_DSERVO] = p[P_CMP] * w1 * w1 + p[P_CMS] * w2 * w2
+    y[Y_DSPINDLE] = p[P_CSP] * w3 * w3 + p[P_CSS] * w43 * w43 + Tf_sp * w3 + Tf_ss * w43
+    y[Y_DMAT] = p[P_ALPHA] * (p[P_KW] * ed_w * ed_w + p[P_KC] * ed_c * ed_c
+                              + p[P_KBELT] * edot * edot + p[P_KTP] * dd_p * dd_p
+                              + p[P_KTS] * dd_s * dd_s)
+    y[Y_DSHEAVE] = c_p * v5 * v5 + c_s * v6 * v6
+    y[Y_PDISS] = (P_slip + lam * rdot + y[Y_DSERVO] + y[Y_DSPINDLE] + y[Y_DMAT]
+                  + y[Y_DSHEAVE])
     y[Y_EN] = E
     y[Y_RG] = r_g
     y[Y_NU] = nu
@@ -494,23 +562,40 @@ def _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p,
 
 
 @njit(cache=True, inline="always")
+def _loss_outputs(x, y, T_pb, T_b, T_lp, T_ls, T_clamp, T_load, T_dp, T_dss):
+    """The variator's losses of `_losses` and its shaft powers into `y`, their sum into
+    ``P_diss`` (`T_pb`: the belt's torque on the primary, `T_b` on the secondary)."""
+    wp, ws = x[15], x[16]
+    y[Y_LCLAMP] = T_clamp * wp
+    y[Y_LLOAD] = T_load * wp
+    y[Y_LDRAG] = T_dp * wp + T_dss * ws
+    y[Y_PVIN] = (T_pb + T_lp) * wp
+    y[Y_PVOUT] = (T_b - T_ls) * ws
+    y[Y_PDISS] += y[Y_LCLAMP] + y[Y_LLOAD] + y[Y_LDRAG]
+
+
+@njit(cache=True, inline="always")
 def _finish(x, u, p, ix, dx, y, belt, sp, dm, r_g, nu, mu, mu_max, tau, F_b, T_b, lam, kap, keq,
             dr5, dr6, rdot):
     """A pass from the creep force `lam` on: the clamping forces at the contacts (opening the
     sheaves: the belt element's and the creep's), the belt torque, the servo, drive and load
-    torques, the equations of motion into `dx` and the outputs into `y` (`belt`, `sp`, `dm`:
-    `_belt`'s, `_springs`' and `_dampers`' values).  Returns ``(F_s, T_b, T_mp, G, err, T_d,
+    torques, the variator's losses (`_losses`: the primary's load torque is ``r_g T_b`` and
+    the loss torque, the secondary's the belt torque less its drag), the equations of motion
+    into `dx` and the outputs into `y` (`belt`, `sp`, `dm`: `_belt`'s, `_springs`' and
+    `_dampers`' values).  Returns ``(F_s, T_b, T_mp, G, err, T_d,
     T_l)`` for the tangent pass."""
     R_p, R_s, phi, e, g5, g6, edot, N, F_p_el, F_s_el = belt
     F_p = F_p_el + lam * dr5
     F_s = F_s_el - lam * r_g / (p[P_TB] * R_s)
     T_b, T_on_p, P_slip = _belt_torque(x, p, ix, dx, mu, F_s, F_b, T_b, R_p, R_s, r_g)
+    T_lp, T_ls, T_clamp, T_load, T_dp, T_dss = _losses(x, p, F_s, -T_on_p, R_p)
     T_mp, G, err = _ratio_servo(x, u, p, ix, dx, R_p, R_s, phi, r_g, F_s_el, F_p_el)
     T_d, T_l = _drive_load(x, u, p, ix, dx)
-    T_ds = _motion(x, p, dx, sp, dm, T_mp, u[1], T_d, T_l, N, g5, g6, lam, dr5, dr6, T_on_p,
-                   T_b)
+    T_ds = _motion(x, p, dx, sp, dm, T_mp, u[1], T_d, T_l, N, g5, g6, lam, dr5, dr6,
+                   T_on_p - T_lp, T_b - T_ls)
     _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p, F_s, tau, kap,
              keq, T_b, mu, mu_max, R_p, R_s, phi, T_mp, u[1], T_d, T_l, T_ds)
+    _loss_outputs(x, y, -T_on_p, T_b, T_lp, T_ls, T_clamp, T_load, T_dp, T_dss)
     return F_s, T_b, T_mp, G, err, T_d, T_l
 
 

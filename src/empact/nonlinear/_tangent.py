@@ -52,8 +52,13 @@ from ._kernel import (
     P_KTS,
     P_KW,
     P_LAW,
+    P_LF,
     P_LKI,
     P_LKP,
+    P_LQ,
+    P_LT,
+    P_LTS,
+    P_LV,
     P_MP,
     P_MS,
     P_RKD,
@@ -68,6 +73,10 @@ from ._kernel import (
     P_W0,
     P_WC,
     P_XSAT,
+    Y_DMAT,
+    Y_DSERVO,
+    Y_DSHEAVE,
+    Y_DSPINDLE,
     Y_E,
     Y_EN,
     Y_FCR,
@@ -77,6 +86,10 @@ from ._kernel import (
     Y_FSA,
     Y_KAP,
     Y_KEQ,
+    Y_LCLAMP,
+    Y_LDRAG,
+    Y_LLOAD,
+    Y_LSLIP,
     Y_MU,
     Y_MUMAX,
     Y_NU,
@@ -85,6 +98,8 @@ from ._kernel import (
     Y_PDISS,
     Y_PHI,
     Y_PIN,
+    Y_PVIN,
+    Y_PVOUT,
     Y_RDOT,
     Y_RG,
     Y_RP,
@@ -109,7 +124,9 @@ from ._kernel import (
     _belt,
     _dampers,
     _finish,
+    _losses,
     _springs,
+    _tanh,
     _torque_ratio,
     creep_coefficient_d,
     log_kappa_eq_d,
@@ -218,6 +235,18 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
                                                rdot)
     T_ms = u[1]
     slipv = r_g * wp - ws
+    # the variator's losses (`_kernel._losses`) and their local slopes
+    T_pb = R_p * F_b if locked else r_g * T_b
+    T_lp, T_dss, T_clamp, T_load, T_dp, _ = _losses(x, p, F_s, T_pb, R_p)
+    wc = p[P_WC]
+    lf, lt, lv, lq, lts = p[P_LF], p[P_LT], p[P_LV], p[P_LQ], p[P_LTS]
+    sg_p = _tanh(wp / wc)
+    sg_s = _tanh(ws / wc)
+    sgp_w = (1.0 - sg_p * sg_p) / wc
+    sgs_w = (1.0 - sg_s * sg_s) / wc
+    th_T = _tanh(T_pb / lts)
+    absT = T_pb * th_T
+    absT_T = th_T + T_pb * (1.0 - th_T * th_T) / lts
     c0g = -s * i_e / (i_w * tb)
     cmp_ = p[P_CMP]
     cms = p[P_CMS]
@@ -404,8 +433,15 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
         Fd[12, k] = wd_t - wp_t
         Fd[13, k] = ws_t - wl_t
         Fd[14, k] = (T_d_t - T_tc_t) * iJd
-        Fd[15, k] = (T_tc_t + T_on_p_t) * iJp
-        Fd[16, k] = (T_b_t - T_ds_t) * iJs
+        T_pb_t = -T_on_p_t
+        sg_p_t = sgp_w * wp_t
+        T_clamp_t = lf * R_p * (F_s_t * sg_p + F_s * sg_p_t) + lf * F_s * sg_p * R_p_t
+        T_load_t = lt * (absT_T * T_pb_t * sg_p + absT * sg_p_t)
+        T_dp_t = lv * wp_t + lq * (2.0 * wp * sg_p * wp_t + wp * wp * sg_p_t)
+        T_dss_t = lv * ws_t + lq * (2.0 * ws * sg_s * ws_t + ws * ws * sgs_w * ws_t)
+        T_lp_t = T_clamp_t + T_load_t + T_dp_t
+        Fd[15, k] = (T_tc_t + T_on_p_t - T_lp_t) * iJp
+        Fd[16, k] = (T_b_t - T_dss_t - T_ds_t) * iJs
         Fd[17, k] = (T_ds_t - T_l_t) * iJl
         if not want_y:
             continue
@@ -420,14 +456,29 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
             E_t += p[P_KBD] * xb * xb_t
         P_in_t = (T_mp_t * w1 + T_mp * w1_t + T_ms_t * w2 + T_ms * w2_t + T_d_t * wd
                   + T_d * wd_t - T_l_t * wl - T_l * wl_t)
-        P_diss_t = (2.0 * (cmp_ * w1 * w1_t + cms * w2 * w2_t + csp * w3 * w3_t
-                           + css * w43 * w43_t + c_p * v5 * v5_t + c_s * v6 * v6_t
-                           + alpha * (kw * ed_w * ed_w_t + kc * ed_c * ed_c_t
-                                      + kbelt * edot * edot_t + ktp * dd_p * dd_p_t
-                                      + kts * dd_s * dd_s_t))
-                    + c_p_t * v5 * v5 + c_s_t * v6 * v6
-                    + Tf_sp_t * w3 + Tf_sp * w3_t + Tf_ss_t * w43 + Tf_ss * w43_t + P_slip_t
-                    + lam_t * rdot + lam * rdot_t)
+        L_clamp_t = T_clamp_t * wp + T_clamp * wp_t
+        L_load_t = T_load_t * wp + T_load * wp_t
+        L_drag_t = T_dp_t * wp + T_dp * wp_t + T_dss_t * ws + T_dss * ws_t
+        D_servo_t = 2.0 * (cmp_ * w1 * w1_t + cms * w2 * w2_t)
+        D_spindle_t = (2.0 * (csp * w3 * w3_t + css * w43 * w43_t) + Tf_sp_t * w3
+                       + Tf_sp * w3_t + Tf_ss_t * w43 + Tf_ss * w43_t)
+        D_mat_t = 2.0 * alpha * (kw * ed_w * ed_w_t + kc * ed_c * ed_c_t
+                                 + kbelt * edot * edot_t + ktp * dd_p * dd_p_t
+                                 + kts * dd_s * dd_s_t)
+        D_sheave_t = (2.0 * (c_p * v5 * v5_t + c_s * v6 * v6_t) + c_p_t * v5 * v5
+                      + c_s_t * v6 * v6)
+        P_diss_t = (P_slip_t + L_clamp_t + L_load_t + L_drag_t + lam_t * rdot + lam * rdot_t
+                    + D_servo_t + D_spindle_t + D_mat_t + D_sheave_t)
+        Yd[Y_LSLIP, k] = P_slip_t
+        Yd[Y_LCLAMP, k] = L_clamp_t
+        Yd[Y_LLOAD, k] = L_load_t
+        Yd[Y_LDRAG, k] = L_drag_t
+        Yd[Y_PVIN, k] = (T_pb_t + T_lp_t) * wp + (T_pb + T_lp) * wp_t
+        Yd[Y_PVOUT, k] = (T_b_t - T_dss_t) * ws + (T_b - T_dss) * ws_t
+        Yd[Y_DSERVO, k] = D_servo_t
+        Yd[Y_DSPINDLE, k] = D_spindle_t
+        Yd[Y_DMAT, k] = D_mat_t
+        Yd[Y_DSHEAVE, k] = D_sheave_t
         Yd[Y_RG, k] = r_g_t
         Yd[Y_NU, k] = nu_t
         Yd[Y_NUR, k] = -(ws_t - ws_wp * wp_t) * inur

@@ -5,7 +5,9 @@ constant shaft speeds, constant twists), with every derivative zero.  It is requ
 `~empact.params.OperatingPoint`: the ratio ``r_g``, the primary speed ``omega_p`` [rad/s] and
 exactly two of the slip (``nu``, or the torque ratio ``tau = mu(nu) / mu_max``), the clamping
 force ``F_s`` [N] and the load torque ``T_l`` [N m]; the third follows from the traction
-balance ``T_b = 2 mu(nu, r_g) F_s R_s / cos(beta) = T_l`` (eq. 1).
+balance ``T_b = 2 mu(nu, r_g) F_s R_s / cos(beta) = T_l + T_drag(omega_s)`` (eq. 1, with
+the secondary's drag of `empact.variator.losses`); the drive torque carries the variator's
+input power, ``T_d omega_p = P_var_in`` (its losses included).
 
 The point is built in closed form plus scalar root finds, vectorised over many points at once
 (`trim_grid`; `trim` is its one-point case): the radii of the stretched belt
@@ -462,55 +464,80 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
         nu = nu_
     mu = model.traction(np.nan_to_num(nu_), r) if nu is not None else np.full(N, nan)
 
+    # the belt torque Tb on the secondary: the load torque and the secondary's drag
+    # (`_kernel._losses`) where T_l is given, which depends on the slip through omega_s
+    def belt_torque(slip):
+        return Tl + _drag(c, (1.0 - slip) * r * w)
+
     if locked:
-        R_p, R_s, phi, e = _contact(model, r, Fs,
-                                    lambda R_s, F_el: Tl * cosb / (2 * mu_max * F_el * R_s))
         nu_ = np.zeros(N)
-        tau_kernel = lambda R_s, F_el: Tl * cosb / (2 * mu_max * F_el * R_s)  # noqa: E731
+        Tb = belt_torque(nu_)
+        R_p, R_s, phi, e = _contact(model, r, Fs,
+                                    lambda R_s, F_el: Tb * cosb / (2 * mu_max * F_el * R_s))
+        tau_kernel = lambda R_s, F_el: Tb * cosb / (2 * mu_max * F_el * R_s)  # noqa: E731
     elif nu is not None and F_s is not None:
         R_p, R_s, phi, e = _contact(model, r, Fs, lambda R_s, F_el: mu / mu_max)
-        Tl = 2 * mu * Fs * R_s / cosb
+        Tb = 2 * mu * Fs * R_s / cosb
         tau_kernel = lambda R_s, F_el: mu / mu_max  # noqa: E731
     elif nu is not None:  # nu and T_l: find F_s (R_s depends weakly on F_s: fixed point)
         for k in np.flatnonzero(good & ~(mu * Tl > 0)):
             reason[k] = (f"mu(nu) = {mu[k]:.4g} cannot carry T_l = {Tl[k]:g} N m with a "
                          "positive clamping force")
         good = reason == ""
+        Tb = belt_torque(np.nan_to_num(nu_))
         R_s = np.array(radii(r, model.params.variator.L_belt, model.params.variator.a)[1])
         active = good.copy()
         for _ in range(40):
-            Fs = np.where(good, Tl * cosb / (2 * mu * R_s), 1e4)
+            Fs = np.where(good, Tb * cosb / (2 * mu * R_s), 1e4)
             R_p, R_s_new, phi, e = _contact(model, r, Fs, lambda R_s, F_el: mu / mu_max)
             R_s_new = np.where(active, R_s_new, R_s)
             active &= np.abs(R_s_new - R_s) >= 1e-15
             R_s = R_s_new
             if not active.any():
                 break
-        Fs = np.where(good, Tl * cosb / (2 * mu * R_s), 1e4)
+        Fs = np.where(good, Tb * cosb / (2 * mu * R_s), 1e4)
         R_p, R_s, phi, e = _contact(model, r, Fs, lambda R_s, F_el: mu / mu_max)
         tau_kernel = lambda R_s, F_el: mu / mu_max  # noqa: E731
-    else:  # F_s and T_l: the slip on the rising branch
-        R_p, R_s, phi, e = _contact(model, r, Fs,
-                                    lambda R_s, F_el: Tl * cosb / (2 * Fs * R_s) / mu_max)
-        need = Tl * cosb / (2 * Fs * R_s)
+    else:  # F_s and T_l: the slip on the rising branch (with the drag at that slip: a fixed
+        # point that contracts by ~1e-5 per pass, the drag's slope in the slip being small)
         nu_pk, mu_pk = traction_peak(model, r)
+        nu_ = np.zeros(N)
+        for _ in range(4):
+            Tb = belt_torque(nu_)
+            R_p, R_s, phi, e = _contact(model, r, Fs,
+                                        lambda R_s, F_el: Tb * cosb / (2 * Fs * R_s) / mu_max)
+            need = Tb * cosb / (2 * Fs * R_s)
+            fits = good & (np.abs(need) <= mu_pk)
+            nu_ = np.where(fits, _bisect_rising(model, r, np.where(fits, need, 0.0), nu_pk),
+                           0.0)
         for k in np.flatnonzero(good & ~(np.abs(need) <= mu_pk)):
             reason[k] = (f"T_l = {Tl[k]:g} N m needs mu = {abs(need[k]):.4g}, above the "
                          f"traction peak {mu_pk[k]:.4g} at F_s = {Fs[k]:g} N (slip would run "
                          "away)")
         good = reason == ""
-        nu_ = np.where(good, _bisect_rising(model, r, need, nu_pk), 0.0)
         mu = model.traction(nu_, r)
         tau_kernel = lambda R_s, F_el: mu / mu_max  # noqa: E731
     reason[good & ~np.isfinite(R_s)] = "no belt geometry carries the clamping force (belt " \
         "stretch too large for k_belt)"
     good = reason == ""
-    x, u, F_p_act = _assemble(model, r, w, nu_, Tl, R_p, R_s, phi, e, tau_kernel)
-    # the check: every derivative zero, normalised by the forces on each body
+    x, u, F_p_act = _assemble(model, r, w, nu_, Tb, R_p, R_s, phi, e, tau_kernel)
+    # the drive and load torques that hold the variator's shafts (its losses included:
+    # T_d omega_p = P_var_in, T_l omega_s = P_var_out), then the check: every derivative
+    # zero, normalised by the forces on each body
     residual = np.full(N, np.inf)
     g = np.flatnonzero(good)
     y = np.full((N, len(model.outputs)), nan)
     if g.size:
+        _, y[g] = model.evaluate_many(x[g], u[g])
+        omega_s = (1 - nu_) * r * w
+        if T_l is None:  # the load torque: the belt's less the secondary's drag
+            Tl = Tb - _drag(c, omega_s)
+        # the drive torque: the belt's on the primary and the primary's losses (each exactly
+        # zero without [losses]: then the trim is the lossless one to the bit)
+        lp = (y[:, model.output_index("P_loss_clamp")]
+              + y[:, model.output_index("P_loss_load")]) / w
+        T_d = np.where(good, r * Tb + lp + _drag(c, w), r * Tb)
+        _driveline(model, x, u, T_d, Tl, w, omega_s)
         dx, y[g] = model.evaluate_many(x[g], u[g])
         residual[g] = _residual(model, dx, y[g], F_p_act[g], u[g])
     for k in np.flatnonzero(good & ~(residual < RESIDUAL_TOL)):
@@ -538,11 +565,32 @@ def _servo_statics(model: EmpactModel, F_p_act, F_s_act, q5, q6):
     return q1, q2, q3, q4, T_w / a.i_w, T_c / a.i_c
 
 
+def _drag(c, omega):
+    """The drag torque of a pulley shaft at speed `omega` [rad/s] (`_kernel._losses`:
+    ``c_v omega + c_q omega^2 tanh(omega / coulomb_omega)``; `c` the kernel constants)."""
+    return c.loss_c_v * omega + c.loss_c_q * omega * omega * np.tanh(omega / c.coulomb_omega)
+
+
+def _driveline(model: EmpactModel, x, u, T_d, T_l, w, omega_s) -> None:
+    """Set the driveline's twists, torques and speed-loop integrals of the points `x`, `u` (in
+    place) to the drive torque `T_d` and the load torque `T_l` [N m] at the speeds `w`,
+    `omega_s` [rad/s]."""
+    d, si = model.params.driveline, model.state_index
+    x[:, si("twist_tc")] = T_d / d.k_tc
+    x[:, si("twist_ds")] = T_l / d.k_ds
+    u[:, 2], u[:, 3] = T_d, T_l
+    if "z_d" in model.states:
+        x[:, si("z_d")], u[:, 2] = T_d, w
+    if "z_l" in model.states:
+        x[:, si("z_l")], u[:, 3] = T_l, omega_s
+
+
 def _assemble(model: EmpactModel, r, w, nu, Tl, R_p, R_s, phi, e, tau_of):
     """States and inputs of the trimmed points (arrays): the actuator forces carry the
     clamping forces (the belt element's and the static creep force at the torque ratio the
     kernel computes), the driveline turns at the slip's speeds with its twists carrying the
-    load.  Returns ``(x, u, F_p_act)``."""
+    belt torque `Tl` (without the variator's losses: `trim_grid` then sets the driveline's
+    torques, `_driveline`).  Returns ``(x, u, F_p_act)``."""
     v, d, c = model.params.variator, model.params.driveline, model.constants
     tb = c.tan_beta
     N_b = c.k_belt * e

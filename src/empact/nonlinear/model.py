@@ -75,6 +75,16 @@ Construction choices (documented, not hidden):
   `empact.params.TractionParams`.  The slip power ``T_b (r_g omega_p - omega_s)`` is dissipated.
   With ``belt="locked"`` the traction is replaced by the elastic chain element of
   `empact.linear.driveline` (stiffness ``driveline.k_belt``), the limit in which the belt does not slip.
+* **Variator losses** (`empact.variator.losses`, the ``[losses]`` block): beside the slip, a
+  clamping loss ``lambda_F F_s R_p`` and a load loss ``k_T |r_g T_b|`` on the primary shaft
+  and a spin drag ``c_v omega + c_q omega^2`` on each pulley shaft, each opposing its
+  shaft's rotation (Akehurst et al. 2004; Micklem et al. 1996; Narita & Priest 2007).  The
+  outputs ``P_loss_slip``, ``P_loss_clamp``, ``P_loss_load``, ``P_loss_drag``
+  (`VARIATOR_LOSSES`) sum to ``P_var_in - P_var_out``, the powers at the variator's shafts.
+* **Energy.** ``E`` is the stored (kinetic and elastic) energy, ``P_in`` the power of the
+  servos, the drive and the load, ``P_diss`` the dissipated power, the sum of
+  `DISSIPATION_TERMS` (the variator's losses, ``P_creep``, ``P_diss_servo``,
+  ``P_diss_spindle``, ``P_diss_material``, ``P_diss_sheave``): ``dE/dt = P_in - P_diss``.
 * **Controllers** (optional, for a test bench): PI speed loops on the drive and load motors,
   and a ratio controller (``r_g_ref`` input): ``T_mp = z_r + K_p e - K_d omega_mp``,
   ``dz_r/dt = K_i e``, with ``e = (r_g_ref - r_g) / G``.  With a creep law the shift is a
@@ -130,10 +140,12 @@ control = lazy_module("control")
 
 __all__ = ["KINEMATICS", "ModelOptions", "EmpactModel", "nonlinear_model", "rhs", "BASE_STATES",
            "OUTPUTS",
-           "OUTPUT_UNITS", "STATE_UNITS"]
+           "OUTPUT_UNITS", "STATE_UNITS", "VARIATOR_LOSSES", "DISSIPATION_TERMS"]
 
 BASE_STATES = K.BASE_STATES
 OUTPUTS = K.OUTPUTS
+VARIATOR_LOSSES = K.VARIATOR_LOSSES
+DISSIPATION_TERMS = K.DISSIPATION_TERMS
 STATE_UNITS = {"theta_mp": "rad", "theta_ms": "rad", "theta_sp": "rad", "theta_ss": "rad",
                "x_p": "m", "x_s": "m", "omega_mp": "rad/s", "omega_ms": "rad/s",
                "omega_sp": "rad/s", "omega_ss": "rad/s", "v_p": "m/s", "v_s": "m/s",
@@ -147,7 +159,8 @@ OUTPUT_UNITS = {"r_g": "-", "nu": "-", "nu_r": "-", "theta_mp": "rad", "theta_ms
                 "kappa": "-", "kappa_eq": "-", "r_g_dot": "1/s", "F_creep": "N", "R_p": "m",
                 "R_s": "m", "phi": "rad", "x_p": "m", "x_s": "m", "belt_elongation": "m",
                 "T_mp_act": "N m", "T_d_act": "N m", "T_l_act": "N m", "E": "J", "P_in": "W",
-                "P_diss": "W", "P_creep": "W", "T_ms_act": "N m", "T_ds": "N m", "mu_max": "-"}
+                "P_diss": "W", "P_creep": "W", "T_ms_act": "N m", "T_ds": "N m", "mu_max": "-",
+                **{name: "W" for name in K.OUTPUTS[K.Y_LSLIP:]}}
 #: what each output is (`empact.nonlinear.model` docs, JSON exports)
 OUTPUT_DESCRIPTIONS = {
     "nu": "slip of eq. 2 on the current radii, 1 - omega_s / (r_g omega_p)",
@@ -161,7 +174,17 @@ OUTPUT_DESCRIPTIONS = {
     "F_creep": "creep force on the primary sheave (opening)",
     "P_creep": "power absorbed by the creep resistance (part of P_diss)",
     "T_ms_act": "secondary servo torque", "T_ds": "driveshaft torque k_ds twist_ds (what a "
-    "test bench measures)", "mu_max": "peak traction coefficient at the current ratio"}
+    "test bench measures)", "mu_max": "peak traction coefficient at the current ratio",
+    "P_loss_slip": "the variator's slip power T_b (r_g omega_p - omega_s)",
+    "P_loss_clamp": "the variator's clamping loss lambda_F F_s R_p omega_p (band and segment "
+    "friction, sheave deflection)", "P_loss_load": "the variator's load loss k_T |r_g T_b| "
+    "omega_p", "P_loss_drag": "the variator's spin loss on both pulley shafts",
+    "P_var_in": "power into the variator at the primary pulley shaft",
+    "P_var_out": "power out of the variator at the secondary pulley shaft",
+    "P_diss_servo": "viscous friction of the servos (part of P_diss)",
+    "P_diss_spindle": "viscous and Coulomb friction of the spindles (part of P_diss)",
+    "P_diss_material": "proportional (material) damping of the springs and the belt (part "
+    "of P_diss)", "P_diss_sheave": "Shafai's sheave damping (part of P_diss)"}
 INPUT_UNITS = {"T_mp": "N m", "r_g_ref": "-", "T_ms": "N m", "T_d": "N m",
                "omega_d_ref": "rad/s", "T_l": "N m", "omega_l_ref": "rad/s"}
 
@@ -530,7 +553,10 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
         D_ref=sh.D_ref, F_ref=sh.F_ref, k_D=sh.k_D, a1=sh.a1, a2=sh.a2, gain=sh.gain,
         omega_0=sh.omega_0, xi_sat=sh.xi_sat, g_beta=g_beta(v.beta), kappa_p0=kr.p0,
         kappa_b0=kr.b0, kappa_b1=kr.b1,
-        r_ref=params.operating.r_g if o.reference_ratio is None else o.reference_ratio)
+        r_ref=params.operating.r_g if o.reference_ratio is None else o.reference_ratio,
+        loss_lambda_F=params.losses.lambda_F, loss_k_T=params.losses.k_T,
+        loss_c_v=params.losses.c_v, loss_c_q=params.losses.c_q,
+        loss_T_smooth=params.losses.T_smooth)
     for loop, J, f in (("drive", d.J_d, o.drive_bandwidth_hz),
                        ("load", d.J_l, o.load_bandwidth_hz)):
         w = 2 * np.pi * f

@@ -23,7 +23,8 @@ def machine(ctx: Context, res: rep.MachineSection) -> str:
     -------
     str
         HTML: a note, the traction-reserve figure, the tables of the curve statistics, the creep
-        magnitudes and the torque reserves, the ratio-stability figure and the claims.
+        magnitudes and the torque reserves, the ratio-stability figure, the efficiency table
+        and the clamping sweep, and the claims.
     """
     sh = ctx.params.shift
     return (
@@ -57,4 +58,16 @@ def machine(ctx: Context, res: rep.MachineSection) -> str:
                      "Static stability of the ratio with the servo torques held: d ln "
                      "kappa*/d r_g at fixed load torque (model notes Sec. 9); crosses: the "
                      "shipped set-points")
+        + ctx.table("machine_efficiency",
+                    ["tau", "input torque [N m]", "r_g", "F_s [kN]", "efficiency [%]",
+                     "slip [W]", "clamping [W]", "load [W]", "drag [W]"],
+                    res.efficiency_rows,
+                    "The variator's efficiency and its losses by term at 300 rad/s, at the "
+                    "slip set-point (tau 0.9) and at a safety factor of 1.3 (tau 0.77) "
+                    "(trimmed machine; [losses] of empact params show --describe)")
+        + ctx.table("machine_efficiency_clamping",
+                    ["tau", "F_s [kN]", "efficiency [%]", "slip [W]", "clamping [W]",
+                     "load [W]", "drag [W]"], res.clamping_rows,
+                    "Efficiency over clamping force at r_g 1, 60 N m, 300 rad/s: the slip "
+                    "power falls and the clamping loss rises with the clamping force")
         + ctx.claims(res.claims))

@@ -46,7 +46,7 @@ SECTIONS: tuple[Section, ...] = (
     Section("Figure 14: FRFs on the virtual test rig (r_g = 0.5, nu0 = 0)", "fig14", rid.fig14,
             identification.fig14, cost=2.7),
     Section("Beyond the paper: the machine sheet (traction, creep, thrust ratio, torque "
-            "reserve)", "machine", rmach.machine, machine.machine, cost=1.5),
+            "reserve, efficiency)", "machine", rmach.machine, machine.machine, cost=2.0),
     Section("Beyond the paper: slip and ratio control on the machine (family, loop, closed "
             "loop)", "control", rctl.control, control.control, cost=15.0),
     Section("Beyond the paper: control studies (traction estimate, Monte Carlo, the "
