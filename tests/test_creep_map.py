@@ -85,6 +85,6 @@ def test_creep_map_cli(tmp_path):
 
     path = tmp_path / "kc.csv"
     path.write_text("r_g,F_s,K_c\n0.5,5000,0.003\n0.5,20000,0.003\n2,5000,0.003\n2,20000,0.003\n")
-    res = CliRunner().invoke(main, ["linearize", "--creep-map", str(path)])
+    res = CliRunner().invoke(main, ["linearize", "--creep-map", str(path), "--json"])
     assert res.exit_code == 0, res.output
     assert '"creep_map":' in res.output

@@ -205,6 +205,8 @@ NOT_RESULTS = {
     "empact.control.designs.ControllerType": "a registry entry (a design function by name)",
     "empact.control.law.LoopConfig": "settings of the loop law",
     "empact.experiments.rig.RigSettings": "settings of a rig experiment",
+    "empact.fmu.FmuConfig": "settings of an FMU export (its input)",
+    "empact.fmu.FmuVariable": "an entry of an FMU's model description",
     "empact.hardware.SensorParams": "a parameter section",
     "empact.hardware.ServoLimits": "a parameter section",
     "empact.linear.calibration.Target": "a calibration target (input)",

@@ -111,7 +111,7 @@ def test_options_and_the_cli_offer_every_law(params, name):
     assert out.exit_code == 0 and "--traction-law" in out.output and name in out.output
     bad = runner.invoke(main, ["linearize", "--traction-law", "no-such-law"])
     assert bad.exit_code == 2 and "no-such-law" in bad.output
-    res = runner.invoke(main, ["linearize", "--traction-law", name])
+    res = runner.invoke(main, ["linearize", "--traction-law", name, "--json"])
     assert res.exit_code == 0, res.output
     text = res.stdout
     assert ('"traction_law": "%s"' % name in text) == (name != LAWS[0])

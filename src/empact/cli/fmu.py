@@ -6,8 +6,10 @@ from typing import Any
 import click
 
 from .._validate import check_number
+from ..variator.traction import DEFAULT_TRACTION_LAW
 from ._common import (
     ErrorGroup,
+    InputError,
     OutputFile,
     force_option,
     get_params,
@@ -58,8 +60,8 @@ def export_cmd(out: str, controller: str | None, rate: float, duration: float, r
                nu: float | None, tau: float | None, F_s: float | None, T_l: float | None,
                omega_p: float | None, method: str, rtol: float, max_step: float, damping: str,
                drive: str, load: str, kinematics: str, shift_law: str, thrust_ratio: str | None,
-               creep_map: str | None, traction_table: Any, params_file: str | None,
-               force: bool) -> None:
+               creep_map: str | None, traction_table: Any, traction_law: str,
+               params_file: str | None, force: bool) -> None:
     """Write an FMI 2.0 co-simulation FMU of the nonlinear machine, started at an operating
     point (trimmed at initialisation), with empact's integrator inside (any communication
     step). Inputs T_mp, T_ms and the drive and load inputs (held over each step); outputs
@@ -76,6 +78,9 @@ def export_cmd(out: str, controller: str | None, rate: float, duration: float, r
     params = get_params(params_file)
     point = operating_point(params, trim=True, traction=traction_table, ratio=r_g, slip=nu,
                             tau=tau, clamp=F_s, load_torque=T_l, speed=omega_p)
+    if traction_law != DEFAULT_TRACTION_LAW:  # (a law the FMU's model options do not carry)
+        raise InputError(f"--traction-law {traction_law}: an FMU is exported with the default "
+                         f"analytic law ({DEFAULT_TRACTION_LAW}) or measured curves (--traction)")
     options = _options(drive, load, damping, kinematics, shift_law, thrust_ratio, creep_map,
                        traction_table)
     path = export_fmu(out, params, options=options, point=point, controller=controller,
