@@ -35,8 +35,12 @@ NO_LOSSES = {"losses.lambda_F": 0.0, "losses.k_T": 0.0, "losses.c_v": 0.0,
 def test_variator_losses_constant():
     assert VARIATOR_LOSSES == ("P_loss_slip", "P_loss_clamp", "P_loss_load", "P_loss_drag")
     assert K.VARIATOR_LOSSES is VARIATOR_LOSSES
-    # appended at the end: the other outputs and parameters keep their places
-    assert K.OUTPUTS[:38][-1] == "mu_max" and K.PARAMETER_NAMES[77] == "traction_table"
+    # appended: the other outputs keep their places; the loss parameters follow the
+    # traction table's offset, and the traction laws' registry part comes last
+    assert K.OUTPUTS[:38][-1] == "mu_max" and K.PARAMETER_NAMES[K.P_MTAB] == "traction_table"
+    assert K.PARAMETER_NAMES[K.P_MTAB + 1:K.P_TRACTION] == (
+        "loss_lambda_F", "loss_k_T", "loss_c_v", "loss_c_q", "loss_T_smooth")
+    assert K.PARAMETER_NAMES[K.P_TRACTION] == "traction_law"
     for name in VARIATOR_LOSSES + ("P_var_in", "P_var_out"):
         assert name in K.OUTPUTS
 

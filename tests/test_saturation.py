@@ -43,8 +43,10 @@ def test_the_engine_torque_estimate_is_late_and_off(params):
     """The feedforward on the estimate (the torque source's, the bench's load motor's,
     20 ms late at 1 kHz, +15 %): at rest the law's pre-processing holds its state (its
     buffer starts settled); a step of the source's torque reaches the feedforward's filter
-    exactly 20 samples later, by ``(1 - alpha) ff(1.15 dT)`` (the feedforward's law; to
-    1e-9 relative, rounding), and not before.  The linear loop model refuses it (it covers
+    exactly 20 samples later, by ``(1 - alpha) (ff(T_0 + 1.15 dT) - ff(T_0))`` with ``T_0``
+    the estimate at rest (the feedforward's law: the gain table schedules on the whole
+    estimated torque, so the step is not ``ff(1.15 dT)``; to 1e-9 relative, rounding), and
+    not before.  The linear loop model refuses it (it covers
     the sensors' feedforward only)."""
     sc = _scenario(feedforward_signal="T_e_est", sensors={"engine_torque_error": 0.15})
     law = build_law(sc, params, ideal=True)
@@ -63,7 +65,11 @@ def test_the_engine_torque_estimate_is_late_and_off(params):
         assert s[nb] == s0[nb], k
     s, _, u, _ = law.preprocess(s, raw, 0, ideal=True)
     r = raw0[0]
-    want = (1 - law._alpha_ff) * law._ff_force(1.15 * dT, r, law.refs.mu[0])
+    T0, mu = law._ff_torque0(), law.refs.mu[0]  # the estimate at rest, 1.15 T_l
+    np.testing.assert_allclose(T0, 1.15 * raw0[RAW_SIGNALS.index("T_l_act")], rtol=1e-15,
+                               atol=0)
+    want = (1 - law._alpha_ff) * (law._ff_force(T0 + 1.15 * dT, r, mu)
+                                  - law._ff_force(T0, r, mu))
     np.testing.assert_allclose(s[nb] - s0[nb], want, rtol=1e-9, atol=0)
     with pytest.raises(ParameterError, match="engine-torque estimate"):
         linear_preprocess(law)
