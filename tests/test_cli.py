@@ -604,10 +604,9 @@ BAD_INPUT = [
     (["control", "design", "--bandwidth", "1", "--out", "c.json"],
      "--bandwidth '1': two numbers RATIO,SLIP"),
     (["control", "design", "--bandwidth", "0,1", "--out", "c.json"], "--bandwidth = 0"),
-    (["control", "design", "--method", "hinf", "--drive", "torque", "--nominal", "3,1,0",
-      "--out", "c.json"],
-     "nominal point (3, 1, 0) (r_g = 0.9836, tau = 0.9, F_s = 3000): H-infinity ill-posed "
-     "(A1)"),
+    # (an ill-posed H-infinity problem: tests/test_control.py's
+    # test_hinf_refuses_ill_posed_problems; the torque-driven machine's rigid-body mode that
+    # made one here is damped by the variator's drag since issue 32, so the design is posed)
     (["control", "design", "--nominal", "9,9", "--out", "c.json"],
      "--nominal '9,9': indices in a grid of shape (7, 3, 5)"),
     (["control", "check", "nosuch.json", "--family", "f.npz"], "nosuch.json: no such controller"),
