@@ -73,8 +73,15 @@ def run(folder: Path) -> list[dict]:
     records = []
     for name, args in steps:
         t0 = time.perf_counter()
-        res = subprocess.run(args, cwd=folder, env=env, capture_output=True, text=True,
-                             timeout=240)
+        try:
+            res = subprocess.run(args, cwd=folder, env=env, capture_output=True, text=True,
+                                 timeout=240)
+        except subprocess.TimeoutExpired as exc:  # a record naming the step, not no records
+            err = exc.stderr.decode(errors="replace") if isinstance(exc.stderr, bytes) \
+                else (exc.stderr or "")
+            records.append({"step": name, "status": "timed out after 240 s",
+                            "seconds": time.perf_counter() - t0, "stderr": err[-3000:]})
+            break
         records.append({"step": name, "status": res.returncode,
                         "seconds": time.perf_counter() - t0, "stderr": res.stderr[-3000:]})
         if res.returncode:

@@ -272,8 +272,15 @@ def test_frf_unexcited_bins_are_nan_not_errors():
     # periodic excitation, whole periods, steady state: exact at the lines up to rounding
     true = _true_frf((b, a), est.frequencies_hz[lines])
     assert np.max(np.abs(est.H[0, 0, lines] - true) / np.abs(true)) < 1e-6
-    with pytest.raises(ValueError, match="no power"):
+    # an all-zero input is a dead channel, refused by name before any spectrum (issue 35)
+    with pytest.raises(ValueError, match=r"input 'u\[0\]' is constant \(0 in every sample\)"):
         estimate_frf(np.zeros(512), y[:512], fs)
+    # an input that moves only in samples no segment reads (5 segments of 100 cover 0..499)
+    # carries no power at any frequency: refused, not an FRF of NaN
+    u_late = np.zeros(512)
+    u_late[-1] = 1.0
+    with pytest.raises(ValueError, match="no power"):
+        estimate_frf(u_late, y[:512], fs, nperseg=100, noverlap=0)
 
 
 def test_records_convert_header_units_to_si(tmp_path):
