@@ -7,8 +7,8 @@ machine as an FMI 2.0 co-simulation unit with empact's Rosenbrock integrator ins
 importer runs it (Simulink, OpenModelica, Dymola, FMPy). Here FMPy validates the unit and
 runs a step of the secondary servo's torque at a 1 ms communication step: a positive servo
 torque opens the secondary sheave (the sign convention of :mod:`empact.nonlinear`), so the
-clamping falls and the slip rises, as `empact simulate` gives them. The importing machine needs Python with
-empact installed (docs: "The machine as an FMU").
+clamping falls and the slip rises, as `empact simulate` gives them. The importing machine
+needs Python with empact installed (docs: "The machine as an FMU").
 """
 import tempfile
 from pathlib import Path
