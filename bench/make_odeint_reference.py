@@ -2,7 +2,8 @@
 (`tests/data/odeint_servo_torque_steps.npz`): the shipped servo-torque-steps scenario by
 `scipy.integrate.odeint` (LSODA) at rtol 1e-11 with the simulator's compiled right-hand side
 and exact Jacobian (`_odeint_baseline.py`); kept: ``r_g``, ``nu`` and ``F_s`` at the 1001
-output samples, and the commit it was made from.  The shipped file was made from ``9bddc97``.
+output samples, and the commit it was made from.  The shipped file was made from ``db7a78a``
+(with the variator's losses of issue 32).
 
 Run: ``PYTHONPATH=<checkout>/src .venv/bin/python bench/make_odeint_reference.py
 tests/data/odeint_servo_torque_steps.npz`` (a few seconds after compilation).

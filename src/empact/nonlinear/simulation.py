@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._io import atomic_write_text
+from .._lazy import lazy_module
 from .._progress import progress as progress_bar
 from .._results import frame, plain
 from .._validate import check_choice, check_number
@@ -137,6 +138,9 @@ class SimulationResult:
         return energy_balance(self)
 
 
+#: scipy.integrate, imported on first use (`energy_balance`)
+_integrate = lazy_module("scipy.integrate")
+
 #: the power outputs [W] whose integrals `energy_balance` reports, by energy name
 _POWERS = {"drive": ("T_d_act", "omega_d"), "load": ("T_l_act", "omega_l"),
            "servo_mechanical_primary": ("T_mp_act", "omega_mp"),
@@ -146,9 +150,7 @@ _POWERS = {"drive": ("T_d_act", "omega_d"), "load": ("T_l_act", "omega_l"),
 def _integral(t: NDArray[np.float64], f: NDArray[np.float64]) -> float:
     """``int f dt`` over the samples `t` (uniform): composite Simpson on the even part, the
     last interval (an odd count) by the cubic through the last four samples."""
-    from scipy.integrate import simpson
-
-    return float(simpson(f, x=t)) if len(t) > 2 else float(np.trapezoid(f, t))
+    return float(_integrate.simpson(f, x=t)) if len(t) > 2 else float(np.trapezoid(f, t))
 
 
 def energy_balance(result: SimulationResult) -> dict[str, Any]:
