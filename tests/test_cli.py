@@ -1085,18 +1085,29 @@ def test_output_folder_never_clobbered(tmp_path, monkeypatch, name):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["work"]
 
 
-def test_control_check_strict_gates_a_script(tmp_path):
-    """`control check --strict` exits 0 when every plant is stable and the worst disk margin
-    reaches --min-disk-margin, 1 with one error line when it does not (issue 21, item 7); the
-    margin it prints is the one it judges."""
-    pi = resources.files("empact") / "data" / "control" / "pi.json"
-    fam = tmp_path / "family.npz"
+SHIPPED_PI = resources.files("empact") / "data" / "control" / "pi.json"
+
+
+@pytest.fixture(scope="module")
+def shipped_pi_check(tmp_path_factory):
+    """The shipped PI's ``control check --strict --json`` on two plants of its family (r_g 0.8
+    and 1.25, tau 0.9, 16 kN), which passes: the family file and the check's JSON (shared by
+    the two tests of the strict gate)."""
+    fam = tmp_path_factory.mktemp("shipped_pi_check") / "family.npz"
     res = run("plants", "--ratio", "0.8,1.25", "--tau", "0.9", "--clamp", "16000", "--out", fam,
               "--quiet")
     assert res.exit_code == 0, res.output
-    res = run("control", "check", pi, "--family", fam, "--strict", "--quiet", "--json")
+    res = run("control", "check", SHIPPED_PI, "--family", fam, "--strict", "--quiet", "--json")
     assert res.exit_code == 0, res.output
-    data = json.loads(res.stdout)
+    return fam, json.loads(res.stdout)
+
+
+def test_control_check_strict_gates_a_script(shipped_pi_check):
+    """`control check --strict` exits 0 when every plant is stable and the worst disk margin
+    reaches --min-disk-margin, 1 with one error line when it does not (issue 21, item 7); the
+    margin it prints is the one it judges."""
+    pi = SHIPPED_PI
+    fam, data = shipped_pi_check
     worst = data["worst"]["disk_margin"]
     assert data["passed"] is True and data["worst"]["all_stable"] is True
     assert worst == pytest.approx(min(data["disk_margin"]), rel=0, abs=0)  # what it judges
@@ -1111,19 +1122,13 @@ def test_control_check_strict_gates_a_script(tmp_path):
     assert res.exit_code == 0, res.output
 
 
-def test_control_check_strict_gates_on_the_design_margin(tmp_path):
+def test_control_check_strict_gates_on_the_design_margin(shipped_pi_check, tmp_path):
     """Without --min-disk-margin, `control check --strict` judges the controller's own design
     margin (its record's alpha_min; issue 33, item 9): the shipped PI on two plants of its
     family passes at its alpha_min, and the same file promising more than the check finds
     exits 1 naming the promise."""
-    pi = resources.files("empact") / "data" / "control" / "pi.json"
-    fam = tmp_path / "family.npz"
-    res = run("plants", "--ratio", "0.8,1.25", "--tau", "0.9", "--clamp", "16000", "--out", fam,
-              "--quiet")
-    assert res.exit_code == 0, res.output
-    res = run("control", "check", pi, "--family", fam, "--strict", "--quiet", "--json")
-    assert res.exit_code == 0, res.output
-    data = json.loads(res.stdout)
+    pi = SHIPPED_PI
+    fam, data = shipped_pi_check
     doc = json.loads(pi.read_text())
     assert data["gate"] == {"min_disk_margin": doc["design"]["alpha_min"],
                             "source": "the design's alpha_min"}
