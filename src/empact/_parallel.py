@@ -79,9 +79,10 @@ def _call(index: int) -> tuple[int, Any]:
 
 
 def run_forked(fn: Callable[..., Any], calls: Sequence[tuple[Any, ...]], workers: int,
-               done: Callable[[int, Any], None] | None = None) -> list[Any]:
+               done: Callable[[int, Any], None] | None = None, keep: bool = True) -> list[Any]:
     """``[fn(*args) for args in calls]`` in `workers` forked processes, started in the order
-    given; `done(index, result)` is called in this process as each completes.  The workers
+    given; `done(index, result)` is called in this process as each completes (with `keep`
+    false the results are only handed to `done`: the list returned holds None).  The workers
     inherit `fn` and `calls` (forked after they are set): neither needs to be picklable, only
     the results travel back.
 
@@ -95,7 +96,8 @@ def run_forked(fn: Callable[..., Any], calls: Sequence[tuple[Any, ...]], workers
         with sigint_held():
             pool = multiprocessing.get_context("fork").Pool(workers, initializer=_worker_init)
         for index, result in pool.imap_unordered(_call, range(len(calls)), chunksize=1):
-            results[index] = result
+            if keep:
+                results[index] = result
             if done is not None:
                 done(index, result)
         pool.close()

@@ -184,7 +184,7 @@ def chunk_slices(n_items: int, n_chunks: int) -> list[slice]:
 
 
 def plan_chunks(n_items: int, seconds_per_item: float,
-                options: SweepOptions | None = None) -> list[slice]:
+                options: SweepOptions | None = None, target: float = 0.05) -> list[slice]:
     """Contiguous chunks of ``range(n_items)`` sized by `chunk_count` for `options`'
     parallelism (in process by default).
 
@@ -196,6 +196,9 @@ def plan_chunks(n_items: int, seconds_per_item: float,
         Estimated compute time of one item [s].
     options : SweepOptions, optional
         The scheduler whose parallelism sizes the chunks (default: in process).
+    target : float
+        Wanted compute time of one chunk [s] (`chunk_count`; a streamed study's chunks,
+        written to a shard each, are about a second: `empact.shards`).
 
     Returns
     -------
@@ -203,7 +206,7 @@ def plan_chunks(n_items: int, seconds_per_item: float,
         Contiguous slices covering ``range(n_items)``, in order (`chunk_slices`).
     """
     workers = (options or SweepOptions()).parallelism
-    return chunk_slices(n_items, chunk_count(n_items, seconds_per_item, workers))
+    return chunk_slices(n_items, chunk_count(n_items, seconds_per_item, workers, target))
 
 
 #: the process's thread pools and the number of modules loaded when they were scanned
@@ -226,8 +229,14 @@ def _one_thread(fn: Callable[[Any], Any], arg: Any) -> Any:
 
 
 def run_chunks(fn: Callable[[Any], Any], chunks: Sequence[Any],
-               options: SweepOptions | None = None, desc: str = "sweep") -> list[Any]:
+               options: SweepOptions | None = None, desc: str = "sweep",
+               done: Callable[[int, Any], None] | None = None) -> list[Any]:
     """``[fn(c) for c in chunks]`` on the chosen scheduler, results in chunk order.
+
+    With `done`, the results are streamed instead: ``done(k, fn(chunks[k]))`` is called in
+    this process as each chunk completes (in completion order, whatever the scheduler) and
+    the result is not kept (the list returned holds None), so that memory does not grow with
+    the number of chunks (a study writing a shard per chunk: `empact.shards`).
 
     `fn` must be a module-level function and the chunks picklable for Dask schedulers.
 
@@ -241,11 +250,14 @@ def run_chunks(fn: Callable[[Any], Any], chunks: Sequence[Any],
         Where and how the sweep runs (default: in process, no progress bar).
     desc : str
         Label of the progress bar.
+    done : callable, optional
+        ``done(index, result)``, called in this process as each chunk completes; an
+        exception from it stops the sweep (the workers are terminated).
 
     Returns
     -------
     list
-        ``fn(c)`` for every chunk ``c``, in chunk order.
+        ``fn(c)`` for every chunk ``c``, in chunk order (None each with `done`).
 
     Raises
     ------
@@ -255,28 +267,37 @@ def run_chunks(fn: Callable[[Any], Any], chunks: Sequence[Any],
     """
     opts = options or SweepOptions()
     chunks = list(chunks)
+    out: list[Any] = [None] * len(chunks)
+
+    def store(k: int, result: Any) -> None:
+        if done is None:
+            out[k] = result
+        else:
+            done(k, result)
+
     if opts.scheduler == "none":
-        return _run_here(fn, chunks, opts.parallelism, opts.progress, desc)
-    return _run_dask(fn, chunks, opts, desc)
+        _run_here(fn, chunks, opts.parallelism, opts.progress, desc, store)
+    else:
+        _run_dask(fn, chunks, opts, desc, store)
+    return out
 
 
 def _run_here(fn: Callable[[Any], Any], chunks: list[Any], workers: int, progress: bool,
-              desc: str) -> list[Any]:
+              desc: str, store: Callable[[int, Any], None]) -> None:
     """The chunks on this machine: in process, or the first one here and the rest in
-    `workers` forked processes (they inherit what the first one loaded)."""
-    out: list[Any] = [None] * len(chunks)
+    `workers` forked processes (they inherit what the first one loaded); `store(k, result)`
+    as each completes."""
     with progress_bar(total=len(chunks), desc=desc, unit="chunk", enabled=progress) as bar:
         for k, c in enumerate(chunks if workers <= 1 else chunks[:1]):
-            out[k] = _one_thread(fn, c)
+            store(k, _one_thread(fn, c))
             bar.update(1)
         if workers > 1 and len(chunks) > 1:
             def done(index: int, result: Any) -> None:
-                out[index + 1] = result
+                store(index + 1, result)
                 bar.update(1)
 
             run_forked(_one_thread, [(fn, c) for c in chunks[1:]],
-                       min(workers, len(chunks) - 1), done=done)
-    return out
+                       min(workers, len(chunks) - 1), done=done, keep=False)
 
 
 #: Dask settings of the clusters `run_chunks` starts itself (``"local"``): a batch sweep needs
@@ -339,14 +360,14 @@ def _client(opts: SweepOptions):
                          f"{opts.timeout:g} s ({reason[:120]})") from None
 
 
-def _run_dask(fn, chunks, opts: SweepOptions, desc: str) -> list[Any]:
+def _run_dask(fn, chunks, opts: SweepOptions, desc: str,
+              store: Callable[[int, Any], None]) -> None:
     distributed = _distributed(opts)
     client, cluster = _client(opts)
     try:
         futures = client.map(_one_thread, [fn] * len(chunks), chunks, pure=False,
                              retries=opts.retries)
         index = {f.key: k for k, f in enumerate(futures)}
-        results: list[Any] = [None] * len(chunks)
         with progress_bar(total=len(chunks), desc=desc, unit="chunk",
                           enabled=opts.progress) as bar:
             for fut in distributed.as_completed(futures):
@@ -355,9 +376,8 @@ def _run_dask(fn, chunks, opts: SweepOptions, desc: str) -> list[Any]:
                     exc = fut.exception()
                     raise SweepError(f"sweep chunk {k} failed on a worker: "
                                      f"{type(exc).__name__}: {exc}") from None
-                results[k] = fut.result()
+                store(k, fut.result())
                 bar.update(1)
-        return results
     except BaseException:
         if cluster is not None:  # interrupted or failed: do not wait for running chunks
             _stop_workers(cluster)

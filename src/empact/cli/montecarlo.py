@@ -39,7 +39,12 @@ from ._common import (
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of the study (run i draws from its own stream of it).")
 @click.option("--out", "out", type=click.Path(file_okay=False), default=None,
-              help="Folder for runs.csv, runs.json and summary.json.")
+              help="Folder for runs.csv, runs.json and summary.json; the runs stream into "
+                   "its shards/ (a chunk of about a second each) and manifest.json as they "
+                   "complete.")
+@click.option("--resume", is_flag=True,
+              help="Continue the killed study in --out from its shards (the same spread, "
+                   "seed, runs, analysis and parameters).")
 @sweep_options
 @traction_option
 @params_option
@@ -47,7 +52,7 @@ from ._common import (
 @force_option
 @quiet_option
 def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, example, controller,
-                   seed, out, scheduler, workers, scheduler_timeout, traction_table,
+                   seed, out, resume, scheduler, workers, scheduler_timeout, traction_table,
                    params_file, as_json, json_out, force, quiet) -> None:
     """Monte Carlo over parameter spread: each run draws the spread's parameters, evaluates
     the analysis and is recorded (a failed run with its reason); prints the summary
@@ -56,6 +61,7 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
     Exit status: 0 when at least one run succeeded; 1 when every run failed (nothing
     written); 2 bad input (a spread none of whose values a parameter may take, ...)."""
     from importlib import resources
+    from pathlib import Path
 
     from .._validate import check_int
     from ..montecarlo import load_spread, monte_carlo, save_montecarlo
@@ -79,7 +85,15 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
     if closed and (scenario is None) == (example is None):
         raise InputError("--analysis closed-loop: give exactly one of --scenario FILE or "
                          "--example NAME")
-    if out:
+    if resume and not out:
+        raise InputError("--resume: give the study's folder with --out DIR")
+    if resume:
+        from ..shards import MANIFEST
+
+        if not (Path(out) / MANIFEST).is_file():
+            raise InputError(f"--resume {out}: not a study folder (no {MANIFEST}); start the "
+                             "study with --out alone")
+    elif out:
         output_folder(out, "--out", force=force)
     sweep = sweep_from_options(scheduler, workers, scheduler_timeout, progress=not quiet)
     params = get_params(params_file)
@@ -100,7 +114,8 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
         assert sc.controller is not None  # closed_loop
         ctrl = resolve_controller(controller or sc.controller.file)
     result = monte_carlo(params, spread, runs, analysis, seed=seed, scenario=sc,
-                         controller=ctrl, sweep=sweep, traction=traction_table)
+                         controller=ctrl, sweep=sweep, traction=traction_table,
+                         store=out, resume=resume)
     if result.failures == result.runs:
         kind, f = next(iter(result.summary()["failure_reasons"].items()))
         raise Failed(f"every one of the {result.runs} runs failed ({f['count']} x {kind}, "

@@ -7,13 +7,20 @@ stops), the reason: a failed run is never dropped and never stops the others.  T
 computed in chunks by the sweep layer (`empact.sweep`), in process or on Dask; as each run
 depends only on the seed and its index, the table is the same whatever the scheduler and the
 number of workers.
+
+With a ``store`` folder a study streams: its chunks (about a second of work each) are written
+to shards as they complete (`empact.shards`), the parent process keeps none of them while the
+study runs, a killed study resumes from its shards (``resume=True``) and the table is then
+assembled from the shards in run order, bitwise the table of the same study in memory.
 """
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import json
 import os
+import pickle
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,12 +36,13 @@ from ..control.closed_loop import resolve_controller
 from ..errors import ParameterError, TrimError
 from ..export import jsonable
 from ..params import Params
+from ..shards import ShardStore
 from ..sweep import SweepOptions, plan_chunks, run_chunks
 from .analyses import OUTPUTS, SECONDS_PER_RUN, AnalysisContext, RunFailed, evaluate
 from .spread import Spread
 
 __all__ = ["MonteCarloResult", "monte_carlo", "save_montecarlo", "failure_kind", "QUANTILES",
-           "MAX_RUNS"]
+           "MAX_RUNS", "study_spec", "CHUNK_SECONDS"]
 
 #: quantiles of the summary
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
@@ -47,6 +55,9 @@ SCHEMA_VERSION = 2
 
 #: files of a saved study (the folder's own files, replaced by ``--force``)
 FILES = ("runs.csv", "runs.json", "summary.json")
+
+#: compute time of one chunk of a streamed study, each chunk a shard [s]
+CHUNK_SECONDS = 1.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -204,7 +215,9 @@ def failure_kind(exc: BaseException) -> str:
 
 def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plant", *,
                 seed: int = 0, scenario: Any = None, controller: Any = None,
-                sweep: SweepOptions | None = None, traction: Any = None) -> MonteCarloResult:
+                sweep: SweepOptions | None = None, traction: Any = None,
+                store: str | os.PathLike[str] | None = None, resume: bool = False,
+                chunk_seconds: float = CHUNK_SECONDS) -> MonteCarloResult:
     """Evaluate an analysis over `runs` parameter sets drawn from `spread`.
 
     Parameters
@@ -223,6 +236,13 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
         default the table the parameter file names, `Params.traction_table`, else the
         analytic curve of each run's ``[traction]``, which a spread may vary; the table is not
         varied)
+    store : a study folder: the runs stream to its shards as their chunks complete (chunks of
+        about `chunk_seconds` of work, `empact.shards`); default None: in memory
+    resume : continue the study in `store` (its completed chunks are read, not rerun); a
+        `empact.shards.StudyMismatch` when the folder holds no study or another one (its
+        analysis, seed, runs, spread, parameters or context differ)
+    chunk_seconds : estimated compute time of a stored study's chunk [s] (fixed in its
+        manifest when the study starts)
 
     Returns
     -------
@@ -251,9 +271,24 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
         scenario = scenario.with_options(traction=traction)
     context = AnalysisContext(analysis, scenario, controller,
                               params if analysis == "closed-loop" else None, traction)
-    tasks = [(params, spread, context, seed, s.start, s.stop)
-             for s in plan_chunks(runs, SECONDS_PER_RUN[analysis], sweep)]
-    parts = run_chunks(_run_chunk, tasks, sweep, desc=f"monte carlo ({analysis})")
+    desc = f"monte carlo ({analysis})"
+    if store is None:
+        tasks = [(params, spread, context, seed, s.start, s.stop)
+                 for s in plan_chunks(runs, SECONDS_PER_RUN[analysis], sweep)]
+        parts = run_chunks(_run_chunk, tasks, sweep, desc=desc)
+    else:
+        shards = _study_store(store, resume, params, spread, context, runs, seed, sweep,
+                              chunk_seconds)
+        pending = shards.pending
+
+        def done(k: int, part: tuple[NDArray, NDArray, NDArray, list[str]]) -> None:
+            shards.write(pending[k], {"samples": part[0], "values": part[1], "ok": part[2],
+                                      "reasons": np.array(part[3], dtype=str)})
+
+        run_chunks(_run_chunk, [(params, spread, context, seed, *shards.chunks[k])
+                                for k in pending], sweep, desc=desc, done=done)
+        parts = [(a["samples"], a["values"], a["ok"], [str(r) for r in a["reasons"]])
+                 for _, a in shards.iter_shards()]
     samples = np.concatenate([p[0] for p in parts]).reshape(runs, len(spread.names))
     outputs = tuple(OUTPUTS[analysis])
     units = {**{n: params.unit(n) for n in spread.names}, **OUTPUTS[analysis]}
@@ -262,6 +297,35 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
                             values=np.concatenate([p[1] for p in parts]),
                             ok=np.concatenate([p[2] for p in parts]),
                             reasons=tuple(r for p in parts for r in p[3]))
+
+
+def study_spec(params: Params, spread: Spread, context: AnalysisContext, runs: int,
+               seed: int) -> dict[str, Any]:
+    """What identifies a stored study (its manifest's ``spec``): the analysis, seed and run
+    count, and SHA-256 hashes of the parameters (`Params.to_dict`), the spread (each
+    distribution's name and description) and the analysis' context (scenario, controller,
+    nominal parameters and traction table, pickled)."""
+    def digest(data: bytes) -> str:
+        return hashlib.sha256(data).hexdigest()
+
+    return {"analysis": context.kind, "seed": seed, "runs": runs,
+            "parameters": digest(json.dumps(jsonable(params.to_dict()), sort_keys=True,
+                                            default=str).encode()),
+            "spread": digest(json.dumps([[d.name, d.describe()] for d in spread.distributions]
+                                        ).encode()),
+            "context": digest(pickle.dumps(context, protocol=4))}
+
+
+def _study_store(store: str | os.PathLike[str], resume: bool, params: Params, spread: Spread,
+                 context: AnalysisContext, runs: int, seed: int, sweep: SweepOptions | None,
+                 chunk_seconds: float) -> ShardStore:
+    """The shard store of a streamed study: opened (`resume`) or started with its chunks."""
+    spec = study_spec(params, spread, context, runs, seed)
+    if resume:
+        return ShardStore.open(store, spec)
+    chunks = [(s.start, s.stop) for s in plan_chunks(runs, SECONDS_PER_RUN[context.kind], sweep,
+                                                     target=chunk_seconds)]
+    return ShardStore.create(store, spec, chunks)
 
 
 def save_montecarlo(result: MonteCarloResult, folder: str | os.PathLike[str]) -> Path:

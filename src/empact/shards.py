@@ -1,0 +1,176 @@
+"""A study streamed to shards: one ``.npz`` file per completed chunk and a manifest.
+
+A long study (`empact.montecarlo.monte_carlo` with a ``store`` folder) writes each chunk's
+results as soon as the chunk completes, into ``shards/chunk-NNNNNN.npz`` of its folder, and
+records the chunk as done in ``manifest.json``; both are written atomically (a temporary file
+renamed into place), so a study that is killed leaves whole shards and a manifest that lists
+only whole shards: it loses at most the chunks that were running.  The manifest holds what
+identifies the study (`spec`: analysis, seed, run count and the hashes of the parameters, the
+spread and the analysis' context; `spec_hash` over them), the chunks' run ranges (fixed when
+the study starts, so that a resume on another number of workers computes the same chunks) and
+the completed chunks.  `ShardStore.open` refuses, in one line, a folder whose study differs.
+
+A shard holds whatever arrays the chunk function returns (named), so a record grows new
+columns without a change here.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Any, Iterator, Mapping, Sequence
+
+import numpy as np
+
+from .errors import ParameterError
+
+__all__ = ["ShardStore", "StudyMismatch", "spec_hash", "MANIFEST", "SHARDS"]
+
+#: the manifest's file name in a study folder
+MANIFEST = "manifest.json"
+#: the folder of the shards in a study folder
+SHARDS = "shards"
+#: the manifest's schema
+SCHEMA = {"name": "empact.study.manifest", "version": 1}
+
+
+class StudyMismatch(ParameterError):
+    """A study folder that is not a study, or whose study differs from the one resumed."""
+
+
+def spec_hash(spec: Mapping[str, Any]) -> str:
+    """SHA-256 (hex) of `spec` as canonical JSON (sorted keys).
+
+    Parameters
+    ----------
+    spec : mapping
+        JSON-serialisable description of a study.
+
+    Returns
+    -------
+    str
+        64 hexadecimal digits.
+    """
+    text = json.dumps(spec, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _atomic_write(path: Path, write) -> None:
+    """`write(file)` into a temporary file beside `path`, flushed and renamed onto it."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+class ShardStore:
+    """The shards and manifest of one study in a folder (`create` or `open` it).
+
+    Attributes
+    ----------
+    folder : Path
+        The study folder.
+    spec : dict
+        What identifies the study (JSON).
+    chunks : list of (int, int)
+        Run range ``[start, stop)`` of each chunk, in run order.
+    completed : set of int
+        Indices of the chunks whose shard is written.
+    """
+
+    def __init__(self, folder: Path, spec: dict[str, Any], chunks: list[tuple[int, int]],
+                 completed: set[int]) -> None:
+        self.folder = folder
+        self.spec = spec
+        self.chunks = chunks
+        self.completed = completed
+
+    @classmethod
+    def create(cls, folder: str | os.PathLike[str], spec: Mapping[str, Any],
+               chunks: Sequence[tuple[int, int]]) -> "ShardStore":
+        """Start a study in `folder` (created if missing): an empty ``shards`` folder and the
+        manifest (any shards of an earlier study there are removed)."""
+        path = Path(folder)
+        (path / SHARDS).mkdir(parents=True, exist_ok=True)
+        for old in (path / SHARDS).glob("chunk-*.npz"):
+            old.unlink()
+        store = cls(path, dict(spec), [(int(a), int(b)) for a, b in chunks], set())
+        store._write_manifest()
+        return store
+
+    @classmethod
+    def open(cls, folder: str | os.PathLike[str], spec: Mapping[str, Any],
+             option: str = "--resume") -> "ShardStore":
+        """The study in `folder`, to be resumed with `spec`.
+
+        Raises
+        ------
+        StudyMismatch
+            When `folder` has no readable manifest, or its study's spec differs from `spec`
+            (the message names the fields that differ).
+        """
+        path = Path(folder)
+        try:
+            doc = json.loads((path / MANIFEST).read_text())
+            if doc.get("schema", {}).get("name") != SCHEMA["name"]:
+                raise ValueError("not a study manifest")
+            chunks = [(int(a), int(b)) for a, b in doc["chunks"]]
+            completed = {int(k) for k in doc["completed"]}
+            old = dict(doc["spec"])
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise StudyMismatch(f"{option} {folder}: not a study folder (no readable "
+                                f"{MANIFEST}: {type(exc).__name__}); start it with --out "
+                                "alone") from None
+        if spec_hash(old) != spec_hash(spec):
+            diff = sorted(k for k in set(old) | set(spec) if old.get(k) != spec.get(k))
+            shown = ", ".join(f"{k} {old.get(k)!s:.16} there, {spec.get(k)!s:.16} here"
+                              for k in diff)
+            raise StudyMismatch(f"{option} {folder}: the study there differs ({shown}); "
+                                "resume with the same spread, seed, runs, analysis and "
+                                "parameters, or start a new folder")
+        completed = {k for k in completed if (path / SHARDS / cls._name(k)).is_file()}
+        return cls(path, dict(spec), chunks, completed)
+
+    @staticmethod
+    def _name(index: int) -> str:
+        return f"chunk-{index:06d}.npz"
+
+    def _write_manifest(self) -> None:
+        doc = {"schema": SCHEMA, "spec_hash": spec_hash(self.spec), "spec": self.spec,
+               "runs": self.chunks[-1][1] if self.chunks else 0,
+               "chunk_size": max((b - a for a, b in self.chunks), default=0),
+               "chunks": [list(c) for c in self.chunks], "completed": sorted(self.completed)}
+        _atomic_write(self.folder / MANIFEST,
+                      lambda f: f.write((json.dumps(doc, indent=1) + "\n").encode()))
+
+    @property
+    def pending(self) -> list[int]:
+        """Indices of the chunks still to compute, in run order."""
+        return [k for k in range(len(self.chunks)) if k not in self.completed]
+
+    def write(self, index: int, arrays: Mapping[str, np.ndarray]) -> None:
+        """Write chunk `index`'s shard (the named arrays), then mark it done in the
+        manifest (each atomically)."""
+        _atomic_write(self.folder / SHARDS / self._name(index),
+                      lambda f: np.savez(f, **{k: np.asarray(v) for k, v in arrays.items()}))
+        self.completed.add(index)
+        self._write_manifest()
+
+    def read(self, index: int) -> dict[str, np.ndarray]:
+        """The arrays of chunk `index`'s shard."""
+        with np.load(self.folder / SHARDS / self._name(index), allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+
+    def iter_shards(self) -> Iterator[tuple[tuple[int, int], dict[str, np.ndarray]]]:
+        """``((start, stop), arrays)`` of every chunk in run order (all must be complete)."""
+        for k, rng in enumerate(self.chunks):
+            yield rng, self.read(k)
