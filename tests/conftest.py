@@ -186,6 +186,9 @@ SLOW_TESTS = {
     "test_shift_law.py": ("test_creep_power_closes_the_balance",
                           "test_load_step_with_held_servos_moves_ratio_as_kappa_predicts"),
     "test_slip.py": ("test_sign_of_largest_real_part_follows_sign_of_the_traction_slope",),
+    "test_shards.py": ("test_a_sigkilled_study_resumes_bitwise",
+                       "test_one_and_two_workers_and_a_resume_on_two_are_bitwise_equal",
+                       "test_cli_resume_bad_input_one_line_exit_2"),
     "test_sweep.py": (
         "test_core_never_imports_dask", "test_failed_runs_are_recorded_with_their_reason",
         "test_montecarlo_cli_local_cluster_equals_serial", "test_montecarlo_closed_loop_cli",

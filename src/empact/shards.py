@@ -160,8 +160,9 @@ class ShardStore:
     def write(self, index: int, arrays: Mapping[str, np.ndarray]) -> None:
         """Write chunk `index`'s shard (the named arrays), then mark it done in the
         manifest (each atomically)."""
-        _atomic_write(self.folder / SHARDS / self._name(index),
-                      lambda f: np.savez(f, **{k: np.asarray(v) for k, v in arrays.items()}))
+        data = {k: np.asarray(v) for k, v in arrays.items()}
+        savez: Any = np.savez  # (its stubs type a keyword as allow_pickle's bool)
+        _atomic_write(self.folder / SHARDS / self._name(index), lambda f: savez(f, **data))
         self.completed.add(index)
         self._write_manifest()
 
