@@ -16,14 +16,15 @@ columns without a change here.
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import os
-import tempfile
 from pathlib import Path
 from typing import Any, Iterator, Mapping, Sequence
 
 import numpy as np
 
+from ._io import atomic_write_bytes, atomic_write_text
 from .errors import ParameterError
 
 __all__ = ["ShardStore", "StudyMismatch", "spec_hash", "MANIFEST", "SHARDS"]
@@ -55,21 +56,6 @@ def spec_hash(spec: Mapping[str, Any]) -> str:
     """
     text = json.dumps(spec, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode()).hexdigest()
-
-
-def _atomic_write(path: Path, write) -> None:
-    """`write(file)` into a temporary file beside `path`, flushed and renamed onto it."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            write(f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 class ShardStore:
@@ -149,8 +135,7 @@ class ShardStore:
                "runs": self.chunks[-1][1] if self.chunks else 0,
                "chunk_size": max((b - a for a, b in self.chunks), default=0),
                "chunks": [list(c) for c in self.chunks], "completed": sorted(self.completed)}
-        _atomic_write(self.folder / MANIFEST,
-                      lambda f: f.write((json.dumps(doc, indent=1) + "\n").encode()))
+        atomic_write_text(self.folder / MANIFEST, json.dumps(doc) + "\n")
 
     @property
     def pending(self) -> list[int]:
@@ -160,9 +145,10 @@ class ShardStore:
     def write(self, index: int, arrays: Mapping[str, np.ndarray]) -> None:
         """Write chunk `index`'s shard (the named arrays), then mark it done in the
         manifest (each atomically)."""
-        data = {k: np.asarray(v) for k, v in arrays.items()}
+        buf = io.BytesIO()
         savez: Any = np.savez  # (its stubs type a keyword as allow_pickle's bool)
-        _atomic_write(self.folder / SHARDS / self._name(index), lambda f: savez(f, **data))
+        savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
+        atomic_write_bytes(self.folder / SHARDS / self._name(index), buf.getvalue())
         self.completed.add(index)
         self._write_manifest()
 
