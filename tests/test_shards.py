@@ -106,6 +106,20 @@ def test_one_and_two_workers_and_a_resume_on_two_are_bitwise_equal(tmp_path, in_
         same_table(in_memory, res)
 
 
+def test_a_study_on_dask_streams_and_resumes_bitwise(tmp_path, cluster, in_memory):
+    """The dask-jobqueue recipe with a `LocalCluster` standing in (the suite's cluster: slow):
+    the shards written from Dask's completed futures; two lost, the resume on it bitwise."""
+    opts = SweepOptions(scheduler=cluster)
+    res = monte_carlo(P, SPREAD, RUNS, "slip", seed=7, store=tmp_path, chunk_seconds=TINY,
+                      sweep=opts)
+    same_table(in_memory, res)
+    for k in (0, 3):
+        (tmp_path / SHARDS / f"chunk-{k:06d}.npz").unlink()
+    again = monte_carlo(P, SPREAD, RUNS, "slip", seed=7, store=tmp_path, resume=True,
+                        chunk_seconds=TINY, sweep=opts)
+    same_table(in_memory, again)
+
+
 @pytest.fixture(scope="module")
 def stored(tmp_path_factory):
     folder = tmp_path_factory.mktemp("stored")
