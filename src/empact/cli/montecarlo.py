@@ -119,7 +119,9 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
     if result.failures == result.runs:
         kind, f = next(iter(result.summary()["failure_reasons"].items()))
         raise Failed(f"every one of the {result.runs} runs failed ({f['count']} x {kind}, "
-                     f"e.g. {f['example'].partition(': ')[2]}); nothing written")
+                     f"e.g. {f['example'].partition(': ')[2]}); "
+                     + (f"no table written (the shards stay in {out})" if out
+                        else "nothing written"))
     if out:
         save_montecarlo(result, out)
     summary = result.summary()
