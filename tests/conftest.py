@@ -177,6 +177,11 @@ SLOW_TESTS = {
     "test_nonlinear.py": ("test_energy_conserved_undamped_locked_belt",
                           "test_power_balance_with_dissipation",
                           "test_trim_and_trim_grid_agree_point_by_point"),
+    "test_montecarlo_verdicts.py": (
+        "test_a_tight_target_is_missed_by_every_run_and_counted",
+        "test_same_seed_gives_the_same_table_bitwise", "test_spread_variables_reach_the_run",
+        "test_strict_exit_codes", "test_wide_spread_without_a_scenario_is_one_line_exit_2",
+        "test_wide_spread_loads_on_every_ratio_and_varies_the_shape_at_all_three"),
     "test_plausibility.py": ("test_fuzzed_parameter_files",),
     "test_plotting.py": (
         "test_draws_into_given_axes_and_returns_artists",

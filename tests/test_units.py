@@ -81,12 +81,13 @@ def test_montecarlo_closed_loop_outputs_are_fractions(monkeypatch, params):
                    "slip_setpoint": 0.01, "ratio_error": 0.01, "mean_clamping_force": 1.0,
                    "mean_slip_power": 2.0, "mean_actuation_power": 3.0, "mean_losses": 5.0,
                    "peak_slip_error": 0.005, "slip_reserve": 0.02, "macro_slip": False,
-                   "peak_T_mp": 0.4, "peak_T_ms": 8.0}
+                   "peak_T_mp": 0.4, "peak_T_ms": 8.0, "min_clamping_force": 0.5}
 
     monkeypatch.setattr(analyses, "run_closed_loop", lambda *a, **k: Run)
     sc = load_scenario(control_example_path("slip-load-step-r1"))
     out = analyses.evaluate(params, analyses.AnalysisContext("closed-loop", sc, object()))
     assert out["slip_error"] == 0.0025 and out["peak_slip"] == 0.015
+    assert out["belt_slack"] == 0.0 and out["met.macro_slip"] == 1.0  # F_s > 0, no macro slip
     assert analyses.OUTPUTS["closed-loop"]["slip_error"] == "-"
     assert not [k for k in analyses.OUTPUTS["closed-loop"] if k.endswith("_pp")]
 

@@ -22,8 +22,11 @@ from ._common import (
 @click.command("montecarlo")
 @click.option("--spread", "spread_file", type=click.Path(dir_okay=False), default=None,
               help="TOML file of parameter distributions (see --example-spread).")
-@click.option("--example-spread", "example_spread", is_flag=True,
-              help="Print the shipped example spread file and exit.")
+@click.option("--example-spread", "example_spread", is_flag=False, flag_value="example",
+              default=None, type=click.Choice(["example", "wide"]),
+              help="Print a shipped spread file and exit: 'example' (the default, a few "
+                   "percent) or 'wide' (traction shape at all three ratios, clamping level, "
+                   "load step; for --analysis closed-loop).")
 @click.option("--runs", type=int, default=100, show_default=True, help="Number of runs.")
 @click.option("--analysis", type=click.Choice(["plant", "slip", "closed-loop"]),
               default="plant", show_default=True,
@@ -45,6 +48,8 @@ from ._common import (
 @click.option("--resume", is_flag=True,
               help="Continue the killed study in --out from its shards (the same spread, "
                    "seed, runs, analysis and parameters).")
+@click.option("--strict", is_flag=True,
+              help="Closed loop: exit 1 when any run missed a scenario target (or failed).")
 @sweep_options
 @traction_option
 @params_option
@@ -52,14 +57,20 @@ from ._common import (
 @force_option
 @quiet_option
 def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, example, controller,
-                   seed, out, resume, scheduler, workers, scheduler_timeout, traction_table,
+                   seed, out, resume, strict, scheduler, workers, scheduler_timeout,
+                   traction_table,
                    params_file, as_json, json_out, force, quiet) -> None:
     """Monte Carlo over parameter spread: each run draws the spread's parameters, evaluates
     the analysis and is recorded (a failed run with its reason); prints the summary
     (quantiles, failure count).
 
-    Exit status: 0 when at least one run succeeded; 1 when every run failed (nothing
-    written); 2 bad input (a spread none of whose values a parameter may take, ...)."""
+    Closed loop: each run's scenario targets are judged (met / missed by name, columns
+    ``met.NAME``), with its macro slip and belt slack; the summary counts the runs missing
+    each target (a run that failed to simulate misses every target).
+
+    Exit status: 0 when at least one run succeeded (with --strict: and no run missed a
+    target); 1 when every run failed (nothing written), or with --strict when a run missed
+    a target; 2 bad input (a spread none of whose values a parameter may take, ...)."""
     from importlib import resources
     from pathlib import Path
 
@@ -67,8 +78,8 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
     from ..montecarlo import load_spread, monte_carlo, save_montecarlo
 
     if example_spread:
-        click.echo(resources.files("empact.data").joinpath("montecarlo", "example-spread.toml")
-                   .read_text(), nl=False)
+        click.echo(resources.files("empact.data").joinpath(
+            "montecarlo", f"{example_spread}-spread.toml").read_text(), nl=False)
         return
     if spread_file is None:
         raise InputError("--spread: give a spread file (--example-spread prints one)")
@@ -85,6 +96,9 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
     if closed and (scenario is None) == (example is None):
         raise InputError("--analysis closed-loop: give exactly one of --scenario FILE or "
                          "--example NAME")
+    if strict and not closed:
+        raise InputError(f"--strict: judges the scenario targets of --analysis closed-loop, "
+                         f"not --analysis {analysis}")
     if resume and not out:
         raise InputError("--resume: give the study's folder with --out DIR")
     if resume:
@@ -97,7 +111,6 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
         output_folder(out, "--out", force=force)
     sweep = sweep_from_options(scheduler, workers, scheduler_timeout, progress=not quiet)
     params = get_params(params_file)
-    spread = load_spread(spread_file, params)
     sc = ctrl = None
     if closed:
         from ..control.closed_loop import control_example_path, resolve_controller
@@ -113,6 +126,7 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
             check_references(sc, params)
         assert sc.controller is not None  # closed_loop
         ctrl = resolve_controller(controller or sc.controller.file)
+    spread = load_spread(spread_file, params, sc)
     result = monte_carlo(params, spread, runs, analysis, seed=seed, scenario=sc,
                          controller=ctrl, sweep=sweep, traction=traction_table,
                          store=out, resume=resume)
@@ -125,13 +139,33 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
     if out:
         save_montecarlo(result, out)
     summary = result.summary()
+    verdicts = summary.get("verdicts")
     if as_json or json_out:
         emit_json(summary, "montecarlo", json_out)
-        return
+    else:
+        _echo_summary(result, summary, analysis, seed, out)
+    if strict and verdicts and verdicts["runs_missing_any"]:
+        missed = ", ".join(f"{t} {v['missed']}" for t, v in verdicts["targets"].items()
+                           if v["missed"])
+        raise Failed(f"--strict: {verdicts['runs_missing_any']} of {result.runs} runs missed "
+                     f"a scenario target ({missed}; {result.failures} failed to simulate)")
+
+
+def _echo_summary(result, summary, analysis, seed, out) -> None:
     click.echo(f"{result.runs} runs of the {analysis} analysis (seed {seed}): "
                f"{result.failures} failed" + (f"; written to {out}" if out else ""))
     for kind, f in summary["failure_reasons"].items():
         click.echo(f"  {f['count']} x {kind}, e.g. {f['example']}")
+    v = summary.get("verdicts")
+    if v:
+        click.echo(f"without macro slip or belt slack: {v['clean']} of {result.runs} "
+                   f"({100 * v['clean_fraction']:.1f} %); macro slip {v['macro_slip']}, "
+                   f"belt slack {v['belt_slack']}, other failures {v['failed_other']}")
+        click.echo(f"runs missing a target: {v['runs_missing_any']} of {result.runs}")
+        for t, c in v["targets"].items():
+            click.echo(f"  {t:22s} missed by {c['missed']:5d} runs"
+                       + (f" ({c['missed_failed']} failed to simulate)"
+                          if c["missed_failed"] else ""))
     click.echo(f"{'output':22s} {'unit':18s} {'n':>6s} {'q05':>11s} {'median':>11s} "
                f"{'q95':>11s}")
     for name, s in summary["outputs"].items():

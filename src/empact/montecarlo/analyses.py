@@ -17,25 +17,31 @@
     A closed-loop scenario with a controller on the nonlinear machine
     (`empact.control.closed_loop`): its metrics, slips as fractions (``slip_error``,
     ``peak_slip`` [-]).  The scenario sets its own operating point, so
-    ``operating.*`` spreads do not act here.  A run whose simulation stops early fails with the
-    solver's message.
+    ``operating.*`` spreads do not act here; ``scenario.*`` spreads
+    (`empact.montecarlo.spread.SCENARIO_VARIABLES`) move its initial point and load step.
+    Each run carries its verdicts (`output_units`): ``belt_slack`` (1 when the clamping force
+    reached zero), ``macro_slip`` and ``met.NAME`` (1 met, 0 missed) per scenario target
+    (`empact.control.closed_loop.check_targets`).  A run whose simulation stops early fails
+    with the solver's message (a slack belt stops it: ``clamping force F_s fell to zero``).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from ..control.closed_loop import run_closed_loop
+from ..control.closed_loop import check_targets, run_closed_loop
 from ..errors import ParameterError
 from ..lti import channel_zeros, oscillatory
 from ..nonlinear.linearization import plant
 from ..params import Params
 from ..slip.coupling import linearize_belt
 from ..slip.stability import stability_map
+from .spread import Spread, apply_scenario
 
-__all__ = ["ANALYSES", "OUTPUTS", "AnalysisContext", "RunFailed", "evaluate"]
+__all__ = ["ANALYSES", "OUTPUTS", "AnalysisContext", "RunFailed", "evaluate", "output_units",
+           "prepare", "TARGET_PREFIX"]
 
 ANALYSES = ("plant", "slip", "closed-loop")
 
@@ -49,8 +55,11 @@ OUTPUTS: dict[str, dict[str, str]] = {
                     "slip_reserve": "-", "macro_slip": "-", "ratio_error": "-",
                     "peak_T_mp": "N m", "peak_T_ms": "N m",
                     "mean_clamping_force": "N", "mean_slip_power": "W",
-                    "mean_actuation_power": "W", "mean_losses": "W"},
+                    "mean_actuation_power": "W", "mean_losses": "W", "belt_slack": "-"},
 }
+
+#: a closed-loop run's verdict on scenario target NAME is output ``met.NAME`` (1 met, 0 missed)
+TARGET_PREFIX = "met."
 
 #: measured wall time of one run [s] (sizes the sweep's chunks)
 SECONDS_PER_RUN = {"plant": 0.03, "slip": 2e-3, "closed-loop": 0.08}
@@ -97,6 +106,41 @@ class AnalysisContext:
             raise ParameterError("traction: the slip analysis draws the analytic curve's "
                                  "coefficients; a measured table serves the plant and "
                                  "closed-loop analyses")
+
+
+def output_units(context: AnalysisContext) -> dict[str, str]:
+    """The outputs of a run of `context` -> unit: `OUTPUTS` and, for the closed loop, one
+    verdict ``met.NAME`` [-] per scenario target (in the scenario's order).
+
+    Parameters
+    ----------
+    context : AnalysisContext
+    """
+    out = dict(OUTPUTS[context.kind])
+    if context.kind == "closed-loop":
+        out.update({TARGET_PREFIX + t: "-" for t in context.scenario.targets})
+    return out
+
+
+def prepare(params: Params, spread: Spread, row: Any,
+            context: AnalysisContext) -> tuple[Params, AnalysisContext]:
+    """One run's parameter set and context: the spread's parameters replace the nominal
+    values, its ``scenario.*`` variables the scenario's (validated, `apply_scenario`).
+
+    Parameters
+    ----------
+    params : Params
+        The nominal set.
+    spread : Spread
+    row : sequence of float
+        The run's values (`Spread.sample`'s row), in the order of ``spread.names``.
+    context : AnalysisContext
+    """
+    values, scen = spread.split(row)
+    p = params.from_dotted(values)
+    if scen:
+        context = replace(context, scenario=apply_scenario(context.scenario, scen, params))
+    return p, context
 
 
 def evaluate(params: Params, context: AnalysisContext) -> dict[str, float]:
@@ -155,9 +199,14 @@ def _slip(params: Params, context: AnalysisContext) -> dict[str, float]:
 def _closed_loop(params: Params, context: AnalysisContext) -> dict[str, float]:
     run = run_closed_loop(context.scenario, params, context.controller,
                           nominal=context.nominal)
-    if not run.metrics["complete"]:
-        raise RunFailed(run.metrics["message"])
-    return {k: float(run.metrics[k]) for k in OUTPUTS["closed-loop"]}
+    m = run.metrics
+    if not m["complete"]:
+        raise RunFailed(m["message"])
+    out = {k: float(m[k]) for k in OUTPUTS["closed-loop"] if k != "belt_slack"}
+    out["belt_slack"] = float(m["min_clamping_force"] <= 0.0)
+    out.update({TARGET_PREFIX + c.name: float(c.met)
+                for c in check_targets(m, context.scenario.targets)})
+    return out
 
 
 _EVALUATE = {"plant": _plant, "slip": _slip, "closed-loop": _closed_loop}

@@ -19,6 +19,14 @@ of a parameter file, the operating point included)::
     sigma = 0.1                  # median defaults to the parameter's value
     upper = 60.0
 
+Variables of a closed-loop scenario rather than of the parameter set are named
+``scenario.*`` (`SCENARIO_VARIABLES`): the initial operating point's clamping force, torque
+ratio, ratio and speed (``scenario.initial.F_s``, ``.tau``, ``.r_g``, ``.omega_p``) and the
+load-step size (``scenario.load_step``, a fraction of the torque capacity).  Their nominal
+value is the scenario's; each is checked as the scenario file's own value is (`apply_scenario`:
+the operating point's ranges, the variator's ratio range, the load step's [-1, 2]) when the
+spread is loaded, before any run.
+
 Sampling is by inverse transform of the (truncated) distribution, one uniform number per
 parameter and run: run ``i`` draws from its own stream ``SeedSequence(seed, spawn_key=(i,))``,
 so a run's sample depends on the seed and its index only, never on how the runs are chunked
@@ -29,7 +37,7 @@ from __future__ import annotations
 import math
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -38,10 +46,13 @@ from scipy.special import ndtr, ndtri
 
 from .._validate import check_number, fmt
 from ..errors import ParameterError
+from ..operating import OperatingPoint
 from ..params import Params, read_toml
+from ..variator.geometry import check_ratio
 from ..variator.traction import traction_from_params
 
-__all__ = ["Distribution", "Spread", "load_spread", "spread_from_dict", "DISTRIBUTIONS"]
+__all__ = ["Distribution", "Spread", "load_spread", "spread_from_dict", "DISTRIBUTIONS",
+           "SCENARIO_VARIABLES", "apply_scenario"]
 
 DISTRIBUTIONS = ("normal", "uniform", "lognormal")
 
@@ -49,6 +60,66 @@ DISTRIBUTIONS = ("normal", "uniform", "lognormal")
 _KEYS = {"normal": ("mean", "std", "rel_std", "lower", "upper"),
          "uniform": ("lower", "upper"),
          "lognormal": ("median", "sigma", "lower", "upper")}
+
+#: spread variables of a closed-loop scenario (not of the parameter set) -> unit
+SCENARIO_VARIABLES = {"scenario.initial.F_s": "N", "scenario.initial.tau": "-",
+                      "scenario.initial.r_g": "-", "scenario.initial.omega_p": "rad/s",
+                      "scenario.load_step": "-"}
+
+
+def apply_scenario(scenario: Any, values: Mapping[str, float], params: Params) -> Any:
+    """A copy of a closed-loop scenario with `values` of `SCENARIO_VARIABLES`, validated as
+    the scenario file's own values are.
+
+    Parameters
+    ----------
+    scenario : empact.nonlinear.scenario.Scenario
+        The nominal scenario.
+    values : mapping str -> float
+        ``scenario.*`` names (`SCENARIO_VARIABLES`) -> values (SI; fractions).
+    params : Params
+        The machine (its variator's ratio range).
+
+    Returns
+    -------
+    Scenario
+        The scenario with the new initial point and load step.
+
+    Raises
+    ------
+    ParameterError
+        One line naming the variable, its value and what is allowed.
+    """
+    if not values:
+        return scenario
+    init = {f.name: getattr(scenario.initial, f.name) for f in fields(scenario.initial)}
+    load_step = scenario.load_step
+    for name, x in values.items():
+        key = name.removeprefix("scenario.")
+        if key == "load_step":
+            if scenario.load_step is None:
+                raise ParameterError(f"{name}: the scenario {scenario.name!r} has no load "
+                                     "step (scenario.load_step) to vary")
+            load_step = check_number(name, x, -1.0, 2.0,
+                                     note="a fraction of the torque capacity")
+        else:
+            field_ = key.removeprefix("initial.")
+            if init.get(field_) is None:
+                raise ParameterError(f"{name}: the scenario {scenario.name!r} does not give "
+                                     f"initial.{field_} (its operating point is given by "
+                                     "other variables)")
+            init[field_] = float(x)
+    try:
+        initial = OperatingPoint(**init)
+    except ParameterError as exc:
+        raise ParameterError(f"scenario.initial: {exc}") from None
+    if "scenario.initial.r_g" in values:
+        check_ratio(initial.r_g, params.variator, "scenario.initial.r_g")
+    if "scenario.initial.F_s" in values and not initial.F_s > 0:  # type: ignore[operator]
+        raise ParameterError(f"scenario.initial.F_s = {fmt(initial.F_s)}: a clamping force "
+                             "is > 0 [N]")
+    return replace(scenario, initial=initial, load_step=load_step)
+
 
 #: a truncation keeping less probability than this is refused (bounds far in a tail)
 _MIN_MASS = 1e-9
@@ -131,6 +202,19 @@ class Spread:
         """The dotted parameter names."""
         return tuple(d.name for d in self.distributions)
 
+    def split(self, row: Sequence[float] | NDArray[np.float64]
+              ) -> tuple[dict[str, float], dict[str, float]]:
+        """One run's values as (parameters by dotted name, ``scenario.*`` variables).
+
+        Parameters
+        ----------
+        row : sequence of float
+            The run's values, in the order of `names`.
+        """
+        values = dict(zip(self.names, (float(x) for x in row)))
+        scen = {k: v for k, v in values.items() if k.startswith("scenario.")}
+        return {k: v for k, v in values.items() if k not in scen}, scen
+
     def sample(self, seed: int, runs: Sequence[int] | NDArray[np.int64]) -> NDArray[np.float64]:
         """The parameter values of runs `runs` (indices), shape ``(len(runs), n_parameters)``.
 
@@ -154,15 +238,30 @@ class Spread:
             if k else u
 
 
-def _distribution(name: str, table: Any, params: Params, src: str) -> Distribution:
+def _distribution(name: str, table: Any, params: Params, src: str,
+                  scenario: Any = None) -> Distribution:
     where = f"{src}: spread.{name!r}" if src else f"spread.{name!r}"
     if not isinstance(table, Mapping):
         raise ParameterError(f"{where} must be a table with a distribution, not {table!r}")
-    try:
-        nominal = params.get(name, unset_ok=True)
-    except ParameterError:
-        raise ParameterError(f"{where}: unknown parameter {name!r} (use a dotted name of a "
-                             "parameter file, e.g. 'actuation.k_w')") from None
+    if name.startswith("scenario."):
+        if name not in SCENARIO_VARIABLES:
+            raise ParameterError(f"{where}: unknown scenario variable {name!r} (choose from "
+                                 f"{', '.join(SCENARIO_VARIABLES)})")
+        if scenario is None:
+            raise ParameterError(f"{where}: {name} is a variable of a closed-loop scenario; "
+                                 "it needs --analysis closed-loop with a scenario")
+        key = name.removeprefix("scenario.")
+        nominal = scenario.load_step if key == "load_step" \
+            else getattr(scenario.initial, key.removeprefix("initial."))
+        if nominal is None:
+            raise ParameterError(f"{where}: the scenario {scenario.name!r} does not give "
+                                 f"{key}; it cannot be varied")
+    else:
+        try:
+            nominal = params.get(name, unset_ok=True)
+        except ParameterError:
+            raise ParameterError(f"{where}: unknown parameter {name!r} (use a dotted name of "
+                                 "a parameter file, e.g. 'actuation.k_w')") from None
     if nominal is None and table.get("distribution") in DISTRIBUTIONS and not (
             {"mean", "median", "lower"} & set(table) and "rel_std" not in table):
         raise ParameterError(f"{where}: {name} is not set in this parameter set (the "
@@ -210,7 +309,7 @@ def _distribution(name: str, table: Any, params: Params, src: str) -> Distributi
         if hi - lo < _MIN_MASS:
             raise ParameterError(f"{where}: the bounds [{fmt(lower)}, {fmt(upper)}] keep "
                                  f"no probability of {d.describe().split(' in ')[0]}")
-    _check_reachable(d, params, where)
+    _check_reachable(d, params, where, scenario)
     return d
 
 
@@ -218,13 +317,16 @@ def _distribution(name: str, table: Any, params: Params, src: str) -> Distributi
 _PROBES = np.linspace(0.0005, 0.9995, 41)
 
 
-def _check_reachable(d: Distribution, params: Params, where: str) -> None:
+def _check_reachable(d: Distribution, params: Params, where: str, scenario: Any = None) -> None:
     """Refuse a distribution whose values (41 quantiles, 0.05 % to 99.95 %) the parameter
     set refuses wholly (every run of the study would fail) or for the most part (more than
     half of the probes: most runs would fail, found only after they ran)."""
     why, refused = "", 0
     for x in d.ppf(_PROBES):
         try:
+            if d.name.startswith("scenario."):
+                apply_scenario(scenario, {d.name: float(x)}, params)
+                continue
             p = params.from_dotted({d.name: float(x)})
             nu = p.operating.nu
             if d.name == "operating.nu" and nu is not None:
@@ -248,7 +350,8 @@ def _check_reachable(d: Distribution, params: Params, where: str) -> None:
                          "bound it with lower and upper)")
 
 
-def spread_from_dict(data: Mapping[str, Any], params: Params, source: str = "") -> Spread:
+def spread_from_dict(data: Mapping[str, Any], params: Params, source: str = "",
+                     scenario: Any = None) -> Spread:
     """Validate a parsed spread document against a parameter set (names, distributions).
 
     Parameters
@@ -260,6 +363,9 @@ def spread_from_dict(data: Mapping[str, Any], params: Params, source: str = "") 
         The nominal set (defines each parameter's value and allowed range).
     source : str
         The file it came from (named in the messages).
+    scenario : Scenario, optional
+        The closed-loop scenario of the study: ``scenario.*`` variables
+        (`SCENARIO_VARIABLES`) take their nominal value from it and are checked against it.
 
     Returns
     -------
@@ -296,11 +402,11 @@ def spread_from_dict(data: Mapping[str, Any], params: Params, source: str = "") 
                 flat[name] = value
 
     collect("", tables)
-    return Spread(tuple(_distribution(n, t, params, source) for n, t in flat.items()),
-                  source=source)
+    return Spread(tuple(_distribution(n, t, params, source, scenario)
+                        for n, t in flat.items()), source=source)
 
 
-def load_spread(path: str | os.PathLike[str], params: Params) -> Spread:
+def load_spread(path: str | os.PathLike[str], params: Params, scenario: Any = None) -> Spread:
     """Read and validate a spread TOML file; errors are one line naming file and parameter.
 
     Parameters
@@ -309,10 +415,12 @@ def load_spread(path: str | os.PathLike[str], params: Params) -> Spread:
         A spread TOML file: one ``[spread."section.key"]`` table per parameter.
     params : Params
         The nominal set (defines each parameter's value and allowed range).
+    scenario : Scenario, optional
+        The closed-loop scenario (for ``scenario.*`` variables, `SCENARIO_VARIABLES`).
 
     Returns
     -------
     Spread
         The distributions by dotted name; ``names`` in file order.
     """
-    return spread_from_dict(read_toml(path, "spread"), params, str(path))
+    return spread_from_dict(read_toml(path, "spread"), params, str(path), scenario)

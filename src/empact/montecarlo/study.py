@@ -38,8 +38,16 @@ from ..export import jsonable
 from ..params import Params
 from ..shards import ShardStore
 from ..sweep import SweepOptions, plan_chunks, run_chunks
-from .analyses import OUTPUTS, SECONDS_PER_RUN, AnalysisContext, RunFailed, evaluate
-from .spread import Spread
+from .analyses import (
+    SECONDS_PER_RUN,
+    TARGET_PREFIX,
+    AnalysisContext,
+    RunFailed,
+    evaluate,
+    output_units,
+    prepare,
+)
+from .spread import SCENARIO_VARIABLES, Spread
 
 __all__ = ["MonteCarloResult", "monte_carlo", "save_montecarlo", "failure_kind", "QUANTILES",
            "MAX_RUNS", "study_spec", "CHUNK_SECONDS"]
@@ -126,11 +134,53 @@ class MonteCarloResult(TableResult):
         kinds = Counter(r.split(":")[0] for r in failed)
         reasons = {k: {"count": n, "example": next(r for r in failed if r.startswith(k + ":"))}
                    for k, n in sorted(kinds.items(), key=lambda kv: (-kv[1], kv[0]))}
-        return {"analysis": self.analysis, "seed": self.seed, "runs": self.runs,
-                "succeeded": self.runs - self.failures, "failures": self.failures,
-                "failure_reasons": reasons,
+        out = {"analysis": self.analysis, "seed": self.seed, "runs": self.runs,
+               "succeeded": self.runs - self.failures, "failures": self.failures,
+               "failure_reasons": reasons}
+        if self.analysis == "closed-loop":
+            out["verdicts"] = self.verdicts()
+        return {**out,
                 "spread": {d.name: d.describe() for d in self.spread.distributions},
                 "outputs": stats}
+
+    @property
+    def targets(self) -> tuple[str, ...]:
+        """The scenario targets judged per run (closed loop; outputs ``met.NAME``)."""
+        return tuple(n[len(TARGET_PREFIX):] for n in self.outputs
+                     if n.startswith(TARGET_PREFIX))
+
+    def missed(self) -> NDArray[np.bool_]:
+        """Which runs missed which target, shape (runs, len(`targets`)); a failed run (no
+        result) misses every target."""
+        cols = [self.outputs.index(TARGET_PREFIX + t) for t in self.targets]
+        return ~self.ok[:, None] | (self.values[:, cols] != 1.0)
+
+    def verdicts(self) -> dict[str, Any]:
+        """The closed-loop runs against their scenario's targets and the two failure modes:
+
+        * ``targets``: per target, ``missed`` (runs that missed it, failed runs included)
+          and ``missed_failed`` (of those, runs that failed to simulate);
+        * ``runs_missing_any``: runs that missed at least one target (failed runs included);
+        * ``macro_slip``, ``belt_slack``: runs with macro slip, with a slack belt (a run
+          stopped by ``clamping force F_s fell to zero`` counts as slack);
+        * ``failed_other``: runs that failed for another reason (by `failure_kind`);
+        * ``clean``, ``clean_fraction``: runs that completed without macro slip or belt
+          slack, and their share of all runs.
+        """
+        miss = self.missed()
+        slack_stop = np.array([not ok and "belt slack" in r
+                               for ok, r in zip(self.ok, self.reasons)], dtype=bool)
+        col = {n: self.values[:, self.outputs.index(n)] for n in ("macro_slip", "belt_slack")}
+        macro = self.ok & (col["macro_slip"] == 1.0)
+        slack = (self.ok & (col["belt_slack"] == 1.0)) | slack_stop
+        clean = self.ok & ~macro & ~slack
+        return {"targets": {t: {"missed": int(miss[:, j].sum()),
+                                "missed_failed": int((miss[:, j] & ~self.ok).sum())}
+                            for j, t in enumerate(self.targets)},
+                "runs_missing_any": int(miss.any(axis=1).sum()),
+                "macro_slip": int(macro.sum()), "belt_slack": int(slack.sum()),
+                "failed_other": int((~self.ok & ~slack_stop).sum()),
+                "clean": int(clean.sum()), "clean_fraction": float(clean.mean())}
 
     def _columns(self) -> dict[str, NDArray]:
         """`table` by column: ``run``, ``status``, the parameters, the outputs, ``reason``."""
@@ -172,14 +222,14 @@ def _run_chunk(task) -> tuple[NDArray, NDArray, NDArray, list[str]]:
     """Runs ``start:stop`` of a study (a sweep chunk; module level, picklable)."""
     params, spread, context, seed, start, stop = task
     samples = spread.sample(seed, np.arange(start, stop))
-    names, outputs = spread.names, tuple(OUTPUTS[context.kind])
+    outputs = tuple(output_units(context))
     values = np.full((stop - start, len(outputs)), np.nan)
     ok = np.zeros(stop - start, dtype=bool)
     reasons = [""] * (stop - start)
     for k, row in enumerate(samples):
         try:
-            p = params.from_dotted(dict(zip(names, row.tolist())))
-            out = evaluate(p, context)
+            p, ctx = prepare(params, spread, row, context)
+            out = evaluate(p, ctx)
             values[k] = [out[n] for n in outputs]
             ok[k] = True
         except Exception as exc:  # noqa: BLE001 - recorded with its reason, never dropped
@@ -290,8 +340,10 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
         parts = [(a["samples"], a["values"], a["ok"], [str(r) for r in a["reasons"]])
                  for _, a in shards.iter_shards()]
     samples = np.concatenate([p[0] for p in parts]).reshape(runs, len(spread.names))
-    outputs = tuple(OUTPUTS[analysis])
-    units = {**{n: params.unit(n) for n in spread.names}, **OUTPUTS[analysis]}
+    out_units = output_units(context)
+    outputs = tuple(out_units)
+    units = {**{n: SCENARIO_VARIABLES.get(n) or params.unit(n) for n in spread.names},
+             **out_units}
     return MonteCarloResult(analysis=analysis, seed=seed, spread=spread, samples=samples,
                             outputs=outputs, units=units,
                             values=np.concatenate([p[1] for p in parts]),

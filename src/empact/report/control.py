@@ -212,9 +212,10 @@ def studies(ctx: Context, res: rep.StudiesSection) -> str:
                for (n, f), m in res.traction_error.items()]
     mc = res.montecarlo
     mc_rows = []
+    verdicts = mc.verdicts()
     for j, name in enumerate(mc.outputs):
         v = mc.values[mc.ok, j]
-        if v.size:
+        if v.size and not name.startswith("met."):  # the verdicts are counted below
             q = np.quantile(v, [0.05, 0.5, 0.95])
             mc_rows.append([name, mc.units.get(name, "-"), q[0], q[1], q[2]])
     saving_rows = [[r["scenario"], r["strategy"], r["mean_clamping_force"] / 1e3,
@@ -237,7 +238,9 @@ def studies(ctx: Context, res: rep.StudiesSection) -> str:
                     mc_rows, f"Monte Carlo: {int(mc.ok.sum())} of {mc.values.shape[0]} runs "
                     f"of {rep.MC_SCENARIO} on the shipped spread (data/montecarlo/"
                     "example-spread.toml) completed; quantiles of every metric (slips as "
-                    "fractions)")
+                    "fractions); runs missing the scenario's targets (a failed run misses "
+                    "every one): " + ", ".join(f"{t} {c['missed']}" for t, c
+                                                 in verdicts["targets"].items()))
         + ctx.table("control_saving", ["scenario", "strategy", "mean F_s [kN]",
                                        "mean losses [W]", "saving in F_s [%]",
                                        "variator losses by term [W]", "actuation [W]",
