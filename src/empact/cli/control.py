@@ -438,15 +438,16 @@ def tune_cmd(controller, family_file, loop_scenario, out, parameters, min_dm, ma
         raise InputError(f"--max-ms {max_ms:g}: 0 for none, or above 1 (a sensitivity peak)")
     check_number("--seed", seed, 0, 2**32 - 1)
     check_number("--maxiter", maxiter, 1, 100_000)
-    floor = None
+    floor: tuple[float, float] | None = None
     if bw_floor is not None:
         try:
-            floor = tuple(float(x) for x in bw_floor.split(","))
+            values = [float(x) for x in bw_floor.split(",")]
         except ValueError:
             raise InputError(f"--bandwidth-floor {bw_floor!r}: two numbers RATIO,SLIP "
                              "[Hz]") from None
-        if len(floor) != 2:
+        if len(values) != 2:
             raise InputError(f"--bandwidth-floor {bw_floor!r}: two numbers RATIO,SLIP [Hz]")
+        floor = (values[0], values[1])
         for b in floor:
             check_number("--bandwidth-floor", b, 0.0, 50.0, lo_open=True, unit="Hz")
     try:
@@ -480,13 +481,13 @@ def tune_cmd(controller, family_file, loop_scenario, out, parameters, min_dm, ma
     if as_json or json_out:
         emit_json({**result.to_dict(), "file": str(out)}, "control.tune", json_out)
     else:
-        b, a = result.before, result.after
+        bef, aft = result.before, result.after
         click.echo(f"{fam.size} plants, {result.evaluations} evaluations in "
-                   f"{result.wall_time_s:.1f} s: worst disk margin {b['disk_margin']:.3f} -> "
-                   f"{a['disk_margin']:.3f} (+-{a['gain_margin_db']:.2f} dB, "
-                   f"+-{a['phase_margin_deg']:.1f} deg); Ms ratio {b['ms']['ratio']:.2f} -> "
-                   f"{a['ms']['ratio']:.2f}, slip {b['ms']['slip']:.2f} -> "
-                   f"{a['ms']['slip']:.2f}; written to {out}")
+                   f"{result.wall_time_s:.1f} s: worst disk margin {bef['disk_margin']:.3f} -> "
+                   f"{aft['disk_margin']:.3f} (+-{aft['gain_margin_db']:.2f} dB, "
+                   f"+-{aft['phase_margin_deg']:.1f} deg); Ms ratio {bef['ms']['ratio']:.2f} -> "
+                   f"{aft['ms']['ratio']:.2f}, slip {bef['ms']['slip']:.2f} -> "
+                   f"{aft['ms']['slip']:.2f}; written to {out}")
         click.echo("multipliers: " + ", ".join(f"{k} {v:.4g}"
                                                 for k, v in result.multipliers.items()))
     if strict and not result.met:
