@@ -199,6 +199,10 @@ SLOW_TESTS = {
         "test_montecarlo_cli_local_cluster_equals_serial", "test_montecarlo_closed_loop_cli",
         "test_plant_analysis_slowest_mode_is_the_slowest_resonance",
         "test_unreachable_scheduler_one_line_exit_2"),
+    "test_tune.py": ("test_a_proportional_multiplier_in_the_schedule_is_the_same_loop",
+                     "test_sensitivity_peaks_are_the_loop_at_a_time_sensitivity",
+                     "test_shipped_pi_has_production_margins",
+                     "test_tuner_improves_a_detuned_start_deterministically"),
     "test_traction_table.py": (
         "test_control_simulate_with_a_table_meets_its_targets",
         "test_design_hinf_from_the_cli_uses_the_api_default",

@@ -438,6 +438,7 @@ def files(tmp_path, monkeypatch):
     w("family.mat", "named .mat")
     pi = json.loads(resources.files("empact.data").joinpath("control", "pi.json").read_text())
     w("pi.json", json.dumps(pi))
+    w("hinf.json", resources.files("empact.data").joinpath("control", "hinf.json").read_text())
     for name, change in {"c_str": {"D": [["1", "2"], ["3", "4"]]},
                          "c_flat": {"D": [1, 2, 3, 4, 5, 6]},
                          "c_rows": {"D": [[1, 2, 3], [4, 5, 6]]},
@@ -897,6 +898,26 @@ BAD_INPUT = [
      "c99.json: controller schema version 99 is newer than this empact reads (up to 2)"),
     (["control", "discretize", "c99.json", "--rate", "100", "--out", "d.json"],
      "controller schema version 99 is newer"),
+    # control tune (issue 33 item 2): every option checked before the family is built
+    (["control", "tune", "pi.json", "--out", "t.json", "--min-disk-margin", "3"],
+     "--min-disk-margin = 3"),
+    (["control", "tune", "pi.json", "--out", "t.json", "--max-ms", "0.5"],
+     "--max-ms 0.5: 0 for none, or above 1"),
+    (["control", "tune", "pi.json", "--out", "t.json", "--parameters", "kp_gear"],
+     "--parameters kp_gear: choose distinct names from kp_ratio"),
+    (["control", "tune", "pi.json", "--out", "t.json", "--parameters", "kp_slip,kp_slip"],
+     "--parameters kp_slip,kp_slip: choose distinct names"),
+    (["control", "tune", "pi.json", "--out", "t.json", "--bandwidth-floor", "0.1"],
+     "--bandwidth-floor '0.1': two numbers RATIO,SLIP [Hz]"),
+    (["control", "tune", "pi.json", "--out", "t.json", "--bandwidth-floor", "0.1,-1"],
+     "--bandwidth-floor = -1"),
+    (["control", "tune", "pi.json", "--out", "t.json", "--maxiter", "0"], "--maxiter = 0"),
+    (["control", "tune", "pi.json", "--out", "t.json", "--seed", "-1"], "--seed = -1"),
+    (["control", "tune", "pi.json", "--out", "t.txt"], "--out t.txt: file suffix '.txt'"),
+    (["control", "tune", "pi.json", "--out", "out.json"], "--out out.json: exists; give"),
+    (["control", "tune", "c99.json", "--out", "t.json"], "controller schema version 99"),
+    (["control", "tune", "hinf.json", "--out", "t.json"],
+     "hinf.json: tune: a continuous two-loop PI (method 'pi', 6 states) is tuned"),
     (["control", "check", "c_units.json", "--family", "f.npz"],
      "c_units.json: outputs_units has 1 units for 2 outputs signals"),
     (["control", "check", "c_rpm.json", "--family", "f.npz"],

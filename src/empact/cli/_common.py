@@ -438,6 +438,8 @@ UNITS = {
     "actuation": "W", "efficiency": "-", "total_efficiency": "-",
     "energy": "J (every term)", "energy_balance_residual": "- (relative to the input energy)",
     "duration": "s",
+    "ms": "-", "ms_above_2": "-", "bandwidth_floor_hz": "Hz", "max_ms": "-",
+    "multipliers": "-", "evaluations": "-",
 }
 
 

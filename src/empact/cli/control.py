@@ -11,6 +11,7 @@ import numpy as np
 from .._progress import progress as progress_bar
 from .._validate import check_number
 from ..control.designs import CONTROLLER_TYPES
+from ..errors import ParameterError
 from ..params import check_one_slip
 from ._common import (
     UNITS,
@@ -386,6 +387,113 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
     if strict and not ok:
         raise Failed(f"check failed: {fam.size - data['worst']['stable']} unstable plants, "
                      f"worst disk margin {worst:.3f} (required {gate:g}: {gate_source})")
+
+
+@control_group.command("tune")
+@click.argument("controller", type=click.Path(dir_okay=False))
+@click.option("--family", "family_file", type=click.Path(dir_okay=False), default=None,
+              help="Plant family (.npz from `empact plants`; default: the design family "
+                   "on the parameter set, as `control check`).")
+@loop_option
+@click.option("--out", "out", type=OutputFile(("json", "mat")), required=True,
+              help="The tuned controller (.json or .mat; an existing file only with --force).")
+@click.option("--parameters", "parameters", default=None, metavar="NAME,...",
+              help="The multipliers tuned (default all: kp_ratio, ki_ratio, rolloff_ratio, "
+                   "kp_slip, ki_slip, rolloff_slip; empact.control.tune.TUNABLE).")
+@click.option("--min-disk-margin", "min_dm", type=float, default=0.6, show_default=True,
+              help="The worst multiloop disk margin the result is judged against (exit 1 "
+                   "with --strict when missed).")
+@click.option("--max-ms", "max_ms", type=float, default=2.0, show_default=True,
+              help="Sensitivity peak allowed per loop (loop at a time), a penalty of the "
+                   "objective; 0: none.")
+@click.option("--bandwidth-floor", "bw_floor", default=None, metavar="RATIO,SLIP",
+              help="Lowest sensitivity bandwidth per loop over the family [Hz] (default: the "
+                   "starting controller's).")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of the optimiser's initial simplex.")
+@click.option("--maxiter", "maxiter", type=int, default=300, show_default=True,
+              help="Most objective evaluations.")
+@click.option("--strict", is_flag=True, help="Exit 1 when the tuned controller misses "
+              "--min-disk-margin, --max-ms or the bandwidth floor (it is written either way).")
+@traction_option
+@params_option
+@json_options
+@force_option
+@quiet_option
+def tune_cmd(controller, family_file, loop_scenario, out, parameters, min_dm, max_ms,
+             bw_floor, seed, maxiter, strict, traction_table, params_file, as_json, json_out,
+             force, quiet) -> None:
+    """Tune CONTROLLER's PI structure (gains, integral corners, roll-offs per loop, the
+    schedule's shape kept) to maximise the worst multiloop disk margin over every plant of a
+    family on the loop that runs, with an Ms penalty and a bandwidth floor
+    (empact.control.tune)."""
+    from ..control.controller import load_controller
+    from ..control.family import design_family, load_family
+    from ..control.tune import TuneOptions, check_pi, parse_parameters, tune_pi
+
+    check_number("--min-disk-margin", min_dm, 0.0, 1.99)
+    check_number("--max-ms", max_ms, 0.0, 100.0,
+                 note="0 for none, else above 1: the sensitivity peak allowed")
+    if 0 < max_ms <= 1:
+        raise InputError(f"--max-ms {max_ms:g}: 0 for none, or above 1 (a sensitivity peak)")
+    check_number("--seed", seed, 0, 2**32 - 1)
+    check_number("--maxiter", maxiter, 1, 100_000)
+    floor: tuple[float, float] | None = None
+    if bw_floor is not None:
+        try:
+            values = [float(x) for x in bw_floor.split(",")]
+        except ValueError:
+            raise InputError(f"--bandwidth-floor {bw_floor!r}: two numbers RATIO,SLIP "
+                             "[Hz]") from None
+        if len(values) != 2:
+            raise InputError(f"--bandwidth-floor {bw_floor!r}: two numbers RATIO,SLIP [Hz]")
+        floor = (values[0], values[1])
+        for b in floor:
+            check_number("--bandwidth-floor", b, 0.0, 50.0, lo_open=True, unit="Hz")
+    try:
+        opts = TuneOptions(parameters=(parse_parameters(parameters) if parameters is not None
+                                       else TuneOptions().parameters),
+                           max_ms=max_ms or None, bandwidth_floor_hz=floor,
+                           min_disk_margin=min_dm, seed=seed, max_evaluations=maxiter)
+    except ParameterError as exc:
+        raise InputError(str(exc).replace("parameters = ", "--parameters ", 1)) from None
+    if family_file and traction_table is not None:
+        raise InputError("--traction: give it with the design family, not with --family (a "
+                         "family file records its own model options)")
+    ctrl = load_controller(controller)
+    try:
+        check_pi(ctrl)
+    except ParameterError as exc:
+        raise InputError(f"{controller}: {exc}") from None
+    params = get_params(params_file)
+    loop = _loop_from(loop_scenario, params)
+    tables = {} if traction_table is None else {"traction": traction_table}
+    fam = load_family(family_file) if family_file else design_family(params, **tables)
+    for name in ctrl.measured:
+        base = name[3:] if name.startswith("ln_") else name
+        if base not in fam.outputs:
+            raise InputError(f"{controller}: measures {name!r}, the family has "
+                             f"{', '.join(fam.outputs)}")
+    with progress_bar(total=1, desc="control tune", unit="run", enabled=not quiet) as bar:
+        tuned, result = tune_pi(ctrl, fam, loop, params, opts)
+        bar.update(1)
+    tuned.save(out)
+    if as_json or json_out:
+        emit_json({**result.to_dict(), "file": str(out)}, "control.tune", json_out)
+    else:
+        bef, aft = result.before, result.after
+        click.echo(f"{fam.size} plants, {result.evaluations} evaluations in "
+                   f"{result.wall_time_s:.1f} s: worst disk margin {bef['disk_margin']:.3f} -> "
+                   f"{aft['disk_margin']:.3f} (+-{aft['gain_margin_db']:.2f} dB, "
+                   f"+-{aft['phase_margin_deg']:.1f} deg); Ms ratio {bef['ms']['ratio']:.2f} -> "
+                   f"{aft['ms']['ratio']:.2f}, slip {bef['ms']['slip']:.2f} -> "
+                   f"{aft['ms']['slip']:.2f}; written to {out}")
+        click.echo("multipliers: " + ", ".join(f"{k} {v:.4g}"
+                                                for k, v in result.multipliers.items()))
+    if strict and not result.met:
+        raise Failed(f"tune: the tuned controller misses the targets (worst disk margin "
+                     f"{result.after['disk_margin']:.3f}, required {min_dm:g}; Ms "
+                     f"{max(result.after['ms'].values()):.2f}, allowed {max_ms:g})")
 
 
 def design_margin(design: Mapping[str, Any]) -> tuple[float, str]:

@@ -357,6 +357,34 @@ class LoopModel(Result):
         return {"input": a_in, "output": a_out,
                 "alpha": np.where(stable, np.minimum(a_in, a_out), 0.0)}
 
+    def sensitivity_peaks(self, omega: NDArray | None = None) -> dict[str, NDArray[np.float64]]:
+        """Loop-at-a-time sensitivity peaks ``Ms_j = max_w |S_jj|`` of each loop, the other
+        loop closed: ``S = (I + L)^-1`` at the servo torques (``input``, ``L = K G``) and at
+        the errors (``output``, ``L = G K``), and the larger of the two (``ms``); for two
+        loops ``S_11 = 1 / (1 + L_11 - L_12 L_21 / (1 + L_22))``, the sensitivity of loop 1
+        broken with loop 2 closed.  Inf where the loop is unstable.
+
+        Parameters
+        ----------
+        omega : ndarray, shape (n_w,), optional
+            Angular frequencies [rad/s] (default `default_omega`, as `disk_margins`).
+
+        Returns
+        -------
+        dict str -> ndarray
+            ``input``, ``output``, ``ms`` [-], each of shape ``shape + (2,)`` (ratio loop,
+            slip loop).
+        """
+        w = default_omega(self.dt) if omega is None else np.asarray(omega, float)
+        G = self.plant_response(w)
+        K = self.controller_response(w) * self.mask[None, :, None]
+        eye = np.eye(2)
+        s_in = np.abs(np.diagonal(np.linalg.inv(eye + K @ G), axis1=-2, axis2=-1)).max(-2)
+        s_out = np.abs(np.diagonal(np.linalg.inv(eye + G @ K), axis1=-2, axis2=-1)).max(-2)
+        stable = (self.spectral_radius() < 1)[..., None]
+        return {"input": s_in, "output": s_out,
+                "ms": np.where(stable, np.maximum(s_in, s_out), np.inf)}
+
     def loop_shapes(self, f_hz: NDArray | None = None) -> "LoopShapes":
         """The diagonal loop gains ``L_ii = (K G)_ii`` at the servo torques over frequency,
         at every point.

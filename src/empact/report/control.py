@@ -52,9 +52,16 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
         lm = res.loops[name]
         rho = lm.spectral_radius()
         dm = lm.disk_margins()
+        ms = lm.sensitivity_peaks()["ms"].reshape(-1, 2).max(axis=0)
         design_rows.append([name, c.n, "yes" if c.schedule is not None else "no",
                             f"{int((rho < 1).sum())} / {rho.size}", float(dm["alpha"].min()),
-                            float(dm["input"].min()), float(dm["output"].min())])
+                            float(dm["input"].min()), float(dm["output"].min()),
+                            float(ms[0]), float(ms[1])])
+        before = c.design.get("tune", {}).get("before")
+        if before:  # the tuner's starting point (empact.control.tune), as recorded
+            design_rows.append([f"{name} before tuning", c.n, design_rows[-1][2], "all" if
+                                before["all_stable"] else "not all", before["disk_margin"],
+                                "", "", before["ms"]["ratio"], before["ms"]["slip"]])
     target_rows = []
     for n, checks in res.targets.items():
         run = res.runs[n]
@@ -115,8 +122,11 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
                      "what margin, down to light-load overdrive cruising")
         + ctx.table("control_designs", ["controller", "states", "scheduled", "stable",
                                         "worst disk margin [-]", "at the servos [-]",
-                                        "at the errors [-]"], design_rows,
-                    "The shipped controllers over the design family on the loop that runs")
+                                        "at the errors [-]", "max Ms ratio loop [-]",
+                                        "max Ms slip loop [-]"], design_rows,
+                    "The shipped controllers over the design family on the loop that runs "
+                    "(Ms: loop-at-a-time sensitivity peak; a tuned controller's starting "
+                    "point as its design record states it, `empact control tune`)")
         + ctx.figure(plot_closed_loop(steps, title="Load steps of 50 % of the torque "
                                       "capacity at 0.5 s", predictions=preds),
                      "control_load_steps", "Closed loop on the nonlinear machine (solid), "
