@@ -196,7 +196,7 @@ def read_trace(path: str | os.PathLike[str]) -> Cycle:
     ParameterError
         For a missing, unreadable or bad file (one line per error).
     """
-    text = read_input_text(path, "no such trace file")
+    text = read_input_text(path, "trace")
     return parse_trace(text, os.fspath(path))
 
 

@@ -110,6 +110,10 @@ def full_load_torque(engine: EngineParams, omega: ArrayLike) -> NDArray[np.float
 def friction_torque(engine: EngineParams) -> float:
     """The Willans line's friction torque ``p_me0 V_d / (4 pi)`` [N m] (four-stroke).
 
+    Parameters
+    ----------
+    engine : EngineParams
+
     Returns
     -------
     float
@@ -144,6 +148,10 @@ def _line_power(engine: EngineParams, omega: NDArray) -> NDArray:
 
 def max_line_power(engine: EngineParams) -> tuple[float, float]:
     """The operating line's largest power [W] and its speed [rad/s] (up to ``omega_max``).
+
+    Parameters
+    ----------
+    engine : EngineParams
 
     Returns
     -------

@@ -438,6 +438,10 @@ UNITS = {
     "actuation": "W", "efficiency": "-", "total_efficiency": "-",
     "energy": "J (every term)", "energy_balance_residual": "- (relative to the input energy)",
     "duration": "s",
+    "distance_m": "m", "duration_s": "s", "wheel_energy_J": "J", "energy_J": "J (every term)",
+    "engine_J": "J", "fuel_g": "g", "fuel_l_per_100km": "l/100 km",
+    "saving": "- (fraction of the reference's fuel)", "variator_efficiency": "-",
+    "transmission_efficiency": "-", "engine_short": "- (samples)",
 }
 
 
