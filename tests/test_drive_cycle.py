@@ -113,7 +113,7 @@ def short_run():
     """The first 120 s of WLTC 3b: rest, launch, accelerations, braking, a stop."""
     c = load_cycle("wltc3b")
     trace = Cycle(name="wltc3b-120s", t=c.t[:121], v=c.v[:121], phase=c.phase[:121])
-    return quasi_static_cycle(default_params(), trace)
+    return quasi_static_cycle(default_params(), trace, strategies=tuple(STRATEGIES))
 
 
 def test_energy_closes_per_strategy(short_run):
@@ -148,6 +148,8 @@ def test_strategies_bill_their_actuation(short_run):
     # the same clamping law, other actuation: the variator's losses are the same
     assert_allclose(r.power["sf1.3"]["clamp"], r.power["hydraulic-sf1.3"]["clamp"], rtol=1e-12)
     assert np.all(r.F_s["sf1.3"] >= 3000.0 * (1 - 1e-9))
+    assert_allclose(r.F_s["slip"], r.F_s["hydraulic-slip"], rtol=1e-12)
+    assert np.all(r.power["hydraulic-slip"]["alternator"] == 0)
 
 
 def test_cli_json_keys_and_bad_input(tmp_path):

@@ -57,12 +57,16 @@ from .nonlinear.model import EmpactModel, nonlinear_model
 from .params import Params
 from .vehicle import wheel_force
 
-__all__ = ["STRATEGIES", "REFERENCE", "RATIO_LIMITS", "MIN_CLAMPING", "TERMS", "CycleResult",
+__all__ = ["STRATEGIES", "DEFAULT_STRATEGIES", "REFERENCE", "RATIO_LIMITS", "MIN_CLAMPING",
+           "TERMS", "CycleResult",
            "quasi_static_cycle"]
 
-#: the clamping strategies of the cycle -> those of `empact.efficiency`
+#: the strategies of the cycle -> their clamping in `empact.efficiency` (a ``hydraulic-``
+#: strategy is actuated by the hydraulic reference, the others by the servos)
 STRATEGIES = {"hydraulic-sf1.3": "hydraulic", "sf1.3": "sf1.3", "sf1.3-aware": "sf1.3-aware",
-              "slip": "slip"}
+              "slip": "slip", "hydraulic-slip": "slip"}
+#: the strategies `quasi_static_cycle` and ``empact cycle`` run by default
+DEFAULT_STRATEGIES = ("hydraulic-sf1.3", "sf1.3", "sf1.3-aware", "slip")
 #: the strategy the savings are against
 REFERENCE = "hydraulic-sf1.3"
 #: the operating ratio range: the shipped loop's design range
@@ -244,7 +248,7 @@ def _trim(model: EmpactModel, strategy: str, r: NDArray, w_s: NDArray, T_l: NDAr
 
 
 def quasi_static_cycle(params: Params, cycle: Cycle, *,
-                       strategies: Sequence[str] = tuple(STRATEGIES),
+                       strategies: Sequence[str] = DEFAULT_STRATEGIES,
                        tau: float | None = None,
                        model: EmpactModel | None = None) -> CycleResult:
     """The quasi-static (backward) drive cycle by strategy (module notes).
@@ -256,7 +260,8 @@ def quasi_static_cycle(params: Params, cycle: Cycle, *,
     cycle : Cycle
         The speed trace (`empact.cycles.load_cycle`, `empact.cycles.read_trace`).
     strategies : sequence of str, optional
-        Any of `STRATEGIES` (default all).
+        Any of `STRATEGIES` (default `DEFAULT_STRATEGIES`; ``hydraulic-slip``: slip control
+        on the hydraulic reference, SAE 04CVT-39's case).
     tau : float, optional
         The slip strategy's torque ratio set-point [-] (default the parameter set's
         ``[operating] tau``, else 0.9).
@@ -321,7 +326,7 @@ def quasi_static_cycle(params: Params, cycle: Cycle, *,
                           np.zeros(1), tau)
             F_s[rest], F_p[rest] = y0["F_s"][0], y0["F_p"][0]
             T_mp[rest], T_ms[rest] = y0["T_mp_act"][0], y0["T_ms_act"][0]
-        if STRATEGIES[s] == "hydraulic":
+        if s.startswith("hydraulic"):
             act = hydraulic_power(params.hydraulic, F_p, F_s, w_e)
             terms["actuation"] = np.asarray(sum(act.values()), float)
         else:

@@ -7,7 +7,7 @@ import json
 import click
 
 from ..cycles import CYCLES, load_cycle, read_trace
-from ..drive_cycle import REFERENCE, STRATEGIES, TERMS, quasi_static_cycle
+from ..drive_cycle import DEFAULT_STRATEGIES, REFERENCE, STRATEGIES, TERMS, quasi_static_cycle
 from ..errors import ParameterError
 from ._common import (
     InputError,
@@ -26,7 +26,8 @@ from .linear import plot_option
 @click.option("--cycle", "cycle", required=True,
               help="A shipped cycle (" + ", ".join(CYCLES) + ") or a CSV trace FILE "
                    "('time [s]', 'speed [km/h]' or 'speed [m/s]').")
-@click.option("--strategies", "strategies", default=",".join(STRATEGIES), show_default=True,
+@click.option("--strategies", "strategies", default=",".join(DEFAULT_STRATEGIES),
+              show_default=True,
               help="Comma-separated clamping strategies (" + ", ".join(STRATEGIES) + ").")
 @click.option("--out", "out", default=None, type=click.Path(file_okay=False),
               help="Output folder for cycle.json and samples.csv; new or empty unless "
