@@ -86,8 +86,8 @@ def drive_cycle(params: Params) -> DriveCycleSection:
     pump_rows = []
     for w, p, P in PUMP_ANCHORS:
         F = (p - h.p_margin) * h.A_s
-        got = float(sum(hydraulic_power(h, np.array([F]), np.array([F]),
-                                        np.array([w])).values())[0])
+        terms = hydraulic_power(h, np.array([F]), np.array([F]), np.array([w]))
+        got = float(np.sum([np.asarray(v, float)[0] for v in terms.values()]))
         pump_rows.append([p / 1e5, P / 1e3, round(got / 1e3, 3)])
     fuel = {s: d["fuel_g"] for s, d in S.items()}
     hyd_slip = 1 - fuel["hydraulic-slip"] / fuel["hydraulic-sf1.3"]
