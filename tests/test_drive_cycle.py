@@ -17,6 +17,7 @@ from empact.drive_cycle import RATIO_LIMITS, STRATEGIES, TERMS, quasi_static_cyc
 from empact.engine import EngineParams, fuel_rate, full_load_torque, operating_speed
 from empact.errors import ParameterError
 from empact.params import default_params
+from empact.plotting import plot_drive_cycle
 from empact.vehicle import VehicleParams, road_load, wheel_force
 
 
@@ -175,3 +176,31 @@ def test_cli_json_keys_and_bad_input(tmp_path):
         assert res.exit_code == 2
         err = res.stderr.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("error:") and match in err[0]
+
+
+def test_operating_rules_hold(short_run):
+    """The ratio stays in the design range, the engine never below its driving speed while
+    the car moves (the launch clutch slips below 11.2 km/h in LOW), at rest the variator
+    stands (no losses) while its actuation holds the floor clamping."""
+    r = short_run
+    eng = default_params().engine
+    moving = r.v > 0
+    rest = ~moving
+    assert rest.sum() > 5
+    for s in STRATEGIES:
+        rg = r.r_g[s][moving]
+        assert np.all((rg >= RATIO_LIMITS[0]) & (rg <= RATIO_LIMITS[1]))
+        assert np.all(r.omega_e[s][moving] >= eng.omega_drive * (1 - 1e-12))
+        assert_allclose(r.omega_e[s][rest], eng.omega_idle, rtol=1e-12)
+        P = r.power[s]
+        assert np.all(P["variator_in"][rest] == 0) and np.all(P["launch"][rest] == 0)
+        assert np.all(P["actuation"][rest] > 0)
+        launch = P["launch"] > 0
+        # the launch clutch slips only at LOW
+        assert launch.any() and np.all(r.r_g[s][launch] == RATIO_LIMITS[0])
+
+
+def test_plot_draws_the_four_panels(short_run):
+    p = plot_drive_cycle(short_run)
+    assert p.axes.shape == (4, 1)
+    assert len(p.artists) == 1 + 3 * len(short_run.strategies)
