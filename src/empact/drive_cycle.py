@@ -101,7 +101,8 @@ class CycleResult(Result):
     weights : array, shape (N,)
         The trapezoid rule's weights [s].
     engine_short : dict str -> int
-        Samples whose engine torque exceeds full load (the car cannot follow there).
+        Samples whose engine torque exceeds full load or whose engine speed exceeds
+        ``omega_max`` (the car cannot follow the trace there; computed as asked).
     rho_fuel : float
         The fuel's density [kg/m^3] (for l/100 km).
     """
@@ -341,7 +342,8 @@ def quasi_static_cycle(params: Params, cycle: Cycle, *,
         out["power"][s] = {**terms, "engine": P_e, "variator_in": var_in,
                            "variator_out": var_out}
         out["fuel_rate"][s] = fuel_rate(eng, T_e, w_e)
-        out["engine_short"][s] = int(np.sum(T_e > full_load_torque(eng, w_e)))
+        out["engine_short"][s] = int(np.sum((T_e > full_load_torque(eng, w_e))
+                                            | (w_e > eng.omega_max)))
     res = CycleResult(cycle=cycle, strategies=strategies, t=t, v=v, a=a, P_wheel=P_w,
                       weights=_weights(t), rho_fuel=eng.rho_fuel, **out)
     return res

@@ -79,6 +79,10 @@ def cycle_cmd(cycle, strategies, out, plot, params_file, as_json, json_out, forc
         click.echo(f"{s:16s} {e} {100 * d['variator_efficiency']:7.2f} "
                    f"{100 * d['transmission_efficiency']:7.2f} {d['fuel_g']:7.1f} "
                    f"{d['fuel_l_per_100km']:7.2f} {saving:>7s}")
+    for s, d in doc["strategies"].items():
+        if d["engine_short"]:
+            click.echo(f"{s}: the engine cannot follow the trace at {d['engine_short']} "
+                       "samples (beyond full load or its highest speed; computed as asked)")
     if REFERENCE not in doc["strategies"]:
         click.echo(f"(no saving: {REFERENCE}, the reference, was not run)")
 
