@@ -2,8 +2,6 @@
 energy by loss term and phase, efficiencies, fuel and the saving against hydraulic-sf1.3."""
 from __future__ import annotations
 
-import json
-
 import click
 
 from ..cycles import CYCLES, load_cycle, read_trace
@@ -61,7 +59,7 @@ def cycle_cmd(cycle, strategies, out, plot, params_file, as_json, json_out, forc
         plot_drive_cycle(res).save(plot)
     if dest is not None:
         with atomic_folder(dest) as tmp:
-            (tmp / "cycle.json").write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n")
+            emit_json(doc, "cycle", str(tmp / "cycle.json"))  # with schema and units
             (tmp / "samples.csv").write_text(_samples_csv(res))
     if as_json or json_out:
         emit_json(doc, "cycle", json_out)
