@@ -145,6 +145,8 @@ def test_energy_closes_per_strategy(short_run):
 def test_strategies_bill_their_actuation(short_run):
     r = short_run
     assert np.all(r.power["hydraulic-sf1.3"]["alternator"] == 0)
+    assert np.all(r.power["hydraulic-sf1.3"]["servo_electrical"] == 0)
+    assert np.all(r.power["sf1.3"]["pump"] == 0)
     assert np.all(r.power["sf1.3"]["alternator"] > 0)
     # the same clamping law, other actuation: the variator's losses are the same
     assert_allclose(r.power["sf1.3"]["clamp"], r.power["hydraulic-sf1.3"]["clamp"], rtol=1e-12)

@@ -75,8 +75,10 @@ RATIO_LIMITS = (0.43, 2.25)
 #: the lowest clamping force [N]: the design grid's lowest clamping (3 kN)
 MIN_CLAMPING = 3000.0
 #: the energy terms [J] besides the wheels': the variator's losses by their kernel names
-#: without ``P_loss_``, the final drive, the launch clutch, the actuation and the alternator
-TERMS = ("slip", "clamp", "load", "drag", "final_drive", "launch", "actuation", "alternator")
+#: without ``P_loss_``, the final drive, the launch clutch, the actuation (the servos'
+#: electrical energy or the pump's shaft energy: the other is zero) and the alternator
+TERMS = ("slip", "clamp", "load", "drag", "final_drive", "launch", "servo_electrical", "pump",
+         "alternator")
 _LOSS = {k: k.removeprefix("P_loss_") for k in VARIATOR_LOSSES}
 
 
@@ -95,7 +97,8 @@ class CycleResult(Result):
     F_s : dict str -> array, shape (N,)
         By strategy: clamping force [N].
     power : dict str -> dict str -> array, shape (N,)
-        By strategy, by term (`TERMS`, ``engine``, ``variator_in``, ``variator_out``) [W].
+        By strategy, by term (`TERMS`, and ``engine``, ``variator_in``, ``variator_out``,
+        ``actuation``: servo electrical plus pump) [W].
     fuel_rate : dict str -> array, shape (N,)
         By strategy [kg/s].
     weights : array, shape (N,)
@@ -329,17 +332,18 @@ def quasi_static_cycle(params: Params, cycle: Cycle, *,
             T_mp[rest], T_ms[rest] = y0["T_mp_act"][0], y0["T_ms_act"][0]
         if s.startswith("hydraulic"):
             act = hydraulic_power(params.hydraulic, F_p, F_s, w_e)
-            terms["actuation"] = np.asarray(sum(act.values()), float)
+            terms["pump"] = np.asarray(sum(act.values()), float)
         else:
             zero = np.zeros(n)
             act = servo_power(params, T_mp, T_ms, zero, zero)
-            terms["actuation"] = np.asarray(sum(act.values()), float)
-            terms["alternator"] = np.maximum(terms["actuation"], 0.0) * (
+            terms["servo_electrical"] = np.asarray(sum(act.values()), float)
+            terms["alternator"] = np.maximum(terms["servo_electrical"], 0.0) * (
                 1 / eng.eta_alternator - 1)
         P_e = np.maximum(P_w, 0.0) * traction + sum(terms.values())
         T_e = P_e / w_e
         out["r_g"][s], out["omega_e"][s], out["F_s"][s] = np.where(moving, r, np.nan), w_e, F_s
         out["power"][s] = {**terms, "engine": P_e, "variator_in": var_in,
+                           "actuation": terms["servo_electrical"] + terms["pump"],
                            "variator_out": var_out}
         out["fuel_rate"][s] = fuel_rate(eng, T_e, w_e)
         out["engine_short"][s] = int(np.sum((T_e > full_load_torque(eng, w_e))

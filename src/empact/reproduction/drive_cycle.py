@@ -116,7 +116,7 @@ def drive_cycle(params: Params) -> DriveCycleSection:
                   f"{100 * floor['hydraulic-slip']:.0f} % (slip) of the moving samples, "
                   "and the pump's leakage and friction at the line pressure of that floor "
                   "dominate; slip control lowers the pump energy from "
-                  f"{e_ref['actuation'] / 1e3:.0f} to {e_slip['actuation'] / 1e3:.0f} kJ "
+                  f"{e_ref['pump'] / 1e3:.0f} to {e_slip['pump'] / 1e3:.0f} kJ "
                   f"and the clamping loss from {e_ref['clamp'] / 1e3:.0f} to "
                   f"{e_slip['clamp'] / 1e3:.0f} kJ, but raises the slip loss from "
                   f"{e_ref['slip'] / 1e3:.0f} to {e_slip['slip'] / 1e3:.0f} kJ. 04CVT-39's "
@@ -130,7 +130,7 @@ def drive_cycle(params: Params) -> DriveCycleSection:
                     "/ 50 bar (checked: within 15 %)",
               computed="; ".join(f"{r[0]:g} bar: {r[2]:.2f} kW" for r in pump_rows)
                        + f"; over WLTC 3b the pump takes "
-                       f"{e_ref['actuation'] / res.cycle.duration:.0f} W on average",
+                       f"{e_ref['pump'] / res.cycle.duration:.0f} W on average",
               shown=pump_err <= 0.15,
               explanation=(
                   f"The computed shaft power is {100 * pump_err:.0f} % above at worst. "
@@ -155,9 +155,9 @@ def drive_cycle(params: Params) -> DriveCycleSection:
                     "at the same clamping (sf1.3)",
               computed=f"sf1.3 against hydraulic-sf1.3: "
                        f"{100 * S['sf1.3']['saving']:.2f} % ({fuel['sf1.3']:.1f} g); "
-                       f"actuation {S['sf1.3']['energy_J']['actuation'] / 1e3:.0f} kJ "
+                       f"actuation {S['sf1.3']['energy_J']['servo_electrical'] / 1e3:.0f} kJ "
                        f"electrical (+{S['sf1.3']['energy_J']['alternator'] / 1e3:.0f} kJ in "
-                       f"the alternator) against {e_ref['actuation'] / 1e3:.0f} kJ of pump",
+                       f"the alternator) against {e_ref['pump'] / 1e3:.0f} kJ of pump",
               shown=S["sf1.3"]["saving"] > 0,
               explanation="The servos' holding power and the alternator cost more than "
                           "the pump.",
