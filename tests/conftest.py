@@ -132,6 +132,8 @@ SLOW_FIXTURES = {"full_report", "readme_tour", "cluster"}
 #: 2-core machine (about 0.3 s of CPU).  Any other test, a new one included, is fast: add a
 #: new test here (or mark it ``@pytest.mark.slow``) when it needs more than that.
 SLOW_TESTS = {
+    "test_drive_cycle.py": ("test_cli_json_keys_and_bad_input",
+                            "test_plot_draws_the_four_panels"),
     "test_cli.py": (
         "test_bad_input_one_line_exit_2_nothing_written", "test_cli_plot",
         "test_cli_rootlocus_zeros_frf_map", "test_cli_simulate_linearize_nmp",

@@ -29,6 +29,11 @@ KNOWN_DEVIATIONS = {
     # the H-infinity alternative is designed on the continuous plant without the
     # feedforward; on the loop that runs one plant of the family is unstable
     "control.hinf.family",
+    # issue 34 (beyond the paper), WLTC 3b quasi-static: slip control on the hydraulic
+    # reference saves 0.6 %, not 04CVT-39's 5 % (the clamping sits at its 3 kN floor most of
+    # the cycle, the pump's leakage and friction at that pressure dominate); the reference
+    # pump's shaft power is 04CVT-49's ideal V omega p over its 0.85 efficiency (+18 %)
+    "cycle.slip_control_saving", "cycle.pump_power",
 }
 
 
@@ -80,3 +85,31 @@ def test_claims_record_the_slip_reading(claims):
     read = [c for c in claims if c["key"].startswith(("fig11.", "fig12a.", "fig12b.", "fig13."))]
     assert read and all("the paper gives none; read near the traction peak" in c["reading"]
                         for c in read)
+
+
+@pytest.mark.slow
+def test_drive_cycle_claims(params):
+    """Issue 34's section: the anchors beside the results (SAE 04CVT-49: 0.63 / 1.27 / 3.17
+    kW at 2000 rpm and 10 / 20 / 50 bar, the ideal V omega p of a 19 cc/rev pump; issue 34:
+    about 11 kW of mean positive wheel power on WLTC 3b for 1300 kg)."""
+    import math
+
+    from numpy.testing import assert_allclose
+
+    from empact.reproduction.drive_cycle import PUMP_ANCHORS, drive_cycle
+
+    sec = drive_cycle(params)
+    by = {c.key: c for c in sec.claims}
+    h = params.hydraulic
+    for (w, p, P), row in zip(PUMP_ANCHORS, sec.pump_rows):
+        # the anchor is the ideal pump (published to 2-3 digits: 0.633 kW is "0.63")
+        assert_allclose(h.displacement * w * p, P, rtol=1e-2)
+        # the reference pump's shaft power, V omega p / eta_hm (empact.actuation_energy notes;
+        # the table rounds to 1 W)
+        assert_allclose(row[2] * 1e3, h.displacement * w * p / h.eta_hm, atol=0.5)
+    assert by["cycle.mean_wheel_power"].shown
+    assert_allclose(by["cycle.mean_wheel_power"].values["mean_wheel_power"], 11e3, rtol=0.15)
+    assert by["cycle.electromechanical_saving"].shown
+    assert not by["cycle.slip_control_saving"].shown
+    assert by["cycle.slip_control_saving"].values["saving_hydraulic"] > 0
+    assert math.isfinite(by["cycle.slip_control_saving"].values["saving_servo"])

@@ -24,6 +24,8 @@ from empact.control.family import FamilyRoots, PlantFamily
 from empact.control.loop import DiskMarginMap, LoopModel, LoopPrediction, LoopShapes
 from empact.control.robustness import RobustnessMap
 from empact.control.shifting import ShiftEnvelope
+from empact.cycles import Cycle
+from empact.drive_cycle import CycleResult, quasi_static_cycle
 from empact.efficiency import EfficiencyMap
 from empact.experiments.plant_id import PlantIdentification, StepExperiment
 from empact.experiments.rig import RigRecord, RigSettings
@@ -39,7 +41,7 @@ from empact.nonlinear.linearization import Plant
 from empact.nonlinear.nmp import BeltLengthChange, NmpResult
 from empact.nonlinear.scenario import example_path, load_scenario
 from empact.nonlinear.simulation import SimulationResult
-from empact.params import OperatingPoint
+from empact.params import OperatingPoint, default_params
 from empact.slip.coupling import BeltLinearisation
 from empact.slip.loci import BeltRootLocus, PoleSweep, ZeroLocus
 from empact.slip.stability import StabilityMap
@@ -111,7 +113,15 @@ def _efficiency_map():
                                "r_g": np.array([0.5, 1.0])}, **f)
 
 
+def _cycle():
+    return Cycle("t", np.array([0.0, 1.0, 2.0, 3.0]), np.array([0.0, 2.0, 3.0, 0.0]),
+                 ("a", "a", "b", "b"))
+
+
 BUILDERS = {
+    Cycle: (_cycle, ("t", "v")),
+    CycleResult: (lambda: quasi_static_cycle(default_params(), _cycle(),
+                                             strategies=("hydraulic-sf1.3", "slip")), ()),
     SimulationResult: (_sim, ("t", "x", "y", "u")),
     EfficiencyMap: (_efficiency_map, ("axes", "strategies")),
     Transmissions: (lambda: Transmissions((0.8, 0.7), (0.9, 0.8), 0.02, (0.7, 0.5),

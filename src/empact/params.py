@@ -20,6 +20,10 @@ A parameter set has one section per concept::
     [losses]            the variator's losses beside the slip: clamping, load, drag
                         (`empact.variator.losses`)
     [sensors]           the closed loop's instruments: delay, encoders, noise
+    [vehicle]           the car around the CVT: mass, wheels, final drive, road load
+                        (`empact.vehicle`)
+    [engine]            the engine: full load, Willans-line fuel, operating line, fuel
+                        (`empact.engine`)
     [operating]         the default operating point (r_g, nu, F_s, omega_p), used by every
                         analysis that is not given one (slip model, trim, plants, NMP, Fig. 2)
 
@@ -43,6 +47,7 @@ import tomli_w
 from ._io import atomic_write_text, parse_toml
 from ._section import Section, param
 from ._validate import check_choice, check_number
+from .engine import EngineParams
 from .errors import ParameterError
 from .hardware import HydraulicParams, SensorParams, ServoLimits
 from .operating import (
@@ -57,6 +62,7 @@ from .variator.losses import LossParams
 from .variator.shift_law import ShiftParams
 from .variator.thrust_ratio import ThrustRatioParams
 from .variator.traction import TabulatedTraction, TractionParams, load_traction
+from .vehicle import VehicleParams
 
 __all__ = [
     "ParameterError", "VariatorParams", "ActuationParams", "DampingLevel", "DampingParams",
@@ -257,9 +263,10 @@ _SECTIONS = {
     "traction": TractionParams, "shift": ShiftParams, "thrust_ratio": ThrustRatioParams,
     "paper_sec21": Sec21Stiffness, "servo": ServoLimits, "sensors": SensorParams,
     "hydraulic": HydraulicParams, "losses": LossParams, "operating": OperatingPoint,
+    "vehicle": VehicleParams, "engine": EngineParams,
 }
 #: sections whose every key has a default (a file may leave them out)
-_OPTIONAL_SECTIONS = ("servo", "sensors", "hydraulic", "losses")
+_OPTIONAL_SECTIONS = ("servo", "sensors", "hydraulic", "losses", "vehicle", "engine")
 
 
 @dataclass(frozen=True)
@@ -276,6 +283,9 @@ class Params:
         and ``[losses]`` tables.
     hydraulic : HydraulicParams
         The hydraulic reference actuation (``[hydraulic]``; every key has a default).
+    vehicle, engine : VehicleParams, EngineParams
+        The car and its engine (``[vehicle]``, ``[engine]``; every key has a default), for
+        the drive cycle (`empact.drive_cycle`).
     operating : OperatingPoint
         The default operating point (``[operating]``).
     traction_table_file : str or None
@@ -302,6 +312,8 @@ class Params:
     losses: LossParams
     operating: OperatingPoint
     hydraulic: HydraulicParams = HydraulicParams()
+    vehicle: VehicleParams = VehicleParams()
+    engine: EngineParams = EngineParams()
     traction_table_file: str | None = None
     traction_table: TabulatedTraction | None = field(default=None, compare=False, repr=False)
 
@@ -612,7 +624,7 @@ def describe_parameters(params: Params | None = None) -> list[ParameterInfo]:
     blocks: list[tuple[str, Any]] = []
     for name in ("variator", "actuation", "damping", "driveline", "traction", "shift",
                  "thrust_ratio", "paper_sec21", "servo", "sensors", "hydraulic", "losses",
-                 "operating"):
+                 "operating", "vehicle", "engine"):
         block = getattr(params, name)
         if name == "damping":
             blocks += [(f"damping.{lvl}", getattr(block, lvl)) for lvl in DAMPING_LEVELS]

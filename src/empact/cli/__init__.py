@@ -47,6 +47,8 @@ COMMANDS = {
                    "Monte Carlo over parameter spread (in process or on Dask)."),
     "efficiency": ("empact.cli.efficiency:efficiency_cmd",
                    "Variator and total efficiency by clamping strategy (steady state)."),
+    "cycle": ("empact.cli.drive_cycle:cycle_cmd",
+              "A drive cycle (WLTC 3b, NEDC, FTP-75, a trace): energy and fuel by strategy."),
 }
 
 

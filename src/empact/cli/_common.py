@@ -440,6 +440,10 @@ UNITS = {
     "duration": "s",
     "ms": "-", "ms_above_2": "-", "bandwidth_floor_hz": "Hz", "max_ms": "-",
     "multipliers": "-", "evaluations": "-",
+    "distance_m": "m", "duration_s": "s", "wheel_energy_J": "J", "energy_J": "J (every term)",
+    "engine_J": "J", "fuel_g": "g", "fuel_l_per_100km": "l/100 km",
+    "saving": "- (fraction of the reference's fuel)", "variator_efficiency": "-",
+    "transmission_efficiency": "-", "engine_short": "- (samples)",
 }
 
 

@@ -22,6 +22,8 @@ variator
     stability map.
 efficiency
     Efficiency maps of the clamping strategies, efficiency over clamping force.
+drive_cycle
+    A quasi-static drive cycle: trace, ratio, clamping, cumulative losses.
 
 Each submodule is imported when one of its names is first used (``from empact.plotting import
 plot_bode`` loads the Bode plot's module, not the control plots' simulation stack).
@@ -45,7 +47,7 @@ _CATALOGUE = {
     "plot_robustness_maps": "control", "plot_closed_loop": "control",
     "plot_shift_envelope": "control",
     "plot_traction_reserve": "variator", "plot_ratio_stability": "variator",
-    "plot_efficiency_map": "efficiency",
+    "plot_efficiency_map": "efficiency", "plot_drive_cycle": "drive_cycle",
 }
 
 __all__ = list(_CATALOGUE)

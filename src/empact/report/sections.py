@@ -2,12 +2,13 @@
 from __future__ import annotations
 
 from ..reproduction import control as rctl
+from ..reproduction import drive_cycle as rcyc
 from ..reproduction import identification as rid
 from ..reproduction import linear as rlin
 from ..reproduction import machine as rmach
 from ..reproduction import nonlinear as rnl
 from ..reproduction import slip as rslip
-from . import control, identification, linear, machine, nonlinear, slip
+from . import control, drive_cycle, identification, linear, machine, nonlinear, slip
 from .context import Section
 
 __all__ = ["SECTIONS"]
@@ -52,4 +53,6 @@ SECTIONS: tuple[Section, ...] = (
     Section("Beyond the paper: control studies (traction estimate, Monte Carlo, the "
             "clamping saving)", "control-studies", rctl.control_studies, control.studies,
             cost=45.0),
+    Section("Beyond the paper: drive cycle (WLTC 3b in a car, quasi-static)", "drive-cycle",
+            rcyc.drive_cycle, drive_cycle.drive_cycle, cost=3.0),
 )

@@ -1,0 +1,100 @@
+"""``empact cycle``: a drive cycle, quasi-static (`empact.drive_cycle`), by clamping strategy:
+energy by loss term and phase, efficiencies, fuel and the saving against hydraulic-sf1.3."""
+from __future__ import annotations
+
+import click
+
+from ..cycles import CYCLES, load_cycle, read_trace
+from ..drive_cycle import DEFAULT_STRATEGIES, REFERENCE, STRATEGIES, TERMS, quasi_static_cycle
+from ..errors import ParameterError
+from ._common import (
+    InputError,
+    emit_json,
+    force_option,
+    get_params,
+    json_options,
+    output_folder,
+    params_option,
+    parse_choices,
+)
+from .linear import plot_option
+
+
+@click.command("cycle")
+@click.option("--cycle", "cycle", required=True,
+              help="A shipped cycle (" + ", ".join(CYCLES) + ") or a CSV trace FILE "
+                   "('time [s]', 'speed [km/h]' or 'speed [m/s]').")
+@click.option("--strategies", "strategies", default=",".join(DEFAULT_STRATEGIES),
+              show_default=True,
+              help="Comma-separated clamping strategies (" + ", ".join(STRATEGIES) + ").")
+@click.option("--out", "out", default=None, type=click.Path(file_okay=False),
+              help="Output folder for cycle.json and samples.csv; new or empty unless "
+                   "--force.")
+@plot_option
+@params_option
+@json_options
+@force_option
+def cycle_cmd(cycle, strategies, out, plot, params_file, as_json, json_out, force) -> None:
+    """A drive cycle, quasi-static (backward): the variator trimmed at every sample of the
+    trace on the operating line, its losses and actuation, the engine's fuel, by strategy
+    (energies [J], fuel [g] and [l/100 km], saving against hydraulic-sf1.3)."""
+    from .._io import atomic_folder
+
+    chosen = parse_choices("--strategies", strategies, tuple(STRATEGIES))
+    params = get_params(params_file)
+    if cycle in CYCLES:
+        trace = load_cycle(cycle)
+    else:
+        try:
+            trace = read_trace(cycle)
+        except ParameterError as exc:
+            raise InputError(f"--cycle {cycle!r}: not a shipped cycle ({', '.join(CYCLES)}), "
+                             f"and as a trace file: {exc}") from None
+    dest = output_folder(out, "--out", force=force) if out else None
+    res = quasi_static_cycle(params, trace, strategies=chosen)
+    doc = res.to_dict()
+    if plot:
+        from ..plotting import plot_drive_cycle
+
+        plot_drive_cycle(res).save(plot)
+    if dest is not None:
+        with atomic_folder(dest) as tmp:
+            emit_json(doc, "cycle", str(tmp / "cycle.json"))  # with schema and units
+            (tmp / "samples.csv").write_text(_samples_csv(res))
+    if as_json or json_out:
+        emit_json(doc, "cycle", json_out)
+        return
+    click.echo(f"{doc['cycle']}: {doc['distance_m'] / 1e3:.3f} km in {doc['duration_s']:g} s, "
+               f"traction at the wheels {doc['wheel_energy_J'] / 1e6:.3f} MJ")
+    head = " ".join(f"{k:>8s}" for k in TERMS)
+    click.echo(f"{'strategy':16s} {head} {'var.eff':>7s} {'trans.':>7s} {'fuel':>7s} "
+               f"{'l/100km':>7s} {'saving':>7s}")
+    units = " ".join(f"{'[kJ]':>8s}" for _ in TERMS)
+    click.echo(f"{'':16s} {units} {'[%]':>7s} {'[%]':>7s} {'[g]':>7s} {'':>7s} {'[%]':>7s}")
+    for s, d in doc["strategies"].items():
+        e = " ".join(f"{d['energy_J'][k] / 1e3:8.1f}" for k in TERMS)
+        saving = "" if d["saving"] is None else f"{100 * d['saving']:7.2f}"
+        click.echo(f"{s:16s} {e} {100 * d['variator_efficiency']:7.2f} "
+                   f"{100 * d['transmission_efficiency']:7.2f} {d['fuel_g']:7.1f} "
+                   f"{d['fuel_l_per_100km']:7.2f} {saving:>7s}")
+    for s, d in doc["strategies"].items():
+        if d["engine_short"]:
+            click.echo(f"{s}: the engine cannot follow the trace at {d['engine_short']} "
+                       "samples (beyond full load or its highest speed; computed as asked)")
+    if REFERENCE not in doc["strategies"]:
+        click.echo(f"(no saving: {REFERENCE}, the reference, was not run)")
+
+
+def _samples_csv(res) -> str:
+    """The per-sample table: time, speed, wheel power, and by strategy ratio, engine speed,
+    clamping, engine power and fuel rate (SI)."""
+    cols = ["time [s]", "speed [m/s]", "P_wheel [W]"]
+    data = [res.t, res.v, res.P_wheel]
+    for s in res.strategies:
+        cols += [f"{s} r_g [-]", f"{s} omega_e [rad/s]", f"{s} F_s [N]", f"{s} P_e [W]",
+                 f"{s} fuel [kg/s]"]
+        data += [res.r_g[s], res.omega_e[s], res.F_s[s], res.power[s]["engine"],
+                 res.fuel_rate[s]]
+    lines = [f"# empact cycle {res.cycle.name}: quasi-static, by strategy", ",".join(cols)]
+    lines += [",".join(repr(float(c[k])) for c in data) for k in range(res.t.size)]
+    return "\n".join(lines) + "\n"
