@@ -84,7 +84,22 @@ class ShardStore:
     def create(cls, folder: str | os.PathLike[str], spec: Mapping[str, Any],
                chunks: Sequence[tuple[int, int]]) -> "ShardStore":
         """Start a study in `folder` (created if missing): an empty ``shards`` folder and the
-        manifest (any shards of an earlier study there are removed)."""
+        manifest (any shards of an earlier study there are removed).
+
+        Parameters
+        ----------
+        folder : path
+            The study's folder.
+        spec : mapping
+            What identifies the study (`empact.montecarlo.study.study_spec`).
+        chunks : sequence of (int, int)
+            Each chunk's run range ``(start, stop)``.
+
+        Returns
+        -------
+        ShardStore
+            The new store, its manifest written.
+        """
         path = Path(folder)
         (path / SHARDS).mkdir(parents=True, exist_ok=True)
         for old in (path / SHARDS).glob("chunk-*.npz"):
@@ -97,6 +112,20 @@ class ShardStore:
     def open(cls, folder: str | os.PathLike[str], spec: Mapping[str, Any],
              option: str = "--resume") -> "ShardStore":
         """The study in `folder`, to be resumed with `spec`.
+
+        Parameters
+        ----------
+        folder : path
+            The study's folder.
+        spec : mapping
+            The resuming study's spec; it must equal the manifest's.
+        option : str
+            The option named in a refusal.
+
+        Returns
+        -------
+        ShardStore
+            The store with its completed chunks.
 
         Raises
         ------
@@ -144,7 +173,19 @@ class ShardStore:
 
     def write(self, index: int, arrays: Mapping[str, np.ndarray]) -> None:
         """Write chunk `index`'s shard (the named arrays), then mark it done in the
-        manifest (each atomically)."""
+        manifest (each atomically).
+
+        Parameters
+        ----------
+        index : int
+            The chunk's index.
+        arrays : mapping of str to ndarray
+            The chunk's named results.
+
+        Returns
+        -------
+        None
+        """
         buf = io.BytesIO()
         savez: Any = np.savez  # (its stubs type a keyword as allow_pickle's bool)
         savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
@@ -153,7 +194,18 @@ class ShardStore:
         self._write_manifest()
 
     def read(self, index: int) -> dict[str, np.ndarray]:
-        """The arrays of chunk `index`'s shard."""
+        """The arrays of chunk `index`'s shard.
+
+        Parameters
+        ----------
+        index : int
+            The chunk's index.
+
+        Returns
+        -------
+        dict of str to ndarray
+            The chunk's named results.
+        """
         with np.load(self.folder / SHARDS / self._name(index), allow_pickle=False) as z:
             return {k: z[k] for k in z.files}
 

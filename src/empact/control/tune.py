@@ -275,7 +275,18 @@ def _unit_pi(ctrl: Controller) -> tuple[NDArray, NDArray, NDArray]:
 
 
 def check_pi(ctrl: Controller) -> None:
-    """Refuse a controller that is not a (scheduled) `pi_controller` on ratio and slip."""
+    """Refuse a controller that is not a (scheduled) `pi_controller` on ratio and slip.
+
+    Parameters
+    ----------
+    ctrl : Controller
+        The controller to tune.
+
+    Returns
+    -------
+    None
+        Raises `ParameterError` naming the controller when it is not one.
+    """
     if ctrl.method != "pi" or ctrl.dt or ctrl.n != 6 or len(ctrl.measured) != 2:
         raise ParameterError(f"tune: a continuous two-loop PI (method 'pi', 6 states) is "
                              f"tuned; got method {ctrl.method!r}, {ctrl.n} states, dt "

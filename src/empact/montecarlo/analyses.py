@@ -115,6 +115,12 @@ def output_units(context: AnalysisContext) -> dict[str, str]:
     Parameters
     ----------
     context : AnalysisContext
+        The study's analysis and its scenario.
+
+    Returns
+    -------
+    dict of str to str
+        Output name -> unit, in the order of a run's record.
     """
     out = dict(OUTPUTS[context.kind])
     if context.kind == "closed-loop":
@@ -135,6 +141,12 @@ def prepare(params: Params, spread: Spread, row: Any,
     row : sequence of float
         The run's values (`Spread.sample`'s row), in the order of ``spread.names``.
     context : AnalysisContext
+        The study's context (scenario, controller, traction).
+
+    Returns
+    -------
+    tuple of (Params, AnalysisContext)
+        The run's parameter set and its context with its own scenario.
     """
     values, scen = spread.split(row)
     p = params.from_dotted(values)

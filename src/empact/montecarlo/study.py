@@ -356,7 +356,26 @@ def study_spec(params: Params, spread: Spread, context: AnalysisContext, runs: i
     """What identifies a stored study (its manifest's ``spec``): the analysis, seed and run
     count, and SHA-256 hashes of the parameters (`Params.to_dict`), the spread (each
     distribution's name and description) and the analysis' context (scenario, controller,
-    nominal parameters and traction table, pickled)."""
+    nominal parameters and traction table, pickled).
+
+    Parameters
+    ----------
+    params : Params
+        The nominal parameter set.
+    spread : Spread
+        The study's spread.
+    context : AnalysisContext
+        The analysis and its context.
+    runs : int
+        Number of runs.
+    seed : int
+        The study's seed.
+
+    Returns
+    -------
+    dict
+        The manifest's ``spec`` (JSON-safe).
+    """
     def digest(data: bytes) -> str:
         return hashlib.sha256(data).hexdigest()
 
