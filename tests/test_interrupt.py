@@ -1,6 +1,7 @@
 """Ctrl-C: a real SIGINT stops a running command promptly, with one line ``error:
 interrupted``, exit status 130, no traceback (from the command or its workers) and no partial
-output; with and without a local Dask cluster.
+output; with and without a local Dask cluster.  A streamed Monte Carlo study interrupted
+after a chunk completed keeps its completed shards for ``--resume`` and says so on that line.
 
 Each command runs in its own session and gets the SIGINT as a terminal's Ctrl-C delivers it:
 to its whole process group, workers included (the workers ignore it; the command stops them).
@@ -21,7 +22,7 @@ import pytest
 SPREAD = '[spread."actuation.k_w"]\ndistribution = "normal"\nrel_std = 0.05\n'
 
 #: name -> (arguments, progress marker, signal the whole group)
-CASES = {
+CASES: dict[str, tuple[list[str], str, bool]] = {
     "reproduce": (["reproduce", "--out", "rep"], "report:", True),
     "montecarlo": (["montecarlo", "--spread", "spread.toml", "--runs", "2000", "--analysis",
                     "closed-loop", "--example", "slip-load-step-r1", "--out", "mc"],
@@ -54,9 +55,10 @@ def _foreground():
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
-def _interrupt(args, marker, group, cwd):
-    """Start ``empact ARGS``, wait for `marker` on stderr, send SIGINT; (exit status,
-    stderr, seconds from the signal to the exit)."""
+def _interrupt(args, marker, group, cwd, after=None):
+    """Start ``empact ARGS``, wait for `marker` on stderr (and for the path `after`, when
+    given, to exist), send SIGINT; (exit status, stderr, seconds from the signal to the
+    exit)."""
     proc = subprocess.Popen([sys.executable, "-c", "from empact.cli import main; main()",
                              *args], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             start_new_session=True, preexec_fn=_foreground,
@@ -64,7 +66,7 @@ def _interrupt(args, marker, group, cwd):
     err = b""
     try:
         deadline = time.monotonic() + 120
-        while marker.encode() not in err:
+        while marker.encode() not in err or (after is not None and not after.exists()):
             assert proc.poll() is None, err.decode()
             assert time.monotonic() < deadline, err.decode()
             if select.select([proc.stderr], [], [], 0.1)[0]:
@@ -95,5 +97,39 @@ def test_ctrl_c_stops_at_once_and_writes_nothing(tmp_path, name):
     assert status == 130, err
     assert err.splitlines()[-1] == "error: interrupted", err
     assert err.count("error:") == 1 and "Traceback" not in err, err
+    if (tmp_path / "mc").exists():  # a streamed study that completed a chunk: kept
+        _check_kept(tmp_path / "mc", err)
+        return
     # nothing written
     assert sorted(p.name for p in tmp_path.iterdir()) == ["long.toml", "spread.toml"]
+
+
+def _check_kept(folder, err):
+    """The interrupted study's folder holds its manifest and one shard per completed chunk,
+    and the error line says how many and how to continue."""
+    import json
+
+    doc = json.loads((folder / "manifest.json").read_text())
+    shards = sorted(p.name for p in (folder / "shards").iterdir())
+    assert doc["completed"], err
+    assert shards == [f"chunk-{k:06d}.npz" for k in sorted(doc["completed"])]
+    assert sorted(p.name for p in folder.iterdir()) == ["manifest.json", "shards"]
+    line = err.splitlines()[-1]
+    assert line.startswith(f"error: interrupted; {len(doc['completed'])} of "
+                           f"{len(doc['chunks'])} chunks ("), err
+    assert line.endswith("kept in mc: continue with --resume"), err
+
+
+@pytest.mark.timeout(180)
+def test_ctrl_c_keeps_a_streamed_studys_completed_chunks(tmp_path):
+    """SIGINT after the first chunk's shard is written: exit 130, one line naming the kept
+    chunks, the shards and manifest left whole for ``--resume`` (test_shards resumes such a
+    folder bitwise)."""
+    args, marker, group = CASES["montecarlo"]
+    (tmp_path / "spread.toml").write_text(SPREAD)
+    status, err, seconds = _interrupt(args, marker, group, tmp_path,
+                                      after=tmp_path / "mc" / "shards" / "chunk-000000.npz")
+    print(f"montecarlo after a chunk: SIGINT to exit {seconds:.2f} s")
+    assert status == 130, err
+    assert err.count("error:") == 1 and "Traceback" not in err, err
+    _check_kept(tmp_path / "mc", err)

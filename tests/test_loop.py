@@ -411,12 +411,15 @@ GOLDEN = Path(__file__).resolve().parent / "data" / "golden_loop.npz"
 #: signals of every shipped run that the golden file keeps (every `decimate`-th sample)
 GOLDEN_SIGNALS = ("r_g", "omega_p", "omega_s", "T_ds", "omega_mp", "omega_ms", "T_l_act", "nu",
                   "F_s", "T_mp", "T_ms")
-#: the shifts' bound, relative to each signal's largest magnitude: their law ran `update`
-#: (numpy's ``tanh`` in the shift feedforward, BLAS's controller products), the compiled
-#: sample has the C library's ``tanh`` (a third of its arguments round the last bit
-#: differently) and products summed in index order; measured 5.2e-12 (omega_ms of
-#: shift-low-od-sf13), metrics 1.2e-12
-SHIFT_RTOL = 1e-10
+#: the bound of every golden comparison, relative to each signal's largest magnitude.  The
+#: runs are deterministic on one host, not across hosts: numpy evaluates ``sin``, ``cos``,
+#: ``arctan`` and ``tanh`` on arrays with SIMD routines chosen by the CPU (SVML on AVX-512,
+#: others on AVX2), so the trims that set each run's initial state and references differ in
+#: the last bits from host to host, and the run carries that on.  Measured: 3.1e-11
+#: (omega_mp of slip-small-step-r2) between an AVX2 host and the host that made the golden,
+#: 5.2e-12 for the shifts on one host (their law ran numpy's ``tanh`` then, libm's now); a
+#: change of the law, a gain or a limit moves these signals by 1e-6 or more
+GOLDEN_RTOL = 1e-10
 
 #: today's runs of the shipped scenarios (`test_regression_golden_closed_loop`): (model, result)
 _SHIPPED_RUNS: dict = {}
@@ -456,9 +459,8 @@ def test_regression_golden_closed_loop(params, golden, name):
     """Every shipped closed-loop scenario (`run_closed_loop`) against its golden run
     (`GOLDEN`, made from the law before its one compiled sample): the signals the law reads,
     the slip, the clamping force and the servo torques at the golden's samples, the whole
-    state at the end, the run's length and step count and every scalar metric.  The load
-    steps ran compiled then too: bitwise; the shifts within `SHIFT_RTOL` of each signal's
-    largest magnitude."""
+    state at the end, the run's length, the load steps' step count and every scalar metric,
+    within `GOLDEN_RTOL` of each signal's largest magnitude (bitwise on the golden's host)."""
     run = run_closed_loop(load_scenario(control_example_path(name)), _lossless(params))
     res = run.result
     _SHIPPED_RUNS[name] = (run.law.model, res)
@@ -476,21 +478,16 @@ def test_regression_golden_closed_loop(params, golden, name):
     metrics = {k: v for k, v in metrics.items() if not k.endswith("_pp")}
     assert set(metrics) | set(legacy) <= set(new)
     ref = {s: g[s] for s in GOLDEN_SIGNALS} | {"x_end": g["x_end"]} | metrics
-    if name.startswith("shift"):
-        dev = {k: _largest_deviation(new[k], v) for k, v in (ref | legacy).items()}
-        assert max(dev.values()) <= SHIFT_RTOL, dev
-    else:
+    if not name.startswith("shift"):  # the load steps took the golden's steps
         assert res.stats["n_steps"] == g["n_steps"]
-        for k in ref:
-            np.testing.assert_array_equal(new[k], ref[k], err_msg=k)
-        for k, v in legacy.items():
-            np.testing.assert_allclose(new[k], v, rtol=4e-16, atol=0, err_msg=k)
+    dev = {k: _largest_deviation(new[k], v) for k, v in (ref | legacy).items()}
+    assert max(dev.values()) <= GOLDEN_RTOL, dev
 
 
 def test_regression_golden_monte_carlo(params, golden):
     """The shipped spread's closed-loop Monte Carlo (slip-load-step-r1, seed 1; the machine
     drawn, the controller knowing the nominal one) against its golden runs (`GOLDEN`): the
-    drawn parameters and every run's metrics bitwise (the load step ran compiled then too)."""
+    drawn parameters bitwise, every run's metrics within `GOLDEN_RTOL`."""
     import sys
 
     sys.path.insert(0, str(GOLDEN.parent))
@@ -506,7 +503,11 @@ def test_regression_golden_monte_carlo(params, golden):
     new["montecarlo/values"] = new["montecarlo/values"][:, kept]
     new["montecarlo/outputs"] = new["montecarlo/outputs"][kept]
     for k, v in new.items():
-        np.testing.assert_array_equal(v, golden[k], err_msg=k)
+        if k == "montecarlo/values":  # the metrics: `GOLDEN_RTOL` per column (host's SIMD)
+            dev = [_largest_deviation(v[:, j], golden[k][:, j]) for j in range(v.shape[1])]
+            assert max(dev) <= GOLDEN_RTOL, dict(zip(new["montecarlo/outputs"], dev))
+        else:  # the draws (numpy's generators are the same on every host), names, flags
+            np.testing.assert_array_equal(v, golden[k], err_msg=k)
 
 
 @pytest.mark.parametrize("name", ["slip-load-step-r1", "shift-low-od-sf13"])
@@ -638,7 +639,8 @@ def test_schedule_gains_at_equals_the_array_form(params):
 def test_regression_golden_linear_preprocess(params, golden):
     """`linear_preprocess` of the ideal law (central differences of `LoopLaw.preprocess`,
     the compiled `_law_core.pre`) equals the golden matrices of the law before its one
-    compiled sample (`GOLDEN`) to the last bit, on a load step and a shift (shift
+    compiled sample (`GOLDEN`) within `GOLDEN_RTOL` of each matrix's largest entry (bitwise
+    on the golden's host; measured 6.8e-25 of it here), on a load step and a shift (shift
     feedforward, references replaced by the linearisation's)."""
     from empact.control.closed_loop import build_law
 
@@ -647,7 +649,8 @@ def test_regression_golden_linear_preprocess(params, golden):
                         ideal=True)
         got = linear_preprocess(law)
         for k, v in got.items():
-            np.testing.assert_array_equal(v, golden[f"linear/{name}/{k}"], err_msg=(name, k))
+            dev = _largest_deviation(v, golden[f"linear/{name}/{k}"])
+            assert dev <= GOLDEN_RTOL, (name, k, dev)
 
 
 def test_a_slip_set_point_past_the_traction_peak_is_refused(params):

@@ -24,6 +24,7 @@ from empact.control.family import FamilyRoots, PlantFamily
 from empact.control.loop import DiskMarginMap, LoopModel, LoopPrediction, LoopShapes
 from empact.control.robustness import RobustnessMap
 from empact.control.shifting import ShiftEnvelope
+from empact.control.tune import TuneResult
 from empact.cycles import Cycle
 from empact.drive_cycle import CycleResult, quasi_static_cycle
 from empact.efficiency import EfficiencyMap
@@ -118,7 +119,17 @@ def _cycle():
                  ("a", "a", "b", "b"))
 
 
+def _tune_result():
+    summary = {"disk_margin": 0.6, "gain_margin_db": 5.0, "phase_margin_deg": 30.0,
+               "ms": {"ratio": 1.8, "slip": 1.7}, "ms_above_2": {"ratio": 0, "slip": 0},
+               "bandwidth_hz": {"ratio": 0.5, "slip": 1.0}, "spectral_radius": 0.99,
+               "all_stable": True, "worst_point": {"r_g": 2.0, "tau": 0.8, "F_s": 8e3}}
+    return TuneResult("disk-margin", ("kp_ratio",), {"kp_ratio": 1.5}, _r(4), summary,
+                      summary, {"ratio": 0.4, "slip": 0.9}, 2.0, 0.6, 4, 1.0, 0, True, "ok")
+
+
 BUILDERS = {
+    TuneResult: (_tune_result, ("history",)),
     Cycle: (_cycle, ("t", "v")),
     CycleResult: (lambda: quasi_static_cycle(default_params(), _cycle(),
                                              strategies=("hydraulic-sf1.3", "slip")), ()),
@@ -214,6 +225,7 @@ NOT_RESULTS = {
     "empact.control.controller.Schedule": "a controller's gain schedule",
     "empact.control.designs.ControllerType": "a registry entry (a design function by name)",
     "empact.control.law.LoopConfig": "settings of the loop law",
+    "empact.control.tune.TuneOptions": "settings of the tuner (recorded in its design record)",
     "empact.experiments.rig.RigSettings": "settings of a rig experiment",
     "empact.fmu.FmuConfig": "settings of an FMU export (its input)",
     "empact.fmu.FmuVariable": "an entry of an FMU's model description",

@@ -187,11 +187,19 @@ def test_bad_files_are_refused(tmp_path, name, text, match):
         load_traction(path)
 
 
-def test_numpy_curve_is_the_compiled_law_bitwise(params, magic):
+def test_numpy_curve_is_the_compiled_law(params, magic):
     """One law for both routes (issue 31): `MagicFormulaTraction.mu`, ``dmu`` and
     ``mu_max`` (numpy, `empact.variator._tables.interp_knots` for the coefficients) equal the
     compiled kernel's `traction_mu`, `traction_mu_d` and the peak at random slips and ratios,
-    at the knots and outside them, to the last bit (tolerance 0: the same operations)."""
+    at the knots and outside them, to the rounding of the transcendental functions.
+
+    The two routes run the same operations, but numpy evaluates ``sin``, ``cos`` and
+    ``arctan`` on arrays with its own SIMD routines where the CPU has them (SVML on AVX-512
+    hosts), the compiled kernel with libm's scalar ones: the CI host gave a ``dmu`` 3 ULP
+    (4.7e-16 relative) from the kernel's (it was bitwise equal on this AVX2 machine).
+    Tolerance: 1e-14 relative (about 45 ULP), with an absolute floor of 1e-14 of the slope's
+    scale where ``dmu`` crosses zero at the peak; a different law or coefficient differs by
+    orders of magnitude more."""
     from empact.nonlinear import _kernel as K
     from empact.nonlinear.model import nonlinear_model
 
@@ -201,7 +209,9 @@ def test_numpy_curve_is_the_compiled_law_bitwise(params, magic):
                         [params.traction.r_low, params.traction.r_med, params.traction.r_od]])
     nu = rng.uniform(-0.2, 0.2, r.size)
     mu, dmu, peak = magic.mu(nu, r), magic.dmu(nu, r), magic.mu_max(r)
-    for k in range(r.size):
-        assert mu[k] == K.traction_mu(nu[k], r[k], p)
-        assert dmu[k] == K.traction_mu_d(nu[k], r[k], p)[1]
-        assert peak[k] == K.mu_peak(r[k], np.log(r[k]), p)
+    k_mu = np.array([K.traction_mu(nu[k], r[k], p) for k in range(r.size)])
+    k_dmu = np.array([K.traction_mu_d(nu[k], r[k], p)[1] for k in range(r.size)])
+    k_peak = np.array([K.mu_peak(r[k], np.log(r[k]), p) for k in range(r.size)])
+    assert_allclose(mu, k_mu, rtol=1e-14, atol=1e-14 * np.abs(k_mu).max())
+    assert_allclose(dmu, k_dmu, rtol=1e-14, atol=1e-14 * np.abs(k_dmu).max())
+    assert_allclose(peak, k_peak, rtol=1e-14, atol=0)

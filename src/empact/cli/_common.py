@@ -89,15 +89,17 @@ EXIT_INTERRUPTED = 130
 
 class Interrupted(click.ClickException):
     """Ctrl-C (SIGINT): one line on stderr, exit status 130; nothing was written (every
-    output is moved into place only when complete)."""
+    output is moved into place only when complete), except what `kept` names (a streamed
+    study's completed shards, kept for ``--resume``)."""
 
     exit_code = EXIT_INTERRUPTED
 
-    def __init__(self) -> None:
+    def __init__(self, kept: str = "") -> None:
         super().__init__("interrupted")
+        self.kept = kept
 
     def show(self, file: Any = None) -> None:
-        click.echo("error: interrupted", err=True)
+        click.echo("error: interrupted" + (f"; {self.kept}" if self.kept else ""), err=True)
 
 
 #: the line a first run prints when numba compiles the model (its cache is cold)

@@ -1,11 +1,14 @@
 """``empact montecarlo``: an analysis over a parameter spread, in process or on Dask."""
 from __future__ import annotations
 
+import os
+
 import click
 
 from ._common import (
     Failed,
     InputError,
+    Interrupted,
     emit_json,
     force_option,
     get_params,
@@ -127,9 +130,15 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
         assert sc.controller is not None  # closed_loop
         ctrl = resolve_controller(controller or sc.controller.file)
     spread = load_spread(spread_file, params, sc)
-    result = monte_carlo(params, spread, runs, analysis, seed=seed, scenario=sc,
-                         controller=ctrl, sweep=sweep, traction=traction_table,
-                         store=out, resume=resume)
+    existed = bool(out) and os.path.lexists(out)
+    try:
+        result = monte_carlo(params, spread, runs, analysis, seed=seed, scenario=sc,
+                             controller=ctrl, sweep=sweep, traction=traction_table,
+                             store=out, resume=resume)
+    except KeyboardInterrupt:
+        if not out:
+            raise
+        raise Interrupted(_interrupted_study(out, resume or existed)) from None
     if result.failures == result.runs:
         kind, f = next(iter(result.summary()["failure_reasons"].items()))
         raise Failed(f"every one of the {result.runs} runs failed ({f['count']} x {kind}, "
@@ -174,3 +183,34 @@ def _echo_summary(result, summary, analysis, seed, out) -> None:
                        f"{s['q50']:11.4g} {s['q95']:11.4g}")
         else:
             click.echo(f"{name:22s} {s['unit']:18s} {0:6d}   (no finite value)")
+
+
+def _interrupted_study(out: str, existed: bool) -> str:
+    """What an interrupted streamed study leaves in `out`: its completed shards stay, for
+    ``--resume`` (the text of the ``error: interrupted`` line); a study that completed no
+    chunk removes the manifest and shards folder it made, and the folder if it made it
+    (nothing written)."""
+    import json
+    from pathlib import Path
+
+    from ..shards import MANIFEST, SHARDS
+
+    folder = Path(out)
+    try:
+        doc = json.loads((folder / MANIFEST).read_text())
+        done, chunks = len(doc["completed"]), len(doc["chunks"])
+        kept = sum(b - a for k, (a, b) in enumerate(doc["chunks"]) if k in set(doc["completed"]))
+        runs = int(doc["runs"])
+    except (OSError, ValueError, KeyError, TypeError):
+        done = 0
+    if done:
+        return (f"{done} of {chunks} chunks ({kept} of {runs} runs) kept in {out}: continue "
+                "with --resume")
+    if not existed:  # only what this run made
+        (folder / MANIFEST).unlink(missing_ok=True)
+        for path in ((folder / SHARDS), folder):
+            try:
+                path.rmdir()
+            except OSError:
+                pass
+    return ""
