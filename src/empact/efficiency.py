@@ -374,8 +374,11 @@ class _Outputs(Mapping[str, NDArray]):
 def run_energy(result: SimulationResult, params: Params,
                kinematics: str = "equal-translation") -> dict[str, Any]:
     """A simulation's energies by term [J]: the variator's input and output at its shafts, its
-    losses by term, the servos' electrical energy (`empact.actuation_energy.actuation_energy`,
-    billed quasi-statically) and the hydraulic reference's pump energy on the same motion.
+    losses by term (the integrator's integrals over its own steps,
+    `SimulationResult.energy_integrals`; the trapezoidal rule on the output samples for a
+    result without them), the servos' electrical energy
+    (`empact.actuation_energy.actuation_energy`, billed quasi-statically on the samples) and
+    the hydraulic reference's pump energy on the same motion.
 
     Parameters
     ----------
@@ -393,13 +396,19 @@ def run_energy(result: SimulationResult, params: Params,
         ``losses`` (the variator's losses by term [J]); ``servo_electrical`` and ``pump``
         [J]; ``actuation`` (the `ActuationEnergy`).
     """
-    t = np.asarray(result.t, float)
-    P_in, P_out, losses = _variator_powers(_Outputs(result))
-    integral = lambda v: float(np.trapezoid(v, t)) if t.size > 1 else 0.0  # noqa: E731
+    q = result.energy_integrals
+    if q:
+        E_in, E_out = float(q["P_var_in"]), float(q["P_var_out"])
+        terms = {k: float(q[k]) for k in VARIATOR_LOSSES}
+    else:
+        t = np.asarray(result.t, float)
+        P_in, P_out, losses = _variator_powers(_Outputs(result))
+        integral = lambda v: float(np.trapezoid(v, t)) if t.size > 1 else 0.0  # noqa: E731
+        E_in, E_out = integral(P_in), integral(P_out)
+        terms = {k: integral(v) for k, v in losses.items()}
     act = actuation_energy(result, params, kinematics)
-    terms = {k: integral(v) for k, v in losses.items()}
-    return {"duration": act.duration, "variator_in": integral(P_in),
-            "variator_out": integral(P_out), "variator_losses": sum(terms.values()),
+    return {"duration": act.duration, "variator_in": E_in,
+            "variator_out": E_out, "variator_losses": sum(terms.values()),
             "losses": terms, "servo_electrical": act.energy["servo_electrical"],
             "pump": act.hydraulic["pump"], "actuation": act}
 
