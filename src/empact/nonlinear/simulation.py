@@ -162,10 +162,11 @@ def _integral(t: NDArray[np.float64], f: NDArray[np.float64]) -> float:
 def energy_balance(result: SimulationResult) -> dict[str, Any]:
     """The energy balance of a run: input = output + losses + change of stored energy.
 
-    The powers are the integrator's integrals over its own steps (`SimulationResult.
-    energy_integrals`: Simpson's rule on each step with its midpoint from the dense output,
-    no step across an input breakpoint or a held command's change), and the stored energy
-    ``E`` (kinetic and elastic) is read at the start and at the end of the integration.
+    The powers are the integrator's integrals over its own steps
+    (`SimulationResult.energy_integrals`: Simpson's rule on each step, its midpoint from the
+    dense output, no step across an input breakpoint or a held command's change), and the
+    stored energy ``E`` (kinetic and elastic) is read at the start and at the end of the
+    integration.
     ``P_in - P_diss = dE/dt`` holds at every instant (the kernel's outputs), so the residual
     is the integration's error along the computed trajectory: it falls with the
     integrator's tolerance (about 10x ``rtol`` or below on the shipped scenarios; the
