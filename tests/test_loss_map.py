@@ -158,7 +158,7 @@ def test_compiled_law_equals_the_numpy_model():
     and its input torque T_pb + loss meets the map: ``loss = sg T_loss(T_pb + loss)``."""
     m = _smooth_map()
     enc = m.encode()
-    r, w, T_pb, F, sg = _points(np.random.default_rng(2))
+    r, w, T_pb, F, sg = _points(np.random.default_rng(2), 200)
     got = np.array([LT.table_loss(*map(float, a), enc, 0) for a in zip(T_pb, np.log(r), w, F, sg)])
     ref = m.torque_loss_at_belt(r, w, T_pb, F, sg)
     np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-12)
@@ -217,6 +217,7 @@ MAP_LOSS_TOL = 0.04
 DRAG_SHIFT_TOL = 1e-4
 
 
+@pytest.mark.slow
 def test_a_map_of_the_analytic_losses_reproduces_their_efficiency(params):
     """Known truth: the analytic [losses] sampled on a grid (the model's own law,
     `EmpactModel.torque_loss`) and read back as a map give `efficiency_map`'s variator
@@ -300,6 +301,7 @@ def test_parameter_file_and_scenario_name_a_map(params, tmp_path):
     assert abs(eb["energy_balance_residual"]) < 1e-3
 
 
+@pytest.mark.slow
 def test_map_acts_in_efficiency_and_the_drive_cycle(params, tmp_path):
     """`empact efficiency --loss-map` reports the map's loss (and no analytic term); the
     quasi-static drive cycle bills it (``map``, no ``clamp``)."""
@@ -326,3 +328,30 @@ def test_map_acts_in_efficiency_and_the_drive_cycle(params, tmp_path):
     cyc = quasi_static_cycle(p, read_trace(str(trace)), strategies=("sf1.3",))
     s = cyc.summary("sf1.3")
     assert s["energy_J"]["map"] > 0 and s["energy_J"]["clamp"] == 0, s
+
+
+@pytest.mark.slow
+def test_a_loss_map_travels_in_the_fmu(params, tmp_path):
+    """``fmu export --loss-map map.csv``: the FMU carries the map's file, and its unit starts
+    from the trim of the model on that map (bitwise the native trim)."""
+    import zipfile
+
+    import empact
+    from empact.fmu import CoSimulation
+
+    m = _smooth_map()
+    path = tmp_path / "map.csv"
+    path.write_text(m.to_csv())
+    res = CliRunner().invoke(main, ["fmu", "export", "--out", str(tmp_path / "m.fmu"),
+                                    "--loss-map", str(path)])
+    assert res.exit_code == 0, res.output
+    folder = tmp_path / "x"
+    with zipfile.ZipFile(tmp_path / "m.fmu") as z:
+        z.extractall(folder)
+        assert z.read("resources/loss_map.csv") == path.read_bytes()
+    unit = CoSimulation.from_folder(folder / "resources")
+    assert unit.model.options.loss_map == m
+    point = params.operating
+    model = empact.nonlinear_model(params, drive="speed", loss_map=m,
+                                   reference_ratio=point.r_g)
+    assert np.array_equal(unit.op.x, empact.trim(model, point).x)
