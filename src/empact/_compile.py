@@ -154,8 +154,9 @@ def _complex_step_references(model, x: np.ndarray, u: np.ndarray) -> None:
     TT.table_mu_max(1.0 + 1e-30j, curves, 0)
     TT.table_peak(1.0, curves, 0)
     # the measured loss map's law, real and complex (against the complex step)
-    lmap = LossMap(r_g=[0.5, 2.0], omega_in=[100.0, 400.0], T_in=[0.0, 200.0],
-                   F_s=[5e3, 3e4], T_loss=np.ones((2, 2, 2, 2)), source="compile").encode()
+    lmap = LossMap(r_g=np.array([0.5, 2.0]), omega_in=np.array([100.0, 400.0]),
+                   T_in=np.array([0.0, 200.0]), F_s=np.array([5e3, 3e4]),
+                   T_loss=np.ones((2, 2, 2, 2)), source="compile").encode()
     LT.table_loss(50.0, 0.0, 300.0, 1e4, 1.0, lmap, 0)
     LT.table_loss(50.0 + 1e-30j, 0j, 300.0 + 0j, 1e4 + 0j, 1.0 + 0j, lmap, 0)
     LT.table_loss_d(50.0, 0.0, 300.0, 1e4, 1.0, lmap, 0)

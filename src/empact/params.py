@@ -343,10 +343,11 @@ class Params:
                 f"operating.r_g = {self.operating.r_g!r}: outside the geometric ratio range "
                 f"[{lo:.4g}, {hi:.4g}] of this variator")
 
-    def _load_table(self, name: str, section: str, load: Any, kind: type, what: str) -> None:
+    def _load_table(self, name: str, section: str, load: Any, kind: Any, what: str) -> None:
         """Check the file of a measured table (``[section] table``) and load it once into the
         field `name` (its file in ``name_file``): the traction curves, the loss map."""
-        file, table = getattr(self, f"{name}_file"), getattr(self, name)
+        file: Any = getattr(self, f"{name}_file")
+        table: Any = getattr(self, name)
         if table is not None and not isinstance(table, kind):
             raise ParameterError(f"{name} = {table!r}: must be a {kind.__name__} "
                                  f"({load.__module__}.{load.__name__})")

@@ -41,6 +41,7 @@ from ..nonlinear.model import nonlinear_model
 from ..nonlinear.scenario import Scenario, load_scenario
 from ..params import Params, parameter_sources
 from .claims import Claim
+from .machine import loss_terms
 
 __all__ = ["DESIGN_GRID", "SHIPPED_DESIGNS", "ControlSection", "StudiesSection", "control",
            "control_studies", "shipped_controller", "MC_RUNS", "MC_SCENARIO",
@@ -421,7 +422,8 @@ def _energy(run: ClosedLoopResult, params: Params) -> dict[str, Any]:
     kin = model.options.kinematics if model is not None else "equal-translation"
     e = run_energy(run.result, params, kin)
     d = e["duration"]
-    losses = {k: v / d for k, v in e["losses"].items()}
+    terms = loss_terms(model) if model is not None else tuple(e["losses"])
+    losses = {k: v / d for k, v in e["losses"].items() if k in terms}
     total = sum(losses.values())
     return {"variator_losses": losses, "variator_losses_total": total,
             "actuation": e["servo_electrical"] / d, "pump": e["pump"] / d,

@@ -192,20 +192,20 @@ class LossMap:
                                  f"(r_g, omega_in, T_in, F_s) {shape}")
         for check, what in ((~np.isfinite(L), "must be finite"),
                             (~(L >= 0), "must be >= 0 [N m] (a loss)")):
-            bad = np.argwhere(check)
-            if bad.size:
-                raise ParameterError(f"{src}: T_loss = {L[tuple(bad[0])]:g} at "
-                                     f"{self._point(axes, bad[0])}: {what}")
+            where = np.argwhere(check)
+            if where.size:
+                raise ParameterError(f"{src}: T_loss = {L[tuple(where[0])]:g} at "
+                                     f"{self._point(axes, where[0])}: {what}")
         if shape[2] > 1:
             slope = np.diff(L, axis=2) / np.diff(axes["T_in"])[None, None, :, None]
-            bad = np.argwhere(~(np.abs(slope) < 1.0))
-            if bad.size:
-                i = tuple(bad[0])
-                at = self._point(axes, bad[0], skip="T_in")
+            steep = np.argwhere(~(np.abs(slope) < 1.0))
+            if steep.size:
+                k = tuple(int(v) for v in steep[0])
+                at = self._point(axes, steep[0], skip="T_in")
                 T = axes["T_in"]
                 raise ParameterError(
-                    f"{src}: T_loss changes by {slope[i]:.4g} N m per N m of input torque "
-                    f"between T_in = {T[i[2]]:g} and {T[i[2] + 1]:g} N m at {at}: "
+                    f"{src}: T_loss changes by {slope[k]:.4g} N m per N m of input torque "
+                    f"between T_in = {T[k[2]]:g} and {T[k[2] + 1]:g} N m at {at}: "
                     "|dT_loss/dT_in| must be < 1 (the output torque must rise with the input "
                     "torque)")
         for name, a in axes.items():
