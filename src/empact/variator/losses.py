@@ -366,7 +366,10 @@ def load_loss_map(path: str | os.PathLike[str]) -> LossMap:
     ``T_in``, ``F_s`` and either ``T_loss`` (the torque loss at the primary [N m]) or
     ``efficiency`` (the torque efficiency ``1 - T_loss / T_in`` [-], at input torques > 0),
     one row per point of a full tensor grid (every combination of the four columns' values
-    exactly once, rows in any order), as a test rig measures it.
+    exactly once, rows in any order), as a test rig measures it: the rig sets ratio, speed,
+    input torque and clamping force and records each combination.  Scattered points are
+    refused (a missing combination is an error): a grid interpolates without a
+    triangulation's arbitrary choices, and the compiled law reproduces it to rounding.
 
     A header cell may carry its unit in brackets (``omega_in [rpm]``, ``T_in [N m]``, ``F_s
     [N]``, ``efficiency [-]``), converted to SI as in `empact.identification.load_records`
