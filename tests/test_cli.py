@@ -399,6 +399,9 @@ def files(tmp_path, monkeypatch):
     w("targets.toml", GOOD_TARGETS)
     w("bad_targets.toml", 'free = ["driveline.k_xx"]\n')
     w("bad_traction.csv", "r_g,nu,mu\n1,0,0\n1,0.02,0.09\n1,0.01,0.1\n")
+    w("neg_map.csv", "r_g,omega_in,T_in [N m],F_s,T_loss [N m]\n1,300,0,1e4,1\n1,300,50,1e4,-1\n")
+    w("hole_map.csv", "r_g,omega_in,T_in,F_s,T_loss\n1,300,0,1e4,1\n2,300,50,1e4,2\n")
+    w("ok_map.csv", "r_g,omega_in,T_in,F_s,T_loss\n1,300,0,1e4,1\n1,300,50,1e4,2\n")
     w("sc_input.toml", SCENARIO + "[inputs]\nT_zz = [[0, 1]]\n")
     w("sc_times.toml", SCENARIO + "[inputs]\nT_l = [[0.5, 1], [0.2, 3]]\n")
     w("sc_rtol.toml", SCENARIO + "[solver]\nrtol = 2.0\n")
@@ -670,6 +673,23 @@ BAD_INPUT = [
     (["cycle", "--cycle", "nedc", "--strategies", "sf2"], "--strategies = 'sf2': must be one"),
     (["cycle", "--cycle", "nedc", "--json-out", "out.json"],
      "--json-out out.json: exists; give --force"),
+    # a measured loss map (issue 32): read while the options are parsed
+    (["efficiency", "--loss-map", "neg_map.csv"],
+     "--loss-map: neg_map.csv: T_loss = -1 at r_g = 1, omega_in = 300 rad/s, T_in = 50 N m"),
+    (["cycle", "--cycle", "nedc", "--loss-map", "nosuch_map.csv"], "nosuch_map.csv"),
+    (["simulate", "--example", "servo-torque-steps", "--loss-map", "hole_map.csv"],
+     "not a full grid: 2 rows for 2 x 1 x 2 x 1 = 4 points"),
+    (["linearize", "--loss-map", "bad_traction.csv"], "must name the columns r_g, omega_in"),
+    (["nmp", "--loss-map", "sp_ok.toml"], "a loss map must be .csv, not '.toml'"),
+    (["control", "simulate", "--example", "slip-load-step-r1", "--loss-map", "neg_map.csv"],
+     "must be >= 0 [N m]"),
+    (["control", "check", "pi.json", "--family", "f.npz", "--loss-map", "ok_map.csv"],
+     "--loss-map: give it with the design family, not with --family"),
+    (["plants", "--loss-map", ""], "--loss-map: an empty value"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--analysis", "slip", "--loss-map",
+      "ok_map.csv"], "--loss-map: the slip analysis's linear slip model has no torque loss"),
+    (["identify", "--loss-map", "hole_map.csv"], "not a full grid"),
+    (["rig", "--loss-map", "neg_map.csv", "--out", "r.csv"], "must be >= 0 [N m]"),
     (["nmp", "--fmax", "-1"], "--fmax = -1: allowed range is (0, 100000]"),
     (["nmp", "--ratios", "9"], "--ratios = 9: outside the geometric ratio range"),
     (["nmp", "--speed", "-300"], "--speed = -300"),

@@ -208,7 +208,11 @@ def test_saving_table_in_energy():
     p = default_params()
     n = "slip-small-step-r1"
     sc = {n: load_scenario(control_example_path(n))}
-    rows = _saving(p, sc, {n: run_closed_loop(sc[n], p)}, [n])
+    from empact.control.closed_loop import safety_factor_twin
+
+    twins = {(n, md): run_closed_loop(safety_factor_twin(sc[n], p, md), p)
+             for md in ("ratio-blind", "ratio-aware")}
+    rows = _saving(p, sc, {n: run_closed_loop(sc[n], p)}, [n], twins)
     assert [r["strategy"] for r in rows] == ["slip control (tau = 0.9)",
                                             "safety factor 1.3, ratio-blind mu", HYDRAULIC_ROW,
                                             "safety factor 1.3, ratio-aware mu"]
@@ -223,3 +227,34 @@ def test_saving_table_in_energy():
         assert r["actuation"] > 0 and r["pump"] > 0
     assert rows[2]["actuation"] == rows[1]["pump"]
     assert rows[2]["mean_clamping_force"] == rows[1]["mean_clamping_force"]
+
+
+def test_sensitivity_sentence_names_the_flips_and_the_corners():
+    """`sensitivity_text` (the claim's sentence) lists the band ends where a scenario's
+    saving changes sign, the parameters that keep it, the corners and the steady state, from
+    the rows alone (a synthetic table: the rule, not the machine)."""
+    from empact.reproduction.control import sensitivity_text
+
+    steady = {"least": -0.01, "largest": 0.02, "untrimmed": []}
+    rows = [{"case": "shipped", "parameter": "", "value": {}, "saving": {"a": 0.05, "b": 0.01},
+             "steady": steady},
+            {"case": "low", "parameter": "x.p", "value": 1.0,
+             "saving": {"a": 0.02, "b": -0.03}, "steady": steady},
+            {"case": "high", "parameter": "x.p", "value": 2.0,
+             "saving": {"a": 0.08, "b": 0.02}, "steady": steady},
+            {"case": "low", "parameter": "x.q", "value": 3.0,
+             "saving": {"a": 0.04, "b": 0.005}, "steady": steady},
+            {"case": "high", "parameter": "x.q", "value": 4.0,
+             "saving": {"a": 0.06, "b": 0.015}, "steady": steady},
+            {"case": "worst corner", "parameter": "", "value": {"x.p": 1.0, "x.q": 3.0},
+             "saving": {"a": -0.01, "b": -0.05},
+             "steady": {**steady, "untrimmed": ["sf1.3 at 25 N m: no trim"]}},
+            {"case": "best corner", "parameter": "", "value": {"x.p": 2.0, "x.q": 4.0},
+             "saving": {"a": 0.1, "b": 0.03}, "steady": steady}]
+    text = sensitivity_text(rows)
+    assert "the same sign at both ends of x.q;" in text
+    assert "the sign flips at x.p = 1 (b -3.0 %)" in text
+    assert "worst corner (each parameter at the end that lowers the mean saving): a -1.0 %, " \
+           "b -5.0 %" in text
+    assert "-1.0 to +2.0 % with the shipped values" in text
+    assert "where sf1.3 at 25 N m: no trim" in text

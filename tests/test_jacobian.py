@@ -20,6 +20,7 @@ from empact.nonlinear import _tangent as KT
 from empact.nonlinear.equilibrium import trim
 from empact.nonlinear.model import nonlinear_model
 from empact.params import OperatingPoint
+from empact.variator.losses import LossMap
 from empact.variator.shift_law import CreepMap
 from empact.variator.thrust_ratio import TabulatedThrustRatio
 
@@ -35,6 +36,14 @@ CMAP = CreepMap((0.5, 1.0, 2.0), (np.array([5e3, 2e4]), np.array([5e3, 1e4, 3e4]
                 (np.array([1e-3, 2e-3]), np.array([2e-3, 2.5e-3, 4e-3]),
                  np.array([3e-3, 5e-3])), source="test")
 
+#: a measured loss map over part of the operating range (the points leave it too: its held
+#: values), curved in every variable: ``0.8 + 0.03 |T| + 2e-5 F / r + 4e-6 w^2`` [N m]
+_LG = dict(r_g=np.array([0.5, 1.0, 2.0]), omega_in=np.array([100.0, 300.0, 500.0]),
+           T_in=np.array([-20.0, 20.0, 80.0, 200.0]), F_s=np.array([4e3, 15e3, 40e3]))
+_LM = np.meshgrid(*_LG.values(), indexing="ij")
+LMAP = LossMap(**_LG, T_loss=0.8 + 0.03 * np.abs(_LM[2]) + 2e-5 * _LM[3] / _LM[0]
+               + 4e-6 * _LM[1] ** 2, source="test")
+
 #: model options: every state layout, every shift law, tables, friction
 CASES = {
     "traction": dict(),
@@ -49,6 +58,8 @@ CASES = {
                    coulomb_ss=0.1),
     "shafai-torque": dict(shift_law="shafai", damping="none"),
     "tables": dict(thrust_ratio=KMAP, creep_map=CMAP, ratio_control=True),
+    "loss-map": dict(loss_map=LMAP, drive="speed", ratio_control=True),
+    "loss-map-locked": dict(loss_map=LMAP, belt="locked"),
 }
 
 
@@ -115,7 +126,7 @@ def test_forward_mode_equals_complex_step(params, name):
         assert np.array_equal(dx0, dx1) and np.array_equal(y0, y1), (name, k)
 
 
-@pytest.mark.parametrize("name", ["traction", "all-loops", "shafai", "tables"])
+@pytest.mark.parametrize("name", ["traction", "all-loops", "shafai", "tables", "loss-map"])
 def test_outside_the_knots_and_saturated(params, name):
     """Ratios outside the traction curve's outer knots (its coefficients held constant), the
     creep law's tanh saturated by a fast shift, a pulley running backwards (|omega| branch)."""

@@ -113,3 +113,36 @@ def test_drive_cycle_claims(params):
     assert not by["cycle.slip_control_saving"].shown
     assert by["cycle.slip_control_saving"].values["saving_hydraulic"] > 0
     assert math.isfinite(by["cycle.slip_control_saving"].values["saving_servo"])
+
+
+def test_energy_saving_sign_at_a_band_end_is_recomputed(params, claims):
+    """Issue 32: the claim ``control.clamping_saving`` states the energy saving's sign over
+    the loss and servo parameters' plausible bands; at one band end (``losses.lambda_F`` at
+    its low end, 1.5e-3) the saving it records equals a recomputation of the same two runs
+    (the same code: 1e-12), and its sentence names that end among the flips exactly when a
+    scenario's saving changes sign there."""
+    from empact.control.closed_loop import (
+        control_example_path,
+        run_closed_loop,
+        safety_factor_twin,
+    )
+    from empact.nonlinear.scenario import load_scenario
+    from empact.params import parameter_sources
+    from empact.reproduction.control import _energy_saving
+
+    claim = next(c for c in claims if c["key"] == "control.clamping_saving")
+    low = float(parameter_sources()["losses.lambda_F"]["band"][0])
+    p = params.from_dotted({"losses.lambda_F": low})
+    n = "slip-load-step-r1"
+    sc = load_scenario(control_example_path(n))
+    got = _energy_saving((run_closed_loop(sc, p),
+                          run_closed_loop(safety_factor_twin(sc, p, "ratio-blind"), p)), p)
+    stated = claim["values"][f"{n}@energy@losses.lambda_F={low:g}"]
+    assert got == pytest.approx(stated, rel=1e-12, abs=1e-12)
+    v = claim["values"]
+    names = [k.split("@")[0] for k in v if k.endswith(f"@energy@losses.lambda_F={low:g}")]
+    flips = [m for m in names
+             if (v[f"{m}@energy@losses.lambda_F={low:g}"] > 0) != (v[f"{m}@energy"] > 0)]
+    assert (f"losses.lambda_F = {low:g} (" in claim["computed"]) == bool(flips)
+    if n in flips:
+        assert f"{n} {100 * got:+.1f} %" in claim["computed"]

@@ -243,6 +243,7 @@ NOT_RESULTS = {
     "empact.params.Params": "the parameter set (to_dict: its TOML layout)",
     "empact.params.DampingParams": "a parameter section",
     "empact.variator.shift_law.CreepDamping": "a law (creep damping)",
+    "empact.variator.losses.LossMap": "a law (a measured loss map; its file: to_csv)",
     "empact.variator.shift_law.CreepMap": "a law (tabulated creep)",
     "empact.variator.thrust_ratio.AnalyticThrustRatio": "a law",
     "empact.variator.thrust_ratio.TabulatedThrustRatio": "a law (table)",

@@ -19,6 +19,8 @@ Variator geometry and traction (eqs. 1, 4-6; Fig. 10)
    ratio_range        -- the variator's geometric ratio range
    traction_from_params, load_traction, traction_curves
                       -- analytic and tabulated traction curves mu(nu, r_g)
+   load_loss_map      -- a measured torque-loss map T_loss(r_g, omega_in, T_in, F_s), in
+                         place of the analytic losses of ``[losses]``
 
 Axial physics of the variator (the machine as built)
 ====================================================
@@ -94,7 +96,7 @@ _CATALOGUE = {
     "variator_state": "variator.geometry", "belt_length": "variator.geometry",
     "ratio_range": "variator.geometry",
     "traction_from_params": "variator.traction", "load_traction": "variator.traction",
-    "traction_curves": "variator.traction",
+    "traction_curves": "variator.traction", "load_loss_map": "variator.losses",
     "creep_damping": "variator.shift_law", "shift_rate": "variator.shift_law",
     "thrust_ratio_from_params": "variator.thrust_ratio",
     "load_thrust_ratio": "variator.thrust_ratio",

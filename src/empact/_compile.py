@@ -35,8 +35,10 @@ from .nonlinear.model import nonlinear_model
 from .nonlinear.scenario import load_scenario
 from .nonlinear.simulation import simulate
 from .params import OperatingPoint, default_params
+from .variator import _loss_table as LT
 from .variator import _traction_table as TT
 from .variator.geometry import secondary_radius
+from .variator.losses import LossMap
 from .variator.thrust_ratio import TabulatedThrustRatio
 from .variator.traction import TabulatedTraction
 
@@ -52,7 +54,8 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     ``_rosenbrock.py`` inline the right-hand side and Jacobian of ``_kernel.py`` and keep the
     version they were compiled with after ``_kernel.py`` changes (numba issue 6845); so do
     the kernel with the variator's compiled laws (``variator/_laws.py``,
-    ``variator/_compiled.py``) and the tabulated traction law (``variator/_traction_table.py``),
+    ``variator/_compiled.py``), the tabulated traction law (``variator/_traction_table.py``)
+    and the measured loss map (``variator/_loss_table.py``),
     the law's sample (``control/_law_core.py``) with those and the kernel's traction peak and
     creep law, and the compiled closed loop (``control/_loop_core.py``) with the kernel, the
     integrators and the law's sample: their caches are dropped likewise.  The test session
@@ -77,7 +80,7 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     # the variator's laws, compiled into the kernel and the law's sample, and the tabulated
     # traction law the kernel compiles in
     laws = [here / "variator" / "_laws.py", here / "variator" / "_compiled.py",
-            here / "variator" / "_traction_table.py"]
+            here / "variator" / "_traction_table.py", here / "variator" / "_loss_table.py"]
     nonlinear = list((here / "nonlinear").glob("*.py")) + laws
     # the law's sample calls the kernel (traction peak, creep law)
     law_core = [here / "control" / "_law_core.py"] + nonlinear
@@ -150,6 +153,14 @@ def _complex_step_references(model, x: np.ndarray, u: np.ndarray) -> None:
     TT.table_mu_d(0.01, 1.0, curves, 0)
     TT.table_mu_max(1.0 + 1e-30j, curves, 0)
     TT.table_peak(1.0, curves, 0)
+    # the measured loss map's law, real and complex (against the complex step)
+    lmap = LossMap(r_g=np.array([0.5, 2.0]), omega_in=np.array([100.0, 400.0]),
+                   T_in=np.array([0.0, 200.0]), F_s=np.array([5e3, 3e4]),
+                   T_loss=np.ones((2, 2, 2, 2)), source="compile").encode()
+    LT.table_loss(50.0, 0.0, 300.0, 1e4, 1.0, lmap, 0)
+    LT.table_loss(50.0 + 1e-30j, 0j, 300.0 + 0j, 1e4 + 0j, 1.0 + 0j, lmap, 0)
+    LT.table_loss_d(50.0, 0.0, 300.0, 1e4, 1.0, lmap, 0)
+    model.torque_loss(1.0, 300.0, 50.0, 1e4)
 
 
 def compile_all() -> float:

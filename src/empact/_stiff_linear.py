@@ -131,7 +131,8 @@ def stepper() -> tuple[Callable, Callable[[float], np.ndarray]]:
                   np.concatenate([A_LIN.ravel(), B_LIN.ravel()]), np.full(4, -1, np.int64),
                   np.array([[0.0, T_END]]), np.array([[U0, U0 + U1 * T_END]]),
                   np.array([2], np.int64), np.array([T_END]), huge, huge, 1e-14, h, 0.0,
-                  10 ** 7, X, Y, np.arange(4, dtype=np.int64), np.zeros((4, 4)), True)
+                  10 ** 7, X, Y, np.arange(4, dtype=np.int64), np.zeros((4, 4)), True,
+                  np.empty(0))
         return out, x, X
 
 

@@ -74,12 +74,12 @@ REFERENCE = "hydraulic-sf1.3"
 RATIO_LIMITS = (0.43, 2.25)
 #: the lowest clamping force [N]: the design grid's lowest clamping (3 kN)
 MIN_CLAMPING = 3000.0
-#: the energy terms [J] besides the wheels': the variator's losses by their kernel names
-#: without ``P_loss_``, the final drive, the launch clutch, the actuation (the servos'
-#: electrical energy or the pump's shaft energy: the other is zero) and the alternator
-TERMS = ("slip", "clamp", "load", "drag", "final_drive", "launch", "servo_electrical", "pump",
-         "alternator")
 _LOSS = {k: k.removeprefix("P_loss_") for k in VARIATOR_LOSSES}
+#: the energy terms [J] besides the wheels': the variator's losses by their kernel names
+#: without ``P_loss_`` (``map``: a measured loss map's, which replaces ``clamp``, ``load`` and
+#: ``drag``), the final drive, the launch clutch, the actuation (the servos' electrical
+#: energy or the pump's shaft energy: the other is zero) and the alternator
+TERMS = (*_LOSS.values(), "final_drive", "launch", "servo_electrical", "pump", "alternator")
 
 
 @dataclass(frozen=True, eq=False)

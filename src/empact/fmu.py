@@ -79,6 +79,7 @@ from .nonlinear.scenario import DEFAULT_METHOD, METHODS
 from .nonlinear.simulation import Stepper
 from .operating import OperatingPoint
 from .params import Params, dumps_params, load_params
+from .variator.losses import load_loss_map
 from .variator.shift_law import load_creep_map
 from .variator.thrust_ratio import load_thrust_ratio
 from .variator.traction import load_traction
@@ -92,11 +93,12 @@ MODEL_IDENTIFIER = "EmpactCVT"
 PARAMETER_SECTIONS = ("variator", "actuation", "driveline", "traction", "shift")
 #: the model options an FMU is exported with (`ModelOptions`)
 EXPORTED_OPTIONS = ("drive", "load", "damping", "kinematics", "shift_law", "traction",
-                    "thrust_ratio", "creep_map")
+                    "thrust_ratio", "creep_map", "loss_map")
 #: the measured tables among them, each with its reader (copied into the FMU)
 _TABLES: dict[str, Callable[[Path], Any]] = {"traction": load_traction,
                                              "thrust_ratio": load_thrust_ratio,
-                                             "creep_map": load_creep_map}
+                                             "creep_map": load_creep_map,
+                                             "loss_map": load_loss_map}
 #: the closed loop's reference inputs (ratio, and the slip set-point by its torque ratio)
 REFERENCE_INPUTS = ("r_g_ref", "tau_ref")
 _SPEC = "empact_fmu.json"
@@ -544,8 +546,11 @@ class CoSimulation:
         files = []
         if options.get("traction") is None and params.traction_table is not None:
             options["traction"] = params.traction_table  # the file's table, as an option
+        if options.get("loss_map") is None and params.loss_map is not None:
+            options["loss_map"] = params.loss_map  # likewise the file's loss map
         data = params.to_dict()
         data.get("traction", {}).pop("table", None)
+        data.get("losses", {}).pop("table", None)
         for key in _TABLES:
             if options.get(key) is not None:
                 src = Path(options[key].source)
@@ -754,8 +759,8 @@ def export_fmu(path: str | Path, params: Params, *, options: Mapping[str, Any] |
         The parameter set.
     options : mapping, optional
         Model options (`EXPORTED_OPTIONS`: ``drive``, ``load``, ``damping``, ``kinematics``,
-        ``shift_law``; the measured ``traction``, ``thrust_ratio``, ``creep_map`` as their
-        readers return them, copied into the FMU from their files).
+        ``shift_law``; the measured ``traction``, ``thrust_ratio``, ``creep_map``,
+        ``loss_map`` as their readers return them, copied into the FMU from their files).
     point : OperatingPoint, optional
         The starting point (default ``params.operating``).
     controller : str or Path, optional

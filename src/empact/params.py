@@ -18,7 +18,8 @@ A parameter set has one section per concept::
     [hydraulic]         a hydraulic actuation of the same variator, the reference to compare
                         with (`empact.hardware`, billed by `empact.actuation_energy`)
     [losses]            the variator's losses beside the slip: clamping, load, drag
-                        (`empact.variator.losses`)
+                        (`empact.variator.losses`); ``table = "map.csv"``: a measured
+                        loss map instead (path relative to the file)
     [sensors]           the closed loop's instruments: delay, encoders, noise
     [vehicle]           the car around the CVT: mass, wheels, final drive, road load
                         (`empact.vehicle`)
@@ -58,7 +59,7 @@ from .operating import (
     check_one_slip,
 )
 from .variator.geometry import VariatorParams, ratio_range
-from .variator.losses import LossParams
+from .variator.losses import LossMap, LossParams, load_loss_map
 from .variator.shift_law import ShiftParams
 from .variator.thrust_ratio import ThrustRatioParams
 from .variator.traction import TabulatedTraction, TractionParams, load_traction
@@ -297,6 +298,14 @@ class Params:
         the nonlinear model's default traction (`empact.nonlinear.nonlinear_model`; an
         explicit ``traction`` option wins).  Not compared: two sets are equal when they name
         the same file.
+    loss_map_file : str or None
+        The file of a measured loss map the parameter file names (``[losses] table =
+        "map.csv"``, resolved relative to that file by `load_params`), or None: the analytic
+        losses of ``[losses]``.  What `to_dict` writes back as ``losses.table``.
+    loss_map : LossMap or None
+        That map, loaded and validated once (`empact.variator.losses.load_loss_map`): the
+        nonlinear model's default losses (an explicit ``loss_map`` option wins).  Not
+        compared, as `traction_table`.
     """
 
     variator: VariatorParams
@@ -316,9 +325,14 @@ class Params:
     engine: EngineParams = EngineParams()
     traction_table_file: str | None = None
     traction_table: TabulatedTraction | None = field(default=None, compare=False, repr=False)
+    loss_map_file: str | None = None
+    loss_map: LossMap | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        self._load_traction_table()
+        self._load_table("traction_table", "traction", load_traction, TabulatedTraction,
+                         "a traction table (a string: .csv or .toml")
+        self._load_table("loss_map", "losses", load_loss_map, LossMap,
+                         "a loss map (a string: .csv")
         if self.shift.k_D * self.shift.F_ref >= 0.9:
             raise ParameterError(
                 f"shift.k_D = {self.shift.k_D:g}: with F_ref = {self.shift.F_ref:g} N the "
@@ -329,38 +343,41 @@ class Params:
                 f"operating.r_g = {self.operating.r_g!r}: outside the geometric ratio range "
                 f"[{lo:.4g}, {hi:.4g}] of this variator")
 
-    def _load_traction_table(self) -> None:
-        """Check the measured traction table's file and load it once (`traction_table`)."""
-        file, table = self.traction_table_file, self.traction_table
-        if table is not None and not isinstance(table, TabulatedTraction):
-            raise ParameterError(f"traction_table = {table!r}: must be a TabulatedTraction "
-                                 "(empact.variator.traction.load_traction)")
+    def _load_table(self, name: str, section: str, load: Any, kind: Any, what: str) -> None:
+        """Check the file of a measured table (``[section] table``) and load it once into the
+        field `name` (its file in ``name_file``): the traction curves, the loss map."""
+        file: Any = getattr(self, f"{name}_file")
+        table: Any = getattr(self, name)
+        if table is not None and not isinstance(table, kind):
+            raise ParameterError(f"{name} = {table!r}: must be a {kind.__name__} "
+                                 f"({load.__module__}.{load.__name__})")
         if file is None:
             if table is not None:  # given as an object: its source names it
-                object.__setattr__(self, "traction_table_file", table.source)
+                object.__setattr__(self, f"{name}_file", table.source)
             return
         if not isinstance(file, (str, os.PathLike)):
-            raise ParameterError(f"traction.table = {file!r}: must be the path of a traction "
-                                 "table (a string: .csv or .toml, relative to the parameter "
-                                 "file)")
-        object.__setattr__(self, "traction_table_file", os.fspath(file))
+            raise ParameterError(f"{section}.table = {file!r}: must be the path of {what}, "
+                                 "relative to the parameter file)")
+        object.__setattr__(self, f"{name}_file", os.fspath(file))
         if table is None:
             try:
-                object.__setattr__(self, "traction_table", load_traction(file))
+                object.__setattr__(self, name, load(file))
             except ParameterError as exc:  # (its message starts with the path: said once)
                 why = str(exc).removeprefix(f"{os.path.normpath(file)}: ")
-                raise ParameterError(f"traction.table = {os.fspath(file)!r}: {why}") from None
+                raise ParameterError(f"{section}.table = {os.fspath(file)!r}: {why}") from None
 
     # -- conversion -----------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """Nested plain dictionary, as written to TOML (variables of the operating point that
         are not given are left out; a measured traction table as its file,
-        ``traction.table``)."""
+        ``traction.table``, a measured loss map as ``losses.table``)."""
         d = {f.name: asdict(getattr(self, f.name)) for f in fields(self)
-             if not f.name.startswith("traction_table")}
+             if not f.name.startswith(("traction_table", "loss_map"))}
         d["operating"] = self.operating.to_dict()
         if self.traction_table_file is not None:
             d["traction"]["table"] = self.traction_table_file
+        if self.loss_map_file is not None:
+            d["losses"]["table"] = self.loss_map_file
         return d
 
     @classmethod
@@ -393,12 +410,16 @@ class Params:
             for name in _OPTIONAL_SECTIONS:  # every key has a default
                 merged.setdefault(name, {})
             file = merged["traction"].pop("table", None)
-            # the base's table is reused, not read again, while the file stays the same
+            map_file = merged["losses"].pop("table", None)
+            # the base's tables are reused, not read again, while the files stay the same
             table = base.traction_table if base is not None \
                 and file == base.traction_table_file else None
+            loss_map = base.loss_map if base is not None \
+                and map_file == base.loss_map_file else None
             sections = {name: kind(**merged[name]) for name, kind in _SECTIONS.items()}
             return cls(damping=DampingParams(**levels, omega_pulley=damping["omega_pulley"]),
-                       **sections, traction_table_file=file, traction_table=table)
+                       **sections, traction_table_file=file, traction_table=table,
+                       loss_map_file=map_file, loss_map=loss_map)
         except KeyError as exc:
             raise ParameterError(f"{source}: missing section or key {exc.args[0]!r}") from None
         except TypeError as exc:  # missing fields of a section
@@ -498,6 +519,7 @@ def _schema() -> dict[str, Any]:
     names = lambda kind: {f.name: None for f in fields(kind)}  # noqa: E731
     schema: dict[str, Any] = {name: names(kind) for name, kind in _SECTIONS.items()}
     schema["traction"]["table"] = None  # a file of measured curves (`Params.traction_table`)
+    schema["losses"]["table"] = None  # a measured loss map (`Params.loss_map`)
     schema["damping"] = {"omega_pulley": None,
                          **{lvl: names(DampingLevel) for lvl in DAMPING_LEVELS}}
     return schema
@@ -656,7 +678,8 @@ def load_params(path: str | os.PathLike[str] | None = None) -> Params:
         A TOML parameter file with any subset of the shipped keys (``[section] key = value``,
         SI units); the other keys keep their shipped values. `None`: the shipped set.
         ``[traction] table = "curves.csv"`` names measured traction curves (a path relative
-        to this file; `Params.traction_table`).
+        to this file; `Params.traction_table`), ``[losses] table = "map.csv"`` a measured
+        loss map (`Params.loss_map`).
 
     Returns
     -------
@@ -678,10 +701,11 @@ def load_params(path: str | os.PathLike[str] | None = None) -> Params:
     if path is None:
         return default_params()
     data = read_toml(path)
-    section = data.get("traction")
-    if isinstance(section, dict) and isinstance(section.get("table"), str):
-        section["table"] = os.path.abspath(os.path.join(os.path.dirname(path),
-                                                        section["table"]))
+    for name in ("traction", "losses"):
+        section = data.get(name)
+        if isinstance(section, dict) and isinstance(section.get("table"), str):
+            section["table"] = os.path.abspath(os.path.join(os.path.dirname(path),
+                                                            section["table"]))
     return Params.from_dict(data, base=default_params(), source=str(path))
 
 

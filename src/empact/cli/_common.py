@@ -27,6 +27,7 @@ import os
 import stat
 import sys
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
@@ -49,7 +50,7 @@ __all__ = ["sweep_options", "sweep_from_options",
            "OutputFile", "check_outputs", "quiet_option", "Interrupted",
            "EXIT_INTERRUPTED", "parse_list", "formats_option", "parse_choices", "schema_version",
            "traction_option", "check_path", "compact_json", "closing_line", "guard_params",
-           "shown_path", "MIN_FREE_BYTES",
+           "shown_path", "MIN_FREE_BYTES", "loss_map_option",
            "announce_compilation", "COMPILING"]
 
 #: suffixes of ``--plot`` files (the figure's format)
@@ -536,6 +537,30 @@ traction_option = click.option(
     callback=_load_traction,
     help="Measured traction curves mu(nu, r_g): .csv (columns r_g,nu,mu) or .toml "
          "([[curve]] tables); default: the analytic magic formula of [traction].")
+
+
+def _load_loss_map(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
+    """``--loss-map FILE`` read while the options are parsed (before any work): a bad map is
+    one line and exit 2."""
+    if value is None:
+        return None
+    from ..variator.losses import load_loss_map
+
+    try:
+        return load_loss_map(value)
+    except ParameterError as exc:
+        raise InputError(f"--loss-map: {exc}") from None
+
+
+#: ``--loss-map FILE``: a measured torque-loss map for every command that builds the
+#: nonlinear model (its trims, simulations, efficiency maps and drive cycles); the value
+#: (``loss_map``) is a `LossMap` or None, applied to the parameter set (`get_params`)
+loss_map_option = click.option(
+    "--loss-map", "loss_map", type=click.Path(dir_okay=False), default=None,
+    callback=_load_loss_map,
+    help="Measured torque-loss map T_loss(r_g, omega_in, T_in, F_s): .csv (columns "
+         "r_g,omega_in,T_in,F_s and T_loss [N m] or efficiency [-], a full grid); replaces "
+         "the parameter file's [losses] terms (clamping, load, drag); default: those.")
 formats_option = click.option(
     "--formats", default="png", show_default=True,
     help="Figure formats, comma-separated: png, svg, pdf (png,svg or png,pdf adds vector "
@@ -662,12 +687,16 @@ def parse_list(text: str, option: str, *, most: int, example: str = "0.5,1,2") -
     return values
 
 
-def get_params(path: str | None) -> Params:
+def get_params(path: str | None, loss_map: Any = None) -> Params:
     """Load parameters and check their physical plausibility (`empact.plausibility`, imported
-    here: it builds the linear models, which ``empact --help`` should not load)."""
+    here: it builds the linear models, which ``empact --help`` should not load); a measured
+    `loss_map` (``--loss-map``) replaces the file's losses."""
     from ..plausibility import check_plausible
 
-    return check_plausible(load_params(path), str(path) if path else "default.toml")
+    params = check_plausible(load_params(path), str(path) if path else "default.toml")
+    if loss_map is not None:
+        params = replace(params, loss_map=loss_map, loss_map_file=loss_map.source)
+    return params
 
 
 #: least free space in an output's file system before a command starts [bytes]

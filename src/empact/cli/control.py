@@ -23,6 +23,7 @@ from ._common import (
     force_option,
     get_params,
     json_options,
+    loss_map_option,
     operating_values,
     params_option,
     quiet_option,
@@ -136,19 +137,20 @@ def _summary(fam) -> dict:
               help="Write the family (.npz, which `empact control check` reads; .json or "
                    ".mat); an existing file only with --force.")
 @sweep_options
+@loss_map_option
 @params_option
 @json_options
 @force_option
 @quiet_option
 def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics, shift_law,
                drive, load_mode, traction_table, out, scheduler, workers, scheduler_timeout,
-               params_file, as_json, json_out, force, quiet) -> None:
+               loss_map, params_file, as_json, json_out, force, quiet) -> None:
     """Trim and exactly linearise the machine over a grid of operating points (a plant
     family: T_mp, T_ms and the load -> r_g, nu, nu_r), for control design and LPV models."""
     from ..control.family import save_family
 
     sweep = sweep_from_options(scheduler, workers, scheduler_timeout, progress=not quiet)
-    params = get_params(params_file)
+    params = get_params(params_file, loss_map)
     t0 = time.perf_counter()
     fam = family_from_options(params, {"ratio": ratio, "slip": slip, "tau": tau,
                                        "clamp": clamp, "speed": speed,
@@ -172,6 +174,14 @@ def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics,
 @click.group("control", cls=ErrorGroup)
 def control_group() -> None:
     """Slip and ratio control: design, robustness across a family, closed loop."""
+
+
+def _family_tables(family_file, traction_table, loss_map) -> None:
+    """Refuse a measured table beside a family file (which records its own model)."""
+    for option, table in (("--traction", traction_table), ("--loss-map", loss_map)):
+        if family_file and table is not None:
+            raise InputError(f"{option}: give it with the design family, not with --family (a "
+                             "family file records its own model options)")
 
 
 def _loop_from(scenario_file, params):
@@ -219,14 +229,15 @@ loop_option = click.option(
 @grid_options
 @click.option("--out", "out", type=OutputFile(("json", "mat")), required=True,
               help="Controller file (.json or .mat; an existing file only with --force).")
+@loss_map_option
 @params_option
 @json_options
 @force_option
 @quiet_option
 def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loop_scenario,
                ratio, slip, tau, clamp, speed, load_torque, damping, kinematics, shift_law,
-               drive, load_mode, traction_table, out, params_file, as_json, json_out, force,
-               quiet) -> None:
+               drive, load_mode, traction_table, out, loss_map, params_file, as_json, json_out,
+               force, quiet) -> None:
     """Design a controller (T_mp, T_ms) from the errors of (r_g, slip) on a plant family
     (default: empact.control.family.DESIGN_GRID: r_g 0.43..2.25 (7, geometric) x torque
     ratio tau 0.8, 0.9, 0.95 x clamping force 3, 5, 8, 16, 32 kN at [operating]'s speed)."""
@@ -256,7 +267,7 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
     if alpha_min is not None:
         check_number("--alpha-min", alpha_min, 0.05, 1.9,
                      note="the multiloop disk margin each plant must keep")
-    params = get_params(params_file)
+    params = get_params(params_file, loss_map)
     loop = _loop_from(loop_scenario, params)
     defaults = not any(v is not None for v in (ratio, slip, tau, clamp, load_torque))
     raw = {"ratio": ratio if ratio is not None else DESIGN_GRID["r_g"],
@@ -315,12 +326,13 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
 @click.option("--mu", is_flag=True, help="Also the structured singular value bound "
               "(slycot ab13md, continuous loop) over a parametric spread covering the family.")
 @traction_option
+@loss_map_option
 @params_option
 @json_options
 @force_option
 @quiet_option
 def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, traction_table,
-              params_file, as_json, json_out, force, quiet) -> None:
+              loss_map, params_file, as_json, json_out, force, quiet) -> None:
     """Closed-loop poles and disk margins of CONTROLLER on the loop that runs (sampled, with
     the loop's sensors and feedforwards; empact.control.loop) against every plant of a
     family."""
@@ -331,13 +343,11 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
 
     if min_dm is not None:
         check_number("--min-disk-margin", min_dm, 0.0, 1.99)
-    if family_file and traction_table is not None:
-        raise InputError("--traction: give it with the design family, not with --family (a "
-                         "family file records its own model options)")
+    _family_tables(family_file, traction_table, loss_map)
     ctrl = load_controller(controller)
     gate, gate_source = ((min_dm, "--min-disk-margin") if min_dm is not None
                          else design_margin(ctrl.design))
-    params = get_params(params_file)
+    params = get_params(params_file, loss_map)
     loop = _loop_from(loop_scenario, params)
     tables = {} if traction_table is None else {"traction": traction_table}
     fam = load_family(family_file) if family_file else design_family(params, **tables)
@@ -416,13 +426,14 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
 @click.option("--strict", is_flag=True, help="Exit 1 when the tuned controller misses "
               "--min-disk-margin, --max-ms or the bandwidth floor (it is written either way).")
 @traction_option
+@loss_map_option
 @params_option
 @json_options
 @force_option
 @quiet_option
 def tune_cmd(controller, family_file, loop_scenario, out, parameters, min_dm, max_ms,
-             bw_floor, seed, maxiter, strict, traction_table, params_file, as_json, json_out,
-             force, quiet) -> None:
+             bw_floor, seed, maxiter, strict, traction_table, loss_map, params_file, as_json,
+             json_out, force, quiet) -> None:
     """Tune CONTROLLER's PI structure (gains, integral corners, roll-offs per loop, the
     schedule's shape kept) to maximise the worst multiloop disk margin over every plant of a
     family on the loop that runs, with an Ms penalty and a bandwidth floor
@@ -457,15 +468,13 @@ def tune_cmd(controller, family_file, loop_scenario, out, parameters, min_dm, ma
                            min_disk_margin=min_dm, seed=seed, max_evaluations=maxiter)
     except ParameterError as exc:
         raise InputError(str(exc).replace("parameters = ", "--parameters ", 1)) from None
-    if family_file and traction_table is not None:
-        raise InputError("--traction: give it with the design family, not with --family (a "
-                         "family file records its own model options)")
+    _family_tables(family_file, traction_table, loss_map)
     ctrl = load_controller(controller)
     try:
         check_pi(ctrl)
     except ParameterError as exc:
         raise InputError(f"{controller}: {exc}") from None
-    params = get_params(params_file)
+    params = get_params(params_file, loss_map)
     loop = _loop_from(loop_scenario, params)
     tables = {} if traction_table is None else {"traction": traction_table}
     fam = load_family(family_file) if family_file else design_family(params, **tables)
@@ -521,12 +530,13 @@ def design_margin(design: Mapping[str, Any]) -> tuple[float, str]:
 @click.option("--out", "out", type=OutputFile(("csv",)), default=None,
               help="Write the time histories (.csv; an existing file only with --force).")
 @traction_option
+@loss_map_option
 @params_option
 @json_options
 @force_option
 @quiet_option
 def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_table,
-                 params_file, as_json, json_out, force, quiet) -> None:
+                 loss_map, params_file, as_json, json_out, force, quiet) -> None:
     """Closed loop on the nonlinear machine: print the scenario's metrics and its targets
     (exit 1 when the run stops early, or with --strict when a target is missed)."""
     from ..control.closed_loop import (
@@ -546,9 +556,11 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
         return
     if (scenario is None) == (example is None):
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
-    params = get_params(params_file)
+    params = get_params(params_file, loss_map)
     sc = load_scenario(control_example_path(example) if example else scenario,
                        params if traction_table is None else None)
+    if loss_map is not None:  # the command line's map over the scenario's [model] loss_map
+        sc = sc.with_options(loss_map=loss_map)
     if not sc.closed_loop:
         raise InputError(f"{scenario}: no [controller] table (an open-loop scenario: run it "
                          "with 'empact simulate')")

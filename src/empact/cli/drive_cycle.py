@@ -13,6 +13,7 @@ from ._common import (
     force_option,
     get_params,
     json_options,
+    loss_map_option,
     output_folder,
     params_option,
     parse_choices,
@@ -31,17 +32,19 @@ from .linear import plot_option
               help="Output folder for cycle.json and samples.csv; new or empty unless "
                    "--force.")
 @plot_option
+@loss_map_option
 @params_option
 @json_options
 @force_option
-def cycle_cmd(cycle, strategies, out, plot, params_file, as_json, json_out, force) -> None:
+def cycle_cmd(cycle, strategies, out, plot, loss_map, params_file, as_json, json_out,
+              force) -> None:
     """A drive cycle, quasi-static (backward): the variator trimmed at every sample of the
     trace on the operating line, its losses and actuation, the engine's fuel, by strategy
     (energies [J], fuel [g] and [l/100 km], saving against hydraulic-sf1.3)."""
     from .._io import atomic_folder
 
     chosen = parse_choices("--strategies", strategies, tuple(STRATEGIES))
-    params = get_params(params_file)
+    params = get_params(params_file, loss_map)
     if cycle in CYCLES:
         trace = load_cycle(cycle)
     else:

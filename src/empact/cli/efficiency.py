@@ -16,6 +16,7 @@ from ._common import (
     force_option,
     get_params,
     json_options,
+    loss_map_option,
     params_option,
     parse_choices,
 )
@@ -53,17 +54,18 @@ def _values(text: str, option: str, unit: str) -> np.ndarray:
               help="The slip strategy's torque ratio set-point [-] (default: the parameter "
                    "file's [operating] tau).")
 @plot_option
+@loss_map_option
 @params_option
 @json_options
 @force_option
-def efficiency_cmd(torque, speed, ratio, strategy, clamp, tau, plot, params_file, as_json,
-                   json_out, force) -> None:
+def efficiency_cmd(torque, speed, ratio, strategy, clamp, tau, plot, loss_map, params_file,
+                   as_json, json_out, force) -> None:
     """Variator and total efficiency by clamping strategy (steady-state trims)."""
     T = _values(torque, "torque", "N m")
     w = _values(speed, "speed", "rad/s")
     r = _values(ratio, "ratio", "-")
     strategies = parse_choices("--strategy", strategy, STRATEGIES)
-    params = get_params(params_file)
+    params = get_params(params_file, loss_map)
     check_ratio(r, params.variator, "--ratio")
     F = None
     if clamp is not None:

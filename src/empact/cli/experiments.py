@@ -19,6 +19,7 @@ from ._common import (
     force_option,
     get_params,
     json_options,
+    loss_map_option,
     operating_point,
     output_folder,
     params_option,
@@ -49,6 +50,7 @@ def _ratios(text: str) -> list[float]:
 @click.option("--step", "step", type=float, default=1e-4, show_default=True,
               help="Servo torque step size [N m].")
 @traction_option
+@loss_map_option
 @params_option
 @json_options
 @click.option("--out", type=click.Path(file_okay=False), default=None,
@@ -58,8 +60,8 @@ def _ratios(text: str) -> list[float]:
 @force_option
 @quiet_option
 def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | None,
-             order: int | None, step: float, traction_table: Any, params_file: str | None,
-             as_json: bool,
+             order: int | None, step: float, traction_table: Any, loss_map: Any,
+             params_file: str | None, as_json: bool,
              json_out: str | None, out: str | None, plot: str | None, force: bool,
              quiet: bool) -> None:
     """Identify (T_mp, T_ms) -> (r_g, nu) from step responses of the nonlinear model (Fig 2)."""
@@ -74,7 +76,7 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
         raise InputError("--step = 0: must be a non-zero torque step in [-1, 1] [N m]")
     r_list = _ratios(ratios)
     dest = None if out is None else output_folder(out, "--out", force=force)
-    params = get_params(params_file)
+    params = get_params(params_file, loss_map)
     base = operating_point(params, trim=True, traction=traction_table, slip=nu, clamp=F_s,
                            speed=omega_p)
     check_ratio(r_list, params.variator, "--ratios")
@@ -135,6 +137,7 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
               help="Spindle Coulomb friction torque [N m] (both spindles).")
 @click.option("--seed", type=int, default=1, show_default=True)
 @traction_option
+@loss_map_option
 @params_option
 @click.option("--out", required=True, type=OutputFile(("csv",)),
               help="CSV records (time, T_mp, T_ms, theta_mp, theta_ms, nu; units in the "
@@ -143,7 +146,7 @@ def identify(ratios: str, nu: float | None, F_s: float | None, omega_p: float | 
 @click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
 def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p: float,
         rms: float, band: str, duration: float, fs: float, friction: float, seed: int,
-        traction_table: Any, params_file: str | None, out: str, force: bool,
+        traction_table: Any, loss_map: Any, params_file: str | None, out: str, force: bool,
         quiet: bool) -> None:
     """Virtual test rig: excite a servo torque of the nonlinear model (Fig 14).
 
@@ -171,7 +174,7 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
     rms = check_number("--rms", rms, 0.0, 100.0, lo_open=True, unit="N m")
     friction = check_number("--friction", friction, 0.0, 100.0, unit="N m")
     seed = check_int("--seed", seed, 0, 2**32 - 1)
-    params = get_params(params_file)
+    params = get_params(params_file, loss_map)
     op = operating_point(params, trim=True, traction=traction_table, ratio=r_g, slip=nu,
                          clamp=F_s, speed=omega_p).resolve(params, traction_table)
     settings = RigSettings(r_g=op.r_g, nu=op.nu, F_s=op.F_s, omega_p=op.omega_p,

@@ -60,7 +60,7 @@ def export_cmd(out: str, controller: str | None, rate: float, duration: float, r
                nu: float | None, tau: float | None, F_s: float | None, T_l: float | None,
                omega_p: float | None, method: str, rtol: float, max_step: float, damping: str,
                drive: str, load: str, kinematics: str, shift_law: str, thrust_ratio: str | None,
-               creep_map: str | None, traction_table: Any, traction_law: str,
+               creep_map: str | None, traction_table: Any, loss_map: Any, traction_law: str,
                params_file: str | None, force: bool) -> None:
     """Write an FMI 2.0 co-simulation FMU of the nonlinear machine, started at an operating
     point (trimmed at initialisation), with empact's integrator inside (any communication
@@ -82,7 +82,7 @@ def export_cmd(out: str, controller: str | None, rate: float, duration: float, r
         raise InputError(f"--traction-law {traction_law}: an FMU is exported with the default "
                          f"analytic law ({DEFAULT_TRACTION_LAW}) or measured curves (--traction)")
     options = _options(drive, load, damping, kinematics, shift_law, thrust_ratio, creep_map,
-                       traction_table)
+                       traction_table, loss_map=loss_map)
     path = export_fmu(out, params, options=options, point=point, controller=controller,
                       rate=rate, method=method, rtol=rtol, max_step=max_step,
                       duration=duration)

@@ -13,6 +13,7 @@ from ._common import (
     force_option,
     get_params,
     json_options,
+    loss_map_option,
     output_folder,
     params_option,
     quiet_option,
@@ -55,13 +56,14 @@ from ._common import (
               help="Closed loop: exit 1 when any run missed a scenario target (or failed).")
 @sweep_options
 @traction_option
+@loss_map_option
 @params_option
 @json_options
 @force_option
 @quiet_option
 def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, example, controller,
                    seed, out, resume, strict, scheduler, workers, scheduler_timeout,
-                   traction_table,
+                   traction_table, loss_map,
                    params_file, as_json, json_out, force, quiet) -> None:
     """Monte Carlo over parameter spread: each run draws the spread's parameters, evaluates
     the analysis and is recorded (a failed run with its reason); prints the summary
@@ -93,6 +95,9 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
         raise InputError("--traction: the slip analysis draws the analytic curve's "
                          "coefficients; a measured table serves --analysis plant and "
                          "closed-loop")
+    if loss_map is not None and analysis == "slip":
+        raise InputError("--loss-map: the slip analysis's linear slip model has no torque "
+                         "loss; a measured map serves --analysis plant and closed-loop")
     if not closed and (scenario or example or controller):
         raise InputError(f"--analysis {analysis}: --scenario, --example and --controller "
                          "belong to --analysis closed-loop")
@@ -113,7 +118,7 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
     elif out:
         output_folder(out, "--out", force=force)
     sweep = sweep_from_options(scheduler, workers, scheduler_timeout, progress=not quiet)
-    params = get_params(params_file)
+    params = get_params(params_file, loss_map)
     sc = ctrl = None
     if closed:
         from ..control.closed_loop import control_example_path, resolve_controller
@@ -127,6 +132,8 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
         if traction_table is not None:  # the references against the curve the run uses
             sc = sc.with_options(traction=traction_table)
             check_references(sc, params)
+        if loss_map is not None:  # the command line's map over the scenario's
+            sc = sc.with_options(loss_map=loss_map)
         assert sc.controller is not None  # closed_loop
         ctrl = resolve_controller(controller or sc.controller.file)
     spread = load_spread(spread_file, params, sc)

@@ -20,6 +20,7 @@ from ._common import (
     formats_option,
     get_params,
     json_options,
+    loss_map_option,
     operating_point,
     output_folder,
     params_option,
@@ -47,13 +48,14 @@ MAX_SAMPLES = 5_000_000
 @click.option("--keep-partial", is_flag=True,
               help="When the run stops early, write what was computed (marked INCOMPLETE).")
 @traction_option
+@loss_map_option
 @params_option
 @json_options
 @force_option
 @click.option("--quiet", is_flag=True, help="No progress bar on stderr.")
 def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: str | None,
                  formats: str, duration: float | None, states: bool, keep_partial: bool,
-                 traction_table: Any, params_file: str | None, as_json: bool,
+                 traction_table: Any, loss_map: Any, params_file: str | None, as_json: bool,
                  json_out: str | None, force: bool, quiet: bool) -> None:
     """Simulate SCENARIO.toml (or --example NAME); write CSV (units in the header) and a figure
     (PNG; --formats png,svg adds the vector figure).  With --json (or --json-out) a summary
@@ -79,9 +81,11 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
     if (scenario is None) == (example is None):
         raise InputError("give exactly one of SCENARIO or --example NAME (see --list-examples)")
     fmts = parse_choices("--formats", formats, PLOT_SUFFIXES)
-    params = get_params(params_file)
+    params = get_params(params_file, loss_map)
     sc = load_scenario(example_path(example) if example else str(scenario),
                        params if traction_table is None else None)
+    if loss_map is not None:  # the command line's map over the scenario's [model] loss_map
+        sc = sc.with_options(loss_map=loss_map)
     if traction_table is not None:  # the references against the curve the run uses
         sc = sc.with_options(traction=traction_table)
         check_references(sc, params)
@@ -123,9 +127,12 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
 
 def _options(drive: str, load: str, damping: str, kinematics: str, shift_law: str,
              thrust_ratio: str | None, creep_map: str | None = None,
-             traction_table: Any = None, traction_law: str = DEFAULT_TRACTION_LAW) -> dict:
+             traction_table: Any = None, traction_law: str = DEFAULT_TRACTION_LAW,
+             loss_map: Any = None) -> dict:
     opts: dict[str, Any] = {"drive": drive, "load": load, "damping": damping,
                             "kinematics": kinematics, "shift_law": shift_law}
+    if loss_map is not None:
+        opts["loss_map"] = loss_map
     if traction_law != DEFAULT_TRACTION_LAW:  # (the default: the JSON as before)
         opts["traction_law"] = traction_law
     if traction_table is not None:
@@ -141,7 +148,7 @@ def _options(drive: str, load: str, damping: str, kinematics: str, shift_law: st
     return opts
 
 
-_TABLES = ("thrust_ratio", "creep_map", "traction")
+_TABLES = ("thrust_ratio", "creep_map", "traction", "loss_map")
 
 
 def _described(opts: dict) -> dict:
@@ -177,6 +184,7 @@ def model_options_for(drive: str = "torque") -> list:
                      default=None, help="Measured shift-speed map K_c(r_g, F_s), .csv "
                      "(r_g,F_s,K_c) or .toml (default: the analytic creep law of [shift])."),
         traction_option,
+        loss_map_option,
         click.option("--traction-law", "traction_law", type=click.Choice(list(TRACTION_LAWS)),
                      default=DEFAULT_TRACTION_LAW, show_default=True,
                      help="The analytic traction law of [traction] (the registry "
@@ -218,8 +226,7 @@ def _add(options):
 @force_option
 def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, as_json, damping, drive,
                   load, kinematics, shift_law, thrust_ratio, creep_map, traction_table,
-                  traction_law,
-                  params_file, force) -> None:
+                  loss_map, traction_law, params_file, force) -> None:
     """Exact linear plant at an operating point: A, B, C, D.
 
     Inputs T_mp, T_ms (control) and the load T_l (or omega_l_ref with --load speed) as the
@@ -245,7 +252,7 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, as_json, da
     point = operating_point(params, trim=True, traction=traction_table, ratio=r_g, slip=nu,
                             tau=tau, clamp=F_s, load_torque=T_l, speed=omega_p)
     opts = _options(drive, load, damping, kinematics, shift_law, thrust_ratio, creep_map,
-                    traction_table, traction_law)
+                    traction_table, traction_law, loss_map)
     model = nonlinear_model(params, **opts)
     op = trim(model, point)
     dist = disturbance_input(model)
@@ -320,8 +327,8 @@ def _plant_summary(sys_: Any, units: dict[str, list[str]], point: dict[str, Any]
 @json_options
 @force_option
 def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, damping, drive, load,
-            kinematics, shift_law, thrust_ratio, creep_map, traction_table, traction_law,
-            params_file, as_json, json_out, force) -> None:
+            kinematics, shift_law, thrust_ratio, creep_map, traction_table, loss_map,
+            traction_law, params_file, as_json, json_out, force) -> None:
     """Delta_x, belt-length change and the zeros of T_mp -> nu over the ratio (Sec 2.3)."""
     from ..nonlinear.nmp import nmp_analysis
 
@@ -333,7 +340,7 @@ def nmp_cmd(ratios, nu, tau, F_s, T_l, omega_p, f_max, slip_signal, plot, dampin
     check_ratio(r, params.variator, "--ratios")
     res = nmp_analysis(params, r, base=base, f_max_hz=f_max, slip=slip_signal,
                        **_options(drive, load, damping, kinematics, shift_law, thrust_ratio,
-                                  creep_map, traction_table, traction_law))
+                                  creep_map, traction_table, traction_law, loss_map))
     if plot:
         from ..plotting import plot_nmp
 

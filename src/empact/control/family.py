@@ -120,8 +120,8 @@ class PlantFamily:
     reason : array of str, shape ``grid``
     options : dict
         The model options: drive, load, damping, kinematics, shift law, and each tabulated
-        law given (``thrust_ratio``, ``creep_map``, ``traction``; `to_dict` and the saved
-        file name it by its source file, which `nonlinear_model` reads back).
+        law given (``thrust_ratio``, ``creep_map``, ``traction``, ``loss_map``; `to_dict`
+        and the saved file name it by its source file, which `nonlinear_model` reads back).
     """
 
     axes: dict[str, NDArray[np.float64]]
@@ -441,7 +441,7 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
 #: the model options a family records (and a design rebuilds its model from); the tabulated
 #: laws only when given
 _FAMILY_OPTIONS = ("drive", "load", "damping", "kinematics", "shift_law")
-_TABLE_OPTIONS = ("thrust_ratio", "creep_map", "traction")
+_TABLE_OPTIONS = ("thrust_ratio", "creep_map", "traction", "loss_map")
 
 
 def _family_options(options) -> dict[str, Any]:

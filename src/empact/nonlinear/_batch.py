@@ -7,11 +7,25 @@ import numpy as np
 from numba import njit
 
 from ..variator._traction_table import table_peak
-from ._kernel import NY, P_MTAB, _eval, _jacobian_cs, creep_force, mu_peak, traction_mu
+from ._kernel import (
+    BASE_STATES,
+    NX_BASE,
+    NY,
+    P_MTAB,
+    _eval,
+    _jacobian_cs,
+    _losses,
+    creep_force,
+    mu_peak,
+    traction_mu,
+)
 from ._tangent import _eval_tangent, _full_seeds, _split
 
 __all__ = ["traction_many", "bisect_rising_many", "traction_peak_many", "mu_max_many",
-           "creep_many", "linearize_batch", "linearize_batch_cs", "eval_batch"]
+           "creep_many", "linearize_batch", "linearize_batch_cs", "eval_batch", "losses_many"]
+
+#: the pulley speeds' places in the state (the variator's losses read them)
+_WP, _WS = BASE_STATES.index("omega_p"), BASE_STATES.index("omega_s")
 
 
 # -- batches over operating points (plant families) ------------------------------------------
@@ -116,3 +130,19 @@ def eval_batch(X, U, p, ix, DX, Y):
     """``DX[k], Y[k] = f(X[k], U[k]), y(X[k], U[k])`` for every point k."""
     for k in range(X.shape[0]):
         _eval(X[k], U[k], p, ix, DX[k], Y[k])
+
+
+@njit(cache=True)
+def losses_many(T_pb, r_g, R_p, omega_p, omega_s, F_s, p, T_lp, T_ls):
+    """The variator's loss torques beside the slip (`_kernel._losses`, the law the kernel
+    applies: the analytic terms or the measured map) on the primary, ``T_lp[k]``, and on the
+    secondary, ``T_ls[k]`` [N m], at the belt's torque `T_pb` on the primary [N m], ratio
+    `r_g`, primary radius `R_p` [m], shaft speeds `omega_p`, `omega_s` [rad/s] and clamping
+    force `F_s` [N] (1-D arrays)."""
+    x = np.zeros(NX_BASE)
+    for k in range(T_pb.shape[0]):
+        x[_WP] = omega_p[k]
+        x[_WS] = omega_s[k]
+        lp, ls, _, _, _, _, _ = _losses(x, p, F_s[k], T_pb[k], R_p[k], r_g[k])
+        T_lp[k] = lp
+        T_ls[k] = ls

@@ -86,6 +86,7 @@ class KernelConstants(NamedTuple):
     loss_c_v: float
     loss_c_q: float
     loss_T_smooth: float
+    loss_table: float
     #: the traction laws' part by name (generated from their registry: the law's index
     #: ``traction_law``, the knots' ``ln_r_*``, the coefficients ``<c>_low`` ...)
     traction: dict[str, float]

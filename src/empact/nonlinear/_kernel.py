@@ -9,8 +9,9 @@ Private: the public interface, the state ordering and the sign conventions are d
   index, the knots' log-ratios, every law's coefficients; `empact.variator._laws`), and
   followed by the optional tabulated maps (a measured thrust-ratio map and a measured
   shift-speed map, `empact.variator._tables.encode_curves`; measured traction curves,
-  `empact.variator._traction_table`), each found at the offset that ``p[P_TAB]`` /
-  ``p[P_CTAB]`` / ``p[P_MTAB]`` holds (0: the analytic law);
+  `empact.variator._traction_table`; a measured loss map, `empact.variator._loss_table`),
+  each found at the offset that ``p[P_TAB]`` / ``p[P_CTAB]`` / ``p[P_MTAB]`` / ``p[P_LTAB]``
+  holds (0: the analytic law);
 * ``ix`` int64, shape (4,): positions in ``x`` of the optional states (belt stretch, drive and
   load speed-loop integrators, ratio-controller integrator), -1 when absent.
 
@@ -42,6 +43,7 @@ from numba import njit
 
 from ..variator import _compiled as law
 from ..variator._laws import TRACTION_KNOTS, traction_parameter_names
+from ..variator._loss_table import table_loss
 from ..variator._traction_table import table_mu, table_mu_d, table_mu_max, table_peak
 from ._constants import KernelConstants
 
@@ -55,7 +57,8 @@ from ._constants import KernelConstants
  P_DKP, P_DKI, P_LKP, P_LKI, P_RKP, P_RKD, P_RKI, P_SIG, P_RS0,
  P_LAW, P_DREF, P_FREF, P_KD, P_A1, P_A2, P_GAIN, P_W0, P_XSAT, P_GBETA,
  P_KP0, P_KB0, P_KB1, P_RREF, P_TAB, P_CTAB, P_MTAB,
- P_LF, P_LT, P_LV, P_LQ, P_LTS) = range(68)
+ P_LF, P_LT, P_LV, P_LQ, P_LTS,
+ P_LTAB) = range(69)
 
 #: names of the parameter vector's entries, in the order of the ``P_*`` indices, then the
 #: traction laws' part generated from their registry (`empact.variator._laws`): the law's
@@ -74,6 +77,7 @@ PARAMETER_NAMES = (
     "kappa_p0", "kappa_b0", "kappa_b1", "r_ref", "thrust_table", "creep_table",
     "traction_table",
     "loss_lambda_F", "loss_k_T", "loss_c_v", "loss_c_q", "loss_T_smooth",
+    "loss_table",
     ) + traction_parameter_names()
 NP = len(PARAMETER_NAMES)
 #: the traction law's index in ``p``; its parameters follow (`traction_parameter_names`)
@@ -103,38 +107,52 @@ OUTPUTS = ("r_g", "nu", "nu_r", "theta_mp", "theta_ms", "F_p", "F_s", "F_p_act",
            "belt_elongation", "T_mp_act", "T_d_act", "T_l_act", "E", "P_in", "P_diss",
            "P_creep", "T_ms_act", "T_ds", "mu_max",
            "P_loss_slip", "P_loss_clamp", "P_loss_load", "P_loss_drag", "P_var_in", "P_var_out",
-           "P_diss_servo", "P_diss_spindle", "P_diss_material", "P_diss_sheave")
+           "P_diss_servo", "P_diss_spindle", "P_diss_material", "P_diss_sheave",
+           "P_loss_map")
 NY = len(OUTPUTS)
 (Y_RG, Y_NU, Y_NUR, Y_THMP, Y_THMS, Y_FP, Y_FS, Y_FPA, Y_FSA, Y_WP, Y_WS, Y_WD, Y_WL, Y_WMP,
  Y_WMS, Y_TB, Y_MU, Y_TAU, Y_KAP, Y_KEQ, Y_RDOT, Y_FCR, Y_RP, Y_RS, Y_PHI, Y_XP, Y_XS, Y_E,
  Y_TMP, Y_TD, Y_TL, Y_EN, Y_PIN, Y_PDISS, Y_PCREEP, Y_TMS, Y_TDS, Y_MUMAX,
  Y_LSLIP, Y_LCLAMP, Y_LLOAD, Y_LDRAG, Y_PVIN, Y_PVOUT,
- Y_DSERVO, Y_DSPINDLE, Y_DMAT, Y_DSHEAVE) = range(NY)
+ Y_DSERVO, Y_DSPINDLE, Y_DMAT, Y_DSHEAVE,
+ Y_LMAP) = range(NY)
 
-#: the variator's losses [W] (outputs): their sum is ``P_var_in - P_var_out`` (`_losses`)
-VARIATOR_LOSSES = ("P_loss_slip", "P_loss_clamp", "P_loss_load", "P_loss_drag")
+#: the variator's losses [W] (outputs): their sum is ``P_var_in - P_var_out`` (`_losses`);
+#: ``P_loss_map`` is a measured loss map's (zero without one, and then the analytic clamping,
+#: load and drag are)
+VARIATOR_LOSSES = ("P_loss_slip", "P_loss_clamp", "P_loss_load", "P_loss_drag", "P_loss_map")
 #: the named terms of ``P_diss`` [W] (outputs): the variator's losses, the creep resistance's
 #: power, and the actuation's viscous, Coulomb and material (proportional) damping
 DISSIPATION_TERMS = VARIATOR_LOSSES + ("P_creep", "P_diss_servo", "P_diss_spindle",
                                        "P_diss_material", "P_diss_sheave")
+#: the rates [W] the integrators integrate over their own steps (`energy_rates`; the energy
+#: balance of a run, `empact.nonlinear.simulation.energy_balance`): the shaft powers of the
+#: drive, the load and the servos (torque times speed), the dissipated powers by term, and
+#: the variator's shaft powers
+ENERGY_RATES = (("drive", "load", "servo_mechanical_primary", "servo_mechanical_secondary")
+                + DISSIPATION_TERMS + ("P_var_in", "P_var_out"))
+#: the outputs behind `ENERGY_RATES` after the four shaft powers
+_RATE_OUTPUTS = np.array([OUTPUTS.index(k) for k in ENERGY_RATES[4:]], dtype=np.int64)
 
 
 def pack_parameters(values: Mapping[str, float], thrust_table: np.ndarray,
-                    creep_table: np.ndarray, traction_table: np.ndarray) -> np.ndarray:
+                    creep_table: np.ndarray, traction_table: np.ndarray,
+                    loss_table: np.ndarray | None = None) -> np.ndarray:
     """The parameter vector ``p`` from values by name (every name of `PARAMETER_NAMES` but the
-    table offsets), followed by the encoded thrust-ratio, shift-speed and traction tables
-    (each empty for its analytic law); ``thrust_table``, ``creep_table`` and
-    ``traction_table`` hold their offsets."""
-    offsets = ("thrust_table", "creep_table", "traction_table")
+    table offsets), followed by the encoded thrust-ratio, shift-speed, traction and loss
+    tables (each empty for its analytic law); ``thrust_table``, ``creep_table``,
+    ``traction_table`` and ``loss_table`` hold their offsets."""
+    offsets = ("thrust_table", "creep_table", "traction_table", "loss_table")
     names = [k for k in PARAMETER_NAMES if k not in offsets]
     missing = set(names) - set(values)
     if missing:
         raise KeyError(f"kernel parameters missing: {', '.join(sorted(missing))}")
-    tables = (thrust_table, creep_table, traction_table)
+    tables = (thrust_table, creep_table, traction_table,
+              np.zeros(0) if loss_table is None else loss_table)
     p = np.zeros(NP + sum(len(t) for t in tables))
     p[:NP] = [float(values.get(k, 0.0)) for k in PARAMETER_NAMES]
     at = NP
-    for index, table in zip((P_TAB, P_CTAB, P_MTAB), tables):
+    for index, table in zip((P_TAB, P_CTAB, P_MTAB, P_LTAB), tables):
         if len(table):
             p[index] = at
             p[at:at + len(table)] = table
@@ -384,11 +402,16 @@ def _belt_torque(x, p, ix, dx, mu, F_s, F_b, T_b, R_p, R_s, r_g):
 
 
 @njit(cache=True, inline="always")
-def _losses(x, p, F_s, T_pb, R_p):
+def _losses(x, p, F_s, T_pb, R_p, r_g):
     """The variator's losses beside the slip (`_belt_torque`), as torques on the pulley shafts:
-    ``(T_lp, T_ls, T_clamp, T_load, T_dp, T_dss)`` [N m], the whole loss torque on the
+    ``(T_lp, T_ls, T_clamp, T_load, T_dp, T_dss, T_map)`` [N m], the whole loss torque on the
     primary and on the secondary, and its parts (`T_pb`: the belt's torque on the primary,
     ``r_g T_b``; `F_s`: the secondary clamping force).
+
+    * **A measured map** (``p[P_LTAB]``, `empact.variator.losses.LossMap`) replaces the three
+      terms below: ``T_map = sg(omega_p) T_loss(r_g, omega_p, T_in, F_s)`` on the primary at
+      its input torque ``T_in = T_pb + T_map`` (`empact.variator._loss_table.table_loss`,
+      exact on the interpolant), nothing on the secondary.
 
     * **Clamping** (band and segment friction, band-band sliding, sheave deflection and
       misalignment: Akehurst, Vaughan, Parker & Simner, Proc. IMechE D 218 (2004) Parts 1-2;
@@ -414,12 +437,16 @@ def _losses(x, p, F_s, T_pb, R_p):
     (identically, beside the locked belt's elastic power)."""
     wp, ws = x[15], x[16]
     sg_p = _tanh(wp / p[P_WC])
+    if p[P_LTAB] != 0.0:
+        T_map = table_loss(T_pb, np.log(r_g), wp, F_s, sg_p, p, int(p[P_LTAB]))
+        zero = 0.0 * T_map
+        return T_map, zero, zero, zero, zero, zero, T_map
     sg_s = _tanh(ws / p[P_WC])
     T_clamp = p[P_LF] * F_s * R_p * sg_p
     T_load = p[P_LT] * T_pb * _tanh(T_pb / p[P_LTS]) * sg_p
     T_dp = p[P_LV] * wp + p[P_LQ] * wp * wp * sg_p
     T_dss = p[P_LV] * ws + p[P_LQ] * ws * ws * sg_s
-    return T_clamp + T_load + T_dp, T_dss, T_clamp, T_load, T_dp, T_dss
+    return T_clamp + T_load + T_dp, T_dss, T_clamp, T_load, T_dp, T_dss, 0.0 * T_dss
 
 
 @njit(cache=True, inline="always")
@@ -562,16 +589,17 @@ def _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p,
 
 
 @njit(cache=True, inline="always")
-def _loss_outputs(x, y, T_pb, T_b, T_lp, T_ls, T_clamp, T_load, T_dp, T_dss):
+def _loss_outputs(x, y, T_pb, T_b, T_lp, T_ls, T_clamp, T_load, T_dp, T_dss, T_map):
     """The variator's losses of `_losses` and its shaft powers into `y`, their sum into
     ``P_diss`` (`T_pb`: the belt's torque on the primary, `T_b` on the secondary)."""
     wp, ws = x[15], x[16]
     y[Y_LCLAMP] = T_clamp * wp
     y[Y_LLOAD] = T_load * wp
     y[Y_LDRAG] = T_dp * wp + T_dss * ws
+    y[Y_LMAP] = T_map * wp
     y[Y_PVIN] = (T_pb + T_lp) * wp
     y[Y_PVOUT] = (T_b - T_ls) * ws
-    y[Y_PDISS] += y[Y_LCLAMP] + y[Y_LLOAD] + y[Y_LDRAG]
+    y[Y_PDISS] += y[Y_LCLAMP] + y[Y_LLOAD] + y[Y_LDRAG] + y[Y_LMAP]
 
 
 @njit(cache=True, inline="always")
@@ -588,14 +616,14 @@ def _finish(x, u, p, ix, dx, y, belt, sp, dm, r_g, nu, mu, mu_max, tau, F_b, T_b
     F_p = F_p_el + lam * dr5
     F_s = F_s_el - lam * r_g / (p[P_TB] * R_s)
     T_b, T_on_p, P_slip = _belt_torque(x, p, ix, dx, mu, F_s, F_b, T_b, R_p, R_s, r_g)
-    T_lp, T_ls, T_clamp, T_load, T_dp, T_dss = _losses(x, p, F_s, -T_on_p, R_p)
+    T_lp, T_ls, T_clamp, T_load, T_dp, T_dss, T_map = _losses(x, p, F_s, -T_on_p, R_p, r_g)
     T_mp, G, err = _ratio_servo(x, u, p, ix, dx, R_p, R_s, phi, r_g, F_s_el, F_p_el)
     T_d, T_l = _drive_load(x, u, p, ix, dx)
     T_ds = _motion(x, p, dx, sp, dm, T_mp, u[1], T_d, T_l, N, g5, g6, lam, dr5, dr6,
                    T_on_p - T_lp, T_b - T_ls)
     _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p, F_s, tau, kap,
              keq, T_b, mu, mu_max, R_p, R_s, phi, T_mp, u[1], T_d, T_l, T_ds)
-    _loss_outputs(x, y, -T_on_p, T_b, T_lp, T_ls, T_clamp, T_load, T_dp, T_dss)
+    _loss_outputs(x, y, -T_on_p, T_b, T_lp, T_ls, T_clamp, T_load, T_dp, T_dss, T_map)
     return F_s, T_b, T_mp, G, err, T_d, T_l
 
 
@@ -703,6 +731,19 @@ def _input_direction_cs(x, u, du, p, ix, out):
     _eval(xc, uc, p, ix, dx, y)
     for i in range(n):
         out[i] = dx[i].imag / h
+
+
+@njit(cache=True, inline="always")
+def energy_rates(y, out):
+    """`ENERGY_RATES` [W] from the outputs `y` into `out`: the drive's, the load's and the
+    servos' shaft powers (``T_d omega_d``, ``T_l omega_l``, ``T_mp omega_mp``, ``T_ms
+    omega_ms``), then the outputs `_RATE_OUTPUTS` name."""
+    out[0] = y[Y_TD] * y[Y_WD]
+    out[1] = y[Y_TL] * y[Y_WL]
+    out[2] = y[Y_TMP] * y[Y_WMP]
+    out[3] = y[Y_TMS] * y[Y_WMS]
+    for i in range(_RATE_OUTPUTS.shape[0]):
+        out[4 + i] = y[_RATE_OUTPUTS[i]]
 
 
 # -- the integrators' stop conditions and constant columns -------------------------------------

@@ -64,7 +64,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._kernel import NY, _eval, stop_status
+from ._kernel import NY, _eval, energy_rates, stop_status
 from ._rosenbrock import STATUS, _lu, _lu_solve, _segment_inputs, _u_at
 from ._tangent import _input_direction, _state_jacobian
 
@@ -155,7 +155,7 @@ ROS2_H = np.array([[0.0, -1.0 / (_G * (1.0 - 2.0 * _G)), 0.0], [0.0, 0.0, 0.0],
 
 @njit(cache=True)
 def _run(A, C, c, d, H, gam, q, x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk,
-         rtol, atol, hmin, hmax, omega_min, max_steps, X, Y, cols, J, full):
+         rtol, atol, hmin, hmax, omega_min, max_steps, X, Y, cols, J, full, Q):
     """The stepper for one tableau (see the module docstring); arguments after `q` (the
     error's order) and the return value as `integrate`."""
     n = x.shape[0]
@@ -182,6 +182,11 @@ def _run(A, C, c, d, H, gam, q, x, t, t_end, h, samples, p, ix, sig_t, sig_v, si
     tref = np.empty(m)
     hint = np.zeros(m, dtype=np.int64)
     all_cols = np.arange(n)
+    nq = Q.shape[0]      # the energy rates' integrals (`integrate`), none when empty
+    R0 = np.empty(nq)
+    Rm = np.empty(nq)
+    R1 = np.empty(nq)
+    ym = np.empty(NY)
     ib = 0
     n_samp = samples.shape[0]
     js = 0
@@ -218,6 +223,8 @@ def _run(A, C, c, d, H, gam, q, x, t, t_end, h, samples, p, ix, sig_t, sig_v, si
                     have_f0 = False   # an input step at t: evaluate at the new value
         if not have_f0:
             _eval(x, u, p, ix, F0, y)
+        if nq > 0:  # the rates at the step's start (on this input piece)
+            energy_rates(yn if have_f0 else y, R0)
         _state_jacobian(x, u, p, ix, J, all_cols if full else cols)
         full = False
         _input_direction(x, u, slope, p, ix, T)
@@ -293,8 +300,8 @@ def _run(A, C, c, d, H, gam, q, x, t, t_end, h, samples, p, ix, sig_t, sig_v, si
         # the end of the step: outputs for the stop conditions, first stage of the next step
         _u_at(t_new, u0, slope, tref, u_end)
         _eval(xn, u_end, p, ix, Fn, yn)
-        # dense output at the samples inside (t, t_new]
-        if js < n_samp and samples[js] <= t_new * (1.0 + 1e-14):
+        # dense output at the samples inside (t, t_new] and at the step's midpoint
+        if nq > 0 or (js < n_samp and samples[js] <= t_new * (1.0 + 1e-14)):
             for r in range(3):
                 for i in range(n):
                     D[r, i] = 0.0
@@ -303,6 +310,19 @@ def _run(A, C, c, d, H, gam, q, x, t, t_end, h, samples, p, ix, sig_t, sig_v, si
                     if hj != 0.0:
                         for i in range(n):
                             D[r, i] += hj * K[j, i]
+        if nq > 0:
+            # the energy rates' integrals over the step: Simpson's rule on the step's ends
+            # and its midpoint (the dense output), all on the step's input piece
+            for i in range(n):
+                xs[i] = 0.5 * x[i] + 0.5 * (xn[i] + 0.5 * (D[0, i] + 0.5 * (D[1, i]
+                                                                            + 0.5 * D[2, i])))
+            _u_at(t + 0.5 * h, u0, slope, tref, u)
+            _eval(xs, u, p, ix, Fs, ym)
+            energy_rates(ym, Rm)
+            energy_rates(yn, R1)
+            w6 = (t_new - t) / 6.0
+            for i in range(nq):
+                Q[i] += w6 * (R0[i] + 4.0 * Rm[i] + R1[i])
         while js < n_samp and samples[js] <= t_new * (1.0 + 1e-14):
             th = (samples[js] - t) / h
             th1 = 1.0 - th
@@ -343,7 +363,7 @@ def _run(A, C, c, d, H, gam, q, x, t, t_end, h, samples, p, ix, sig_t, sig_v, si
 
 @njit(cache=True)
 def integrate(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, atol,
-              hmin, hmax, omega_min, max_steps, X, Y, cols, J, full):
+              hmin, hmax, omega_min, max_steps, X, Y, cols, J, full, Q):
     """Rodas5P: integrate from `t` to `t_end` in place on `x`; fill `X`, `Y` at `samples` in
     (t, t_end].
 
@@ -351,30 +371,37 @@ def integrate(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, at
     the Jacobian between calls: with `full` every column is evaluated at the first step (the
     first call of a run), otherwise only `cols` (the others are constant over a run).
 
+    `Q` (shape (len(`_kernel.ENERGY_RATES`),) or (0,)) accumulates, in place and across
+    calls, the integrals of the energy rates (`_kernel.energy_rates`: the shaft powers and
+    the dissipated powers by term) over the accepted steps: Simpson's rule on each step,
+    its midpoint from the dense output, so to the integrator's own accuracy (no step spans an
+    input breakpoint; each call starts on the inputs it is given, the right limit of a
+    command held from there).  One evaluation more per step; none with an empty `Q`.
+
     Returns ``(status, t, h, n_filled, n_steps, n_rejected)`` (`_rosenbrock.STATUS`); on a
     stop, `x` holds the last accepted state at time `t`.
     """
     return _run(R5P_A, R5P_C, R5P_c, R5P_d, R5P_H, R5P_GAMMA, 5.0, x, t, t_end, h, samples,
                 p, ix, sig_t, sig_v, sig_n, brk, rtol, atol, hmin, hmax, omega_min,
-                max_steps, X, Y, cols, J, full)
+                max_steps, X, Y, cols, J, full, Q)
 
 
 @njit(cache=True)
 def integrate_rodas4(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, atol,
-                     hmin, hmax, omega_min, max_steps, X, Y, cols, J, full):
+                     hmin, hmax, omega_min, max_steps, X, Y, cols, J, full, Q):
     """Rodas4: `integrate`'s signature, semantics and return value."""
     return _run(R4_A, R4_C, R4_c, R4_d, R4_H, R4_GAMMA, 4.0, x, t, t_end, h, samples,
                 p, ix, sig_t, sig_v, sig_n, brk, rtol, atol, hmin, hmax, omega_min,
-                max_steps, X, Y, cols, J, full)
+                max_steps, X, Y, cols, J, full, Q)
 
 
 @njit(cache=True)
 def integrate_ros2(x, t, t_end, h, samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, atol,
-                   hmin, hmax, omega_min, max_steps, X, Y, cols, J, full):
+                   hmin, hmax, omega_min, max_steps, X, Y, cols, J, full, Q):
     """ros2 (ode23s): `integrate`'s signature, semantics and return value."""
     return _run(ROS2_A, ROS2_C, ROS2_c, ROS2_d, ROS2_H, ROS2_GAMMA, 3.0, x, t, t_end, h,
                 samples, p, ix, sig_t, sig_v, sig_n, brk, rtol, atol, hmin, hmax, omega_min,
-                max_steps, X, Y, cols, J, full)
+                max_steps, X, Y, cols, J, full, Q)
 
 
 #: the integrators of this module by `simulate`'s method name

@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from ..variator import _compiled as law
+from ..variator._loss_table import table_loss_d
 from ._kernel import (
     LAW_IDE,
     LAW_SHAFAI,
@@ -57,6 +58,7 @@ from ._kernel import (
     P_LKP,
     P_LQ,
     P_LT,
+    P_LTAB,
     P_LTS,
     P_LV,
     P_MP,
@@ -89,6 +91,7 @@ from ._kernel import (
     Y_LCLAMP,
     Y_LDRAG,
     Y_LLOAD,
+    Y_LMAP,
     Y_LSLIP,
     Y_MU,
     Y_MUMAX,
@@ -237,7 +240,7 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
     slipv = r_g * wp - ws
     # the variator's losses (`_kernel._losses`) and their local slopes
     T_pb = R_p * F_b if locked else r_g * T_b
-    T_lp, T_dss, T_clamp, T_load, T_dp, _ = _losses(x, p, F_s, T_pb, R_p)
+    T_lp, T_dss, T_clamp, T_load, T_dp, _, T_map = _losses(x, p, F_s, T_pb, R_p, r_g)
     wc = p[P_WC]
     lf, lt, lv, lq, lts = p[P_LF], p[P_LT], p[P_LV], p[P_LQ], p[P_LTS]
     sg_p = _tanh(wp / wc)
@@ -247,6 +250,11 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
     th_T = _tanh(T_pb / lts)
     absT = T_pb * th_T
     absT_T = th_T + T_pb * (1.0 - th_T * th_T) / lts
+    use_map = p[P_LTAB] != 0.0   # a measured loss map in place of the terms above
+    lm_b = lm_lr = lm_w = lm_F = lm_sg = 0.0
+    if use_map:
+        _, lm_b, lm_lr, lm_w, lm_F, lm_sg = table_loss_d(T_pb, lr, wp, F_s, sg_p, p,
+                                                         int(p[P_LTAB]))
     c0g = -s * i_e / (i_w * tb)
     cmp_ = p[P_CMP]
     cms = p[P_CMS]
@@ -435,11 +443,18 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
         Fd[14, k] = (T_d_t - T_tc_t) * iJd
         T_pb_t = -T_on_p_t
         sg_p_t = sgp_w * wp_t
-        T_clamp_t = lf * R_p * (F_s_t * sg_p + F_s * sg_p_t) + lf * F_s * sg_p * R_p_t
-        T_load_t = lt * (absT_T * T_pb_t * sg_p + absT * sg_p_t)
-        T_dp_t = lv * wp_t + lq * (2.0 * wp * sg_p * wp_t + wp * wp * sg_p_t)
-        T_dss_t = lv * ws_t + lq * (2.0 * ws * sg_s * ws_t + ws * ws * sgs_w * ws_t)
-        T_lp_t = T_clamp_t + T_load_t + T_dp_t
+        if use_map:
+            T_map_t = (lm_b * T_pb_t + lm_lr * lr_t + lm_w * wp_t + lm_F * F_s_t
+                       + lm_sg * sg_p_t)
+            T_clamp_t = T_load_t = T_dp_t = T_dss_t = 0.0
+            T_lp_t = T_map_t
+        else:
+            T_map_t = 0.0
+            T_clamp_t = lf * R_p * (F_s_t * sg_p + F_s * sg_p_t) + lf * F_s * sg_p * R_p_t
+            T_load_t = lt * (absT_T * T_pb_t * sg_p + absT * sg_p_t)
+            T_dp_t = lv * wp_t + lq * (2.0 * wp * sg_p * wp_t + wp * wp * sg_p_t)
+            T_dss_t = lv * ws_t + lq * (2.0 * ws * sg_s * ws_t + ws * ws * sgs_w * ws_t)
+            T_lp_t = T_clamp_t + T_load_t + T_dp_t
         Fd[15, k] = (T_tc_t + T_on_p_t - T_lp_t) * iJp
         Fd[16, k] = (T_b_t - T_dss_t - T_ds_t) * iJs
         Fd[17, k] = (T_ds_t - T_l_t) * iJl
@@ -459,6 +474,7 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
         L_clamp_t = T_clamp_t * wp + T_clamp * wp_t
         L_load_t = T_load_t * wp + T_load * wp_t
         L_drag_t = T_dp_t * wp + T_dp * wp_t + T_dss_t * ws + T_dss * ws_t
+        L_map_t = T_map_t * wp + T_map * wp_t
         D_servo_t = 2.0 * (cmp_ * w1 * w1_t + cms * w2 * w2_t)
         D_spindle_t = (2.0 * (csp * w3 * w3_t + css * w43 * w43_t) + Tf_sp_t * w3
                        + Tf_sp * w3_t + Tf_ss_t * w43 + Tf_ss * w43_t)
@@ -467,12 +483,13 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
                                  + kts * dd_s * dd_s_t)
         D_sheave_t = (2.0 * (c_p * v5 * v5_t + c_s * v6 * v6_t) + c_p_t * v5 * v5
                       + c_s_t * v6 * v6)
-        P_diss_t = (P_slip_t + L_clamp_t + L_load_t + L_drag_t + lam_t * rdot + lam * rdot_t
-                    + D_servo_t + D_spindle_t + D_mat_t + D_sheave_t)
+        P_diss_t = (P_slip_t + L_clamp_t + L_load_t + L_drag_t + L_map_t + lam_t * rdot
+                    + lam * rdot_t + D_servo_t + D_spindle_t + D_mat_t + D_sheave_t)
         Yd[Y_LSLIP, k] = P_slip_t
         Yd[Y_LCLAMP, k] = L_clamp_t
         Yd[Y_LLOAD, k] = L_load_t
         Yd[Y_LDRAG, k] = L_drag_t
+        Yd[Y_LMAP, k] = L_map_t
         Yd[Y_PVIN, k] = (T_pb_t + T_lp_t) * wp + (T_pb + T_lp) * wp_t
         Yd[Y_PVOUT, k] = (T_b_t - T_dss_t) * ws + (T_b - T_dss) * ws_t
         Yd[Y_DSERVO, k] = D_servo_t

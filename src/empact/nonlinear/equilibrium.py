@@ -535,7 +535,8 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
         # the drive torque: the belt's on the primary and the primary's losses (each exactly
         # zero without [losses]: then the trim is the lossless one to the bit)
         lp = (y[:, model.output_index("P_loss_clamp")]
-              + y[:, model.output_index("P_loss_load")]) / w
+              + y[:, model.output_index("P_loss_load")]
+              + y[:, model.output_index("P_loss_map")]) / w
         T_d = np.where(good, r * Tb + lp + _drag(c, w), r * Tb)
         _driveline(model, x, u, T_d, Tl, w, omega_s)
         dx, y[g] = model.evaluate_many(x[g], u[g])
@@ -567,7 +568,10 @@ def _servo_statics(model: EmpactModel, F_p_act, F_s_act, q5, q6):
 
 def _drag(c, omega):
     """The drag torque of a pulley shaft at speed `omega` [rad/s] (`_kernel._losses`:
-    ``c_v omega + c_q omega^2 tanh(omega / coulomb_omega)``; `c` the kernel constants)."""
+    ``c_v omega + c_q omega^2 tanh(omega / coulomb_omega)``; `c` the kernel constants); none
+    with a measured loss map, whose loss acts on the primary alone (``P_loss_map``)."""
+    if c.loss_table != 0.0:
+        return 0.0 * omega
     return c.loss_c_v * omega + c.loss_c_q * omega * omega * np.tanh(omega / c.coulomb_omega)
 
 

@@ -78,8 +78,11 @@ Construction choices (documented, not hidden):
 * **Variator losses** (`empact.variator.losses`, the ``[losses]`` block): beside the slip, a
   clamping loss ``lambda_F F_s R_p`` and a load loss ``k_T |r_g T_b|`` on the primary shaft
   and a spin drag ``c_v omega + c_q omega^2`` on each pulley shaft, each opposing its
-  shaft's rotation (Akehurst et al. 2004; Micklem et al. 1996; Narita & Priest 2007).  The
-  outputs ``P_loss_slip``, ``P_loss_clamp``, ``P_loss_load``, ``P_loss_drag``
+  shaft's rotation (Akehurst et al. 2004; Micklem et al. 1996; Narita & Priest 2007); or a
+  measured loss map (`ModelOptions.loss_map`, ``[losses] table``,
+  `empact.variator.losses.LossMap`): its torque loss ``T_loss(r_g, omega_p, T_in, F_s)`` on
+  the primary at the input torque it carries, in place of those three.  The outputs
+  ``P_loss_slip``, ``P_loss_clamp``, ``P_loss_load``, ``P_loss_drag``, ``P_loss_map``
   (`VARIATOR_LOSSES`) sum to ``P_var_in - P_var_out``, the powers at the variator's shafts.
 * **Energy.** ``E`` is the stored (kinetic and elastic) energy, ``P_in`` the power of the
   servos, the drive and the load, ``P_diss`` the dissipated power, the sum of
@@ -123,6 +126,7 @@ from ..errors import ParameterError
 from ..linear.actuation import actuation_model
 from ..params import Params
 from ..variator import _laws
+from ..variator.geometry import radii
 from ..variator.shift_law import g_beta
 from ..variator.traction import (
     AnalyticTraction,
@@ -179,6 +183,8 @@ OUTPUT_DESCRIPTIONS = {
     "P_loss_clamp": "the variator's clamping loss lambda_F F_s R_p omega_p (band and segment "
     "friction, sheave deflection)", "P_loss_load": "the variator's load loss k_T |r_g T_b| "
     "omega_p", "P_loss_drag": "the variator's spin loss on both pulley shafts",
+    "P_loss_map": "the measured loss map's torque loss T_loss omega_p (zero without a map, "
+    "which replaces the clamping, load and drag losses)",
     "P_var_in": "power into the variator at the primary pulley shaft",
     "P_var_out": "power out of the variator at the secondary pulley shaft",
     "P_diss_servo": "viscous friction of the servos (part of P_diss)",
@@ -410,6 +416,73 @@ class EmpactModel:
         KB.mu_max_many(np.ascontiguousarray(r.ravel()), self.p, out)
         return out.reshape(r.shape)
 
+    def torque_loss(self, r_g: ArrayLike, omega_p: ArrayLike, T_in: ArrayLike,
+                    F_s: ArrayLike, nu: ArrayLike = 0.0) -> NDArray[np.float64]:
+        """The variator's torque loss beside the slip [N m], referred to the primary: the
+        loss power of the kernel's law (the clamping, load and drag terms of ``[losses]``,
+        or the measured loss map) over ``omega_p``, at the input torque `T_in` the primary
+        carries, i.e. what a `~empact.variator.losses.LossMap` tabulates (a map sampled
+        from it replaces the analytic law).
+
+        The secondary's drag, at ``omega_s = (1 - nu) r_g omega_p``, is referred to the
+        primary by the speed ratio; the radii are the unstretched belt's.  The input torque
+        is reached by the secant method on the belt's torque (to 1e-12 N m).
+
+        Parameters
+        ----------
+        r_g : array_like
+            Ratios [-].
+        omega_p : array_like
+            Primary speeds [rad/s], > 0.
+        T_in : array_like
+            Input torques at the primary [N m].
+        F_s : array_like
+            Secondary clamping forces [N].
+        nu : array_like, optional
+            Slips [-] (default 0: the geometric speed ratio); all five broadcast.
+
+        Returns
+        -------
+        ndarray
+            ``T_loss`` [N m], the broadcast shape.
+
+        Raises
+        ------
+        ParameterError
+            When the input torque is not met (a loss law whose input torque does not rise
+            with the belt's).
+        """
+        r, w, T, F, n = (np.ascontiguousarray(a.ravel()) for a in np.broadcast_arrays(
+            *(np.asarray(v, float) for v in (r_g, omega_p, T_in, F_s, nu))))
+        shape = np.broadcast_shapes(*(np.shape(v) for v in (r_g, omega_p, T_in, F_s, nu)))
+        v = self.params.variator
+        R_p = np.ascontiguousarray(radii(r, v.L_belt, v.a)[0])
+        w_s = (1.0 - n) * r * w
+        T_lp, T_ls = np.empty(r.size), np.empty(r.size)
+
+        def miss(T_pb):  # the input torque's miss at the belt torque T_pb
+            KB.losses_many(T_pb, r, R_p, w, w_s, F, self.p, T_lp, T_ls)
+            return T_pb + T_lp - T
+
+        a, fa = T.copy(), miss(T.copy())
+        b = T - fa
+        fb = miss(b)
+        for _ in range(60):
+            done = np.abs(fb) <= 1e-12 * np.maximum(1.0, np.abs(T))
+            if done.all():
+                break
+            step = np.where(done | (fb == fa), 0.0, fb * (b - a) / np.where(fb == fa, 1.0,
+                                                                             fb - fa))
+            a, fa = b, fb
+            b = b - step
+            fb = miss(b)
+        else:
+            k = int(np.argmax(np.abs(fb)))
+            raise ParameterError(f"torque_loss: the input torque T_in = {T[k]:g} N m is not "
+                                 f"met (miss {fb[k]:.3g} N m at r_g = {r[k]:g}, omega_p = "
+                                 f"{w[k]:g} rad/s, F_s = {F[k]:g} N)")
+        return (T_lp + T_ls * w_s / w).reshape(shape)
+
     def static_creep(self, r_g, R_p, R_s, phi, F_el, tau) -> tuple[NDArray, NDArray]:
         """The shift law at rest for arrays (broadcast): the generalised force ``Lambda``
         [N m] on the ratio and the equilibrium thrust ratio ``kappa*`` [-], at the belt
@@ -536,6 +609,7 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
     thrust_table = o.thrust_ratio.encode() if o.thrust_ratio is not None else np.zeros(0)
     creep_table = o.creep_map.encode() if o.creep_map is not None else np.zeros(0)
     traction_table = o.traction.encode() if o.traction is not None else np.zeros(0)
+    loss_table = o.loss_map.encode() if o.loss_map is not None else np.zeros(0)
     sig = sheave_sense(o.kinematics)
     k_w, k_c, k_belt, k_tp, k_ts = stiffnesses(params, o.kinematics)
     values = dict(
@@ -567,7 +641,7 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
         values.update(ratio_kp=J * w * w, ratio_kd=2 * 0.7 * w * J, ratio_ki=J * w**3 / 4)
     else:  # PI on the creep law's ratio rate per N m: crossover w (servo damping kept)
         values.update(ratio_kp=w, ratio_kd=2 * 0.7 * w * J, ratio_ki=w * w / 4)
-    return K.pack_parameters(values, thrust_table, creep_table, traction_table)
+    return K.pack_parameters(values, thrust_table, creep_table, traction_table, loss_table)
 
 
 def _index(names: tuple[str, ...], name: str, what: str) -> int:
@@ -621,7 +695,9 @@ def nonlinear_model(params: Params, options: ModelOptions | None = None, **kwarg
         ...; see `ModelOptions`).  Unknown keywords are an error.  Without a ``traction``
         option the measured curves the parameter file names (`Params.traction_table`) are
         the traction law, else the magic formula of ``[traction]``; an explicit option (the
-        CLI's ``--traction``, a scenario's ``[model] traction``) wins.
+        CLI's ``--traction``, a scenario's ``[model] traction``) wins.  Likewise the
+        measured loss map (``loss_map``; `Params.loss_map`, ``[losses] table``) replaces
+        the analytic losses of ``[losses]``.
     **kwargs
         The `ModelOptions` fields as keywords (instead of `options`).
 
@@ -644,6 +720,8 @@ def nonlinear_model(params: Params, options: ModelOptions | None = None, **kwarg
     opts = options if options is not None else ModelOptions.from_mapping(kwargs)
     if opts.traction is None and params.traction_table is not None:
         opts = replace(opts, traction=params.traction_table)
+    if opts.loss_map is None and params.loss_map is not None:
+        opts = replace(opts, loss_map=params.loss_map)
     return EmpactModel(params, opts)
 
 

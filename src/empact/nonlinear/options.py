@@ -1,6 +1,6 @@
 """The nonlinear model's options (`ModelOptions`): the drive and load motors, the belt, the
 damping level, the sheave kinematics, the shift law, the controllers a run closes, and the
-tabulated laws a user measured (thrust ratio, shift speed, traction); all validated on
+tabulated laws a user measured (thrust ratio, shift speed, traction, losses); all validated on
 construction.  `empact.nonlinear.model` builds the model from them and re-exports them.
 """
 from __future__ import annotations
@@ -13,6 +13,7 @@ from .._deprecate import warn_renamed
 from .._validate import check_bool, check_choice, check_number
 from ..errors import ParameterError
 from ..params import DAMPING_LEVELS
+from ..variator.losses import LossMap, load_loss_map
 from ..variator.shift_law import SHIFT_LAWS, CreepMap, load_creep_map
 from ..variator.thrust_ratio import TabulatedThrustRatio, load_thrust_ratio
 from ..variator.traction import (
@@ -82,6 +83,11 @@ class ModelOptions:
         a path is loaded): the kernel evaluates their interpolant (PCHIP in slip, linear in
         ``r_g``) and ``mu_max(r_g)`` is its peak (`TabulatedTraction.mu_max`); default the
         analytic law of ``[traction]`` (`traction_law`).
+    loss_map : LossMap, optional
+        A measured torque-loss map ``T_loss(r_g, omega_in, T_in, F_s)``
+        (`empact.variator.losses.load_loss_map`; a path is loaded): the kernel applies its
+        torque loss on the primary in place of the clamping, load and drag losses of
+        ``[losses]`` (the slip stays the traction law's); default those analytic losses.
     traction_law : str
         The analytic traction law the kernel evaluates without measured curves, one of the
         registered laws (`empact.variator.traction.TRACTION_LAWS`: ``"magic-formula"``,
@@ -111,6 +117,7 @@ class ModelOptions:
     creep_map: CreepMap | None = None
     traction: TabulatedTraction | None = None
     traction_law: str = DEFAULT_TRACTION_LAW
+    loss_map: LossMap | None = None
     drive_bandwidth: InitVar[float | None] = None
     load_bandwidth: InitVar[float | None] = None
     ratio_bandwidth: InitVar[float | None] = None
@@ -139,6 +146,9 @@ class ModelOptions:
         if self.traction is not None and not isinstance(self.traction, TabulatedTraction):
             raise ParameterError(f"traction = {self.traction!r}: must be a TabulatedTraction "
                                  "(empact.variator.traction.load_traction)")
+        if self.loss_map is not None and not isinstance(self.loss_map, LossMap):
+            raise ParameterError(f"loss_map = {self.loss_map!r}: must be a LossMap "
+                                 "(empact.variator.losses.load_loss_map)")
         if self.reference_ratio is not None:
             object.__setattr__(self, "reference_ratio", check_number(
                 "reference_ratio", self.reference_ratio, 0.0, lo_open=True))
@@ -162,7 +172,8 @@ class ModelOptions:
         ----------
         values : dict
             Option names (the fields of `ModelOptions`, or a deprecated name) to values;
-            ``thrust_ratio`` and ``creep_map`` may be file paths (read here).
+            ``thrust_ratio``, ``creep_map``, ``traction`` and ``loss_map`` may be file paths
+            (read here).
         """
         allowed = [f.name for f in fields(cls)] + list(_DEPRECATED_OPTIONS)
         for key in values:
@@ -176,6 +187,8 @@ class ModelOptions:
             values["creep_map"] = load_creep_map(values["creep_map"])
         if isinstance(values.get("traction"), (str, os.PathLike)):
             values["traction"] = load_traction(values["traction"])
+        if isinstance(values.get("loss_map"), (str, os.PathLike)):
+            values["loss_map"] = load_loss_map(values["loss_map"])
         return cls(**values)
 
 

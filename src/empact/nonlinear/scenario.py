@@ -344,8 +344,8 @@ def check_tables(data: Mapping[str, Any], schema: Mapping[str, Any], src: str) -
 def model_options(table: Mapping[str, Any], src: str,
                   defaults: Mapping[str, Any] | None = None) -> ModelOptions:
     """A scenario file's ``[model]`` table as `ModelOptions` (over `defaults`); a relative
-    ``thrust_ratio``, ``creep_map`` or ``traction`` path is read relative to the scenario
-    file.
+    ``thrust_ratio``, ``creep_map``, ``traction`` or ``loss_map`` path is read relative to
+    the scenario file.
 
     Parameters
     ----------
@@ -367,7 +367,7 @@ def model_options(table: Mapping[str, Any], src: str,
         One line naming `src` and the bad option.
     """
     model = {**(defaults or {}), **dict(table)}
-    for key in ("thrust_ratio", "creep_map", "traction"):
+    for key in ("thrust_ratio", "creep_map", "traction", "loss_map"):
         path = model.get(key)
         if isinstance(path, str) and not Path(path).is_absolute() and Path(src).is_file():
             model[key] = str(Path(src).parent / path)

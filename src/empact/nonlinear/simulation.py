@@ -67,6 +67,11 @@ class SimulationResult:
     scenario : str
     stats : dict
         ``n_steps``, ``n_rejected``, ``wall_time`` [s], ``t_end`` [s].
+    energy_integrals : dict
+        The integrals over the run, ``[0, stats["t_end"]]``, of the energy rates
+        `empact.nonlinear._kernel.ENERGY_RATES` by name [J], taken by the integrator on its
+        own steps, and the stored energy at the start and at ``t_end``, ``E_start`` and
+        ``E_end`` [J] (`energy_balance`); empty for a result that no integrator made.
     """
 
     t: NDArray[np.float64]
@@ -80,6 +85,7 @@ class SimulationResult:
     message: str
     scenario: str = ""
     stats: Mapping[str, float] = field(default_factory=dict)
+    energy_integrals: Mapping[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """The run as plain JSON types (SI; the result contract of `empact._results`):
@@ -156,13 +162,18 @@ def _integral(t: NDArray[np.float64], f: NDArray[np.float64]) -> float:
 def energy_balance(result: SimulationResult) -> dict[str, Any]:
     """The energy balance of a run: input = output + losses + change of stored energy.
 
-    The powers are integrated over the output samples by the composite Simpson rule (order
-    4; `scipy.integrate.simpson`), the stored energy ``E`` (kinetic and elastic) is read at
-    the ends.  ``P_in - P_diss = dE/dt`` holds at every instant (the kernel's outputs), so
-    the residual measures the quadrature's error on the output grid and the integrator's
-    (its tolerance on ``E``): about 1e-6-1e-4 of the input energy at the shipped 1 kHz
-    sampling, larger where the inputs step between samples (a step's kink is integrated at
-    first order).
+    The powers are the integrator's integrals over its own steps
+    (`SimulationResult.energy_integrals`: Simpson's rule on each step, its midpoint from the
+    dense output, no step across an input breakpoint or a held command's change), and the
+    stored energy ``E`` (kinetic and elastic) is read at the start and at the end of the
+    integration.
+    ``P_in - P_diss = dE/dt`` holds at every instant (the kernel's outputs), so the residual
+    is the integration's error along the computed trajectory: it falls with the
+    integrator's tolerance (about 10x ``rtol`` or below on the shipped scenarios; the
+    output grid no longer limits it: Simpson's rule on the 1 kHz samples integrated a step
+    between samples at first order, a floor of 1e-5-5e-5).  A result without those
+    integrals (made by hand) is integrated on its output samples by the composite Simpson
+    rule (`scipy.integrate.simpson`), and ``quadrature`` says which.
 
     Parameters
     ----------
@@ -177,25 +188,33 @@ def energy_balance(result: SimulationResult) -> dict[str, Any]:
         ``output`` (what the load motor absorbs), each of `DISSIPATION_TERMS` (the
         variator's losses, ``P_creep``, the actuation's damping), ``losses`` (their sum),
         ``stored_change``; ``energy_balance_residual`` [-]: ``(input - output - losses -
-        stored_change) / input``.  (The servos' electrical energy is not part of this
-        mechanical balance: `empact.efficiency.energy_summary` adds it as
-        ``servo_electrical``.)
+        stored_change) / input``; ``quadrature``: ``"integrator steps"`` or ``"output
+        samples"``.  (The servos' electrical energy is not part of this mechanical balance:
+        `empact.efficiency.energy_summary` adds it as ``servo_electrical``.)
     """
-    t = result.t
+    q = result.energy_integrals
     energy: dict[str, float] = {}
-    for name, (torque, speed) in _POWERS.items():
-        energy[name] = _integral(t, result.output(torque) * result.output(speed))
+    if q:
+        energy.update({name: float(q[name]) for name in _POWERS})
+        energy.update({name: float(q[name]) for name in K.DISSIPATION_TERMS})
+        stored = float(q["E_end"] - q["E_start"])
+    else:
+        t = result.t
+        for name, (torque, speed) in _POWERS.items():
+            energy[name] = _integral(t, result.output(torque) * result.output(speed))
+        for name in K.DISSIPATION_TERMS:
+            energy[name] = _integral(t, result.output(name))
+        E = result.output("E")
+        stored = float(E[-1] - E[0])
     energy["input"] = (energy["drive"] + energy["servo_mechanical_primary"]
                        + energy["servo_mechanical_secondary"])
     energy["output"] = energy.pop("load")
-    for name in K.DISSIPATION_TERMS:
-        energy[name] = _integral(t, result.output(name))
     energy["losses"] = sum(energy[name] for name in K.DISSIPATION_TERMS)
-    E = result.output("E")
-    energy["stored_change"] = float(E[-1] - E[0])
+    energy["stored_change"] = stored
     balance = energy["input"] - energy["output"] - energy["losses"] - energy["stored_change"]
     scale = abs(energy["input"]) if energy["input"] != 0.0 else 1.0
-    return {"energy": energy, "energy_balance_residual": balance / scale}
+    return {"energy": energy, "energy_balance_residual": balance / scale,
+            "quadrature": "integrator steps" if q else "output samples"}
 
 
 def state_tolerances(model: EmpactModel, rtol: float) -> tuple[NDArray, NDArray]:
@@ -303,6 +322,8 @@ class SampledLoop(NamedTuple):
     X, Y, cols, J : ndarray
         The output states and outputs (written), the Jacobian's varying columns and its
         work array.
+    Q : ndarray, shape (len(ENERGY_RATES),)
+        The energy rates' integrals, accumulated by the integrator (`simulate`).
     """
 
     x: NDArray[np.float64]
@@ -333,6 +354,7 @@ class SampledLoop(NamedTuple):
     Y: NDArray[np.float64]
     cols: NDArray[Any]
     J: NDArray[np.float64]
+    Q: NDArray[np.float64]
 
 
 @runtime_checkable
@@ -483,7 +505,7 @@ class Stepper:
             self.x, self.t, float(t_end), self.h, self._none, self.model.p, self.model.ix,
             self._sig_t, self._sig_v, self._sig_n, self._none, self._rel, self._atol, 1e-14,
             self.max_step, self.omega_min, self.max_steps - self.n_steps, self._X, self._Y,
-            self._cols, self.J, self._full)
+            self._cols, self.J, self._full, self._none)
         self._full = False
         self.t, self.h = float(t), float(h)
         self.n_steps += ns
@@ -631,6 +653,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     rel, atol = state_tolerances(model, rtol)
     cols = K.varying_columns(model.ix)
     J = np.empty((model.n, model.n))
+    Q = np.zeros(len(K.ENERGY_RATES))  # the energy rates' integrals (`energy_balance`)
     t, h = 0.0, min(1e-5, max_step)
     status, n_steps, n_rej, filled = 0, 0, 0, 1
     wall = time.perf_counter()
@@ -647,7 +670,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
                 status, t, h, filled, ns, nr = step(
                     x, t, float(t_chunk), h, samples, model.p, model.ix, sig_t, sig_v, sig_n,
                     brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps, X, Y,
-                    cols, J, k == 0)
+                    cols, J, k == 0, Q)
                 n_steps += ns
                 n_rej += nr
                 bar.update(100 * (k + 1) // n_chunks - 100 * k // n_chunks)
@@ -657,7 +680,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     else:
         status, t, filled, n_steps, n_rej, U = _run_sampled(
             model, controller, x, u0, duration, samples, sig_t, sig_v, sig_n, brk_arr, rel,
-            atol, max_step, omega_min, max_steps, X, Y, cols, J, progress, name, step)
+            atol, max_step, omega_min, max_steps, X, Y, cols, J, progress, name, step, Q)
     wall = time.perf_counter() - wall
     complete = status == 0
     if complete:
@@ -666,9 +689,14 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
         state = ", ".join(f"{s} = {v:.6g}" for s, v in zip(model.states, x))
         message = (f"stopped at t = {t:.6g} s: {STATUS[status]}; state: {state}")
     keep = slice(0, max(filled, 1))
+    E_start = float(Y[0, K.Y_EN])
+    K._eval(x, U[0], model.p, model.ix, dx, y)  # the stored energy where the run ended
+    integrals = {**dict(zip(K.ENERGY_RATES, Q.tolist())), "E_start": E_start,
+                 "E_end": float(y[K.Y_EN])}
     return SimulationResult(t=samples[keep], x=X[keep], y=Y[keep], u=U[keep],
                             states=model.states, outputs=model.outputs, inputs=model.inputs,
                             complete=complete, message=message, scenario=name,
+                            energy_integrals=integrals,
                             stats={"n_steps": n_steps, "n_rejected": n_rej, "wall_time": wall,
                                    "t_end": t, "method": method})
 
@@ -700,13 +728,14 @@ def _measurement(model: EmpactModel, names: tuple[str, ...]):
 
 def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_n, brk_arr,
                  rel, atol, max_step, omega_min, max_steps, X, Y, cols, J, progress, name,
-                 step=None):
+                 step=None, Q=None):
     """The loop of `simulate` with a sampled controller: at every sample ``t_k = k dt`` the
     controller reads its signals (outputs and states at ``x(t_k)``, inputs at ``t_k``) and
     sets its commands, held by giving the integrator a constant signal for each commanded
     input up to ``t_(k+1)``.  The inputs the controller does not drive are evaluated on the
     sample grid once, before the loop."""
     step = integrate if step is None else step
+    Q = np.empty(0) if Q is None else Q
     dt = float(check_number("controller dt", controller.dt, 0.0, duration, lo_open=True,
                             unit="s"))
     cmd_list = [model.input_index(c) for c in controller.commands]
@@ -746,7 +775,7 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
                 meas=np.empty(out_idx.size), tableau=tableau, samples=samples, p=model.p,
                 ix=model.ix, sig_t=sig_t, sig_v=sig_v, sig_n=sig_n, brk=brk_arr, rtol=rel,
                 atol=atol, hmax=float(max_step), omega_min=float(omega_min),
-                max_steps=int(max_steps), X=X, Y=Y, cols=cols, J=J)
+                max_steps=int(max_steps), X=X, Y=Y, cols=cols, J=J, Q=Q)
             for k0 in range(0, n_k, every):
                 k1 = min(k0 + every, n_k)
                 status, t, h, filled, n_steps, n_rej, k = controller.run_compiled(
@@ -772,7 +801,7 @@ def _run_sampled(model, controller, x, u0, duration, samples, sig_t, sig_v, sig_
                 status, t, h, filled, ns, nr = step(
                     x, t, t_list[k + 1], h, samples, model.p, model.ix, sig_t, sig_v,
                     sig_n, brk_arr, rel, atol, 1e-14, max_step, omega_min, max_steps - n_steps,
-                    X, Y, cols, J, k == 0)
+                    X, Y, cols, J, k == 0, Q)
                 n_steps += ns
                 n_rej += nr
                 if (k + 1) % every == 0:

@@ -234,6 +234,13 @@ def studies(ctx: Context, res: rep.StudiesSection) -> str:
                     r["actuation"], r["total"],
                     100 * r["saving_energy"] if r["saving_energy"] else "",
                     _fmt(r["macro_slip"])] for r in res.saving]
+    names = list(res.sensitivity[0]["saving"]) if res.sensitivity else []
+    sens_rows = [[r["case"], r["parameter"] or "; ".join(f"{k} {v:g}" for k, v
+                                                         in r["value"].items()),
+                  r["value"] if r["parameter"] else "",
+                  *(100 * r["saving"][n] for n in names),
+                  100 * r["steady"]["least"], 100 * r["steady"]["largest"]]
+                 for r in res.sensitivity]
     return (
         "<p>The shipped controller and loop of the previous section on three questions: "
         "an error of the feedforward's traction estimate, the shipped parameter spread, and "
@@ -264,4 +271,18 @@ def studies(ctx: Context, res: rep.StudiesSection) -> str:
                     "ratio-blind run's motion, the pump's shaft power, their total and the "
                     "saving of slip control's total against each row's (mean powers over "
                     "the run)")
+        + (ctx.table("control_saving_sensitivity",
+                     ["case", "parameter", "value (SI)",
+                      *(f"saving {n} [%]" for n in names),
+                      "steady state: least [%]", "steady state: largest [%]"], sens_rows,
+                     "Is the energy saving's sign robust? Slip control's energy saving "
+                     "against the ratio-blind safety factor 1.3 (the table above) with each "
+                     "loss and servo parameter at each end of its plausible band "
+                     "(data/parameter_sources.toml; the variator's losses act on the "
+                     "machine: the runs are repeated; the servos' parameters bill the same "
+                     "runs), then at the corners (every parameter at the end that lowers, "
+                     "or raises, the mean saving), and the steady-state saving of the "
+                     "efficiency map (slip against sf1.3, empact.efficiency) over 25, 60, "
+                     "150 N m x r_g 0.5, 1, 2 at 300 rad/s")
+           if res.sensitivity else "")
         + ctx.claims(res.claims))

@@ -27,6 +27,9 @@ def machine(ctx: Context, res: rep.MachineSection) -> str:
         and the clamping sweep, and the claims.
     """
     sh = ctx.params.shift
+    names = {"P_loss_slip": "slip", "P_loss_clamp": "clamping", "P_loss_load": "load",
+             "P_loss_drag": "drag", "P_loss_map": "loss map"}
+    losses = [f"{names.get(k, k)} [W]" for k in res.loss_terms]
     return (
         "<p>The paper gives no variator laws; these are the shipped defaults, each with its "
         "source and plausible band in <code>empact params show --describe</code>. The "
@@ -60,14 +63,13 @@ def machine(ctx: Context, res: rep.MachineSection) -> str:
                      "shipped set-points")
         + ctx.table("machine_efficiency",
                     ["tau", "input torque [N m]", "r_g", "F_s [kN]", "efficiency [%]",
-                     "slip [W]", "clamping [W]", "load [W]", "drag [W]"],
+                     *losses],
                     res.efficiency_rows,
                     "The variator's efficiency and its losses by term at 300 rad/s, at the "
                     "slip set-point (tau 0.9) and at a safety factor of 1.3 (tau 0.77) "
                     "(trimmed machine; [losses] of empact params show --describe)")
         + ctx.table("machine_efficiency_clamping",
-                    ["tau", "F_s [kN]", "efficiency [%]", "slip [W]", "clamping [W]",
-                     "load [W]", "drag [W]"], res.clamping_rows,
+                    ["tau", "F_s [kN]", "efficiency [%]", *losses], res.clamping_rows,
                     "Efficiency over clamping force at r_g 1, 60 N m, 300 rad/s: the slip "
                     "power falls and the clamping loss rises with the clamping force")
         + ctx.claims(res.claims))

@@ -52,7 +52,7 @@ SECTIONS: tuple[Section, ...] = (
             "loop)", "control", rctl.control, control.control, cost=15.0),
     Section("Beyond the paper: control studies (traction estimate, Monte Carlo, the "
             "clamping saving)", "control-studies", rctl.control_studies, control.studies,
-            cost=45.0),
+            cost=75.0),
     Section("Beyond the paper: drive cycle (WLTC 3b in a car, quasi-static)", "drive-cycle",
             rcyc.drive_cycle, drive_cycle.drive_cycle, cost=3.0),
 )

@@ -34,17 +34,20 @@ from ..control.loop import (
     predict_scenario,
 )
 from ..control.shifting import ShiftEnvelope, shift_envelope
-from ..efficiency import run_energy
+from ..efficiency import efficiency_map, run_energy
 from ..montecarlo.spread import load_spread
 from ..montecarlo.study import MonteCarloResult, monte_carlo
 from ..nonlinear.model import nonlinear_model
 from ..nonlinear.scenario import Scenario, load_scenario
-from ..params import Params
+from ..params import Params, parameter_sources
 from .claims import Claim
+from .machine import loss_terms
 
 __all__ = ["DESIGN_GRID", "SHIPPED_DESIGNS", "ControlSection", "StudiesSection", "control",
            "control_studies", "shipped_controller", "MC_RUNS", "MC_SCENARIO",
-           "ESTIMATE_ERRORS", "ESTIMATE_SIGNALS", "estimate_targets", "estimate_label"]
+           "ESTIMATE_ERRORS", "ESTIMATE_SIGNALS", "estimate_targets", "estimate_label",
+           "SENSITIVITY_LOSSES", "SENSITIVITY_SERVO", "saving_sensitivity",
+           "sensitivity_text"]
 
 #: how the shipped controllers (``data/control/pi.json``, ``hinf.json``) are designed:
 #: ``empact control design --method pi --schedule --bandwidth 0.5,1 --alpha-min 0.5 --out
@@ -78,6 +81,18 @@ ESTIMATE_ERRORS = (-0.15, 0.15)
 ESTIMATE_SIGNALS = ("T_e_est", "T_ds_est")
 
 SRC = "issue 21 (beyond the paper)"
+
+#: the parameters over whose plausible bands (``data/parameter_sources.toml``) the energy
+#: saving's sign is tested (issue 32): the variator's losses, which act in the kernel (the
+#: runs are repeated), and the servos' electrical model and transmissions, which bill the
+#: same runs (`empact.actuation_energy`); ``losses.T_smooth`` is a regularisation, not a loss
+SENSITIVITY_LOSSES = ("losses.lambda_F", "losses.k_T", "losses.c_v", "losses.c_q")
+SENSITIVITY_SERVO = ("servo.k_m_ms", "servo.k_m_mp", "servo.eta_drive", "servo.eta_chain",
+                     "servo.eta_epicyclic", "servo.worm_lead", "servo.worm_mu",
+                     "servo.screw_d", "servo.screw_mu", "servo.omega_hold")
+#: the steady-state points of the sensitivity's efficiency-map comparison: input torques
+#: [N m] and ratios [-] at the primary speed [rad/s] of the machine sheet's table
+STEADY_TORQUES, STEADY_RATIOS, STEADY_SPEED = (25.0, 60.0, 150.0), (0.5, 1.0, 2.0), 300.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,12 +195,16 @@ class StudiesSection:
         ``saving_energy`` [-] (`_saving`)
     claims : tuple of Claim
         The targets checked.
+    sensitivity : list of dict
+        The energy saving against the ratio-blind safety factor over the loss and servo
+        parameters' plausible bands (`saving_sensitivity`).
     """
 
     traction_error: dict[tuple[str, float], dict[str, Any]]
     montecarlo: MonteCarloResult
     saving: list[dict[str, Any]]
     claims: tuple[Claim, ...]
+    sensitivity: list[dict[str, Any]] = field(default_factory=list)
 
 
 def shipped_controller(name: str) -> Controller:
@@ -345,12 +364,17 @@ def control_studies(params: Params) -> StudiesSection:
     mc = monte_carlo(params, spread, MC_RUNS, "closed-loop", scenario=scenarios[MC_SCENARIO])
     names = steps + ["shift-low-od-slow"]
     runs = {n: run_closed_loop(scenarios[n], params) for n in names}
-    saving = _saving(params, scenarios, runs, names)
+    twins = {(n, md): run_closed_loop(safety_factor_twin(scenarios[n], params, md), params)
+             for n in names for md in ("ratio-blind", "ratio-aware")}
+    saving = _saving(params, scenarios, runs, names, twins)
+    sensitivity = saving_sensitivity(params, {n: scenarios[n] for n in names},
+                                     {n: (runs[n], twins[(n, "ratio-blind")]) for n in names})
     return StudiesSection(traction_error, mc, saving,
-                          tuple(_study_claims(traction_error, mc, saving)))
+                          tuple(_study_claims(traction_error, mc, saving, sensitivity)),
+                          sensitivity)
 
 
-def _saving(params, scenarios, runs, names) -> list[dict[str, Any]]:
+def _saving(params, scenarios, runs, names, twins) -> list[dict[str, Any]]:
     """Mean clamping force, losses and energy of slip control against the safety-factor 1.3
     strategy (ratio-blind and ratio-aware design mu) on the same runs, and against the
     hydraulic reference actuation on the ratio-blind run's motion.
@@ -369,7 +393,7 @@ def _saving(params, scenarios, runs, names) -> list[dict[str, Any]]:
                      "r_g": float(runs[n].op.r_g), "macro_slip": a.get("macro_slip"),
                      **ea, "saving_energy": 0.0})
         for md in ("ratio-blind", "ratio-aware"):
-            run = run_closed_loop(safety_factor_twin(scenarios[n], params, md), params)
+            run = twins[(n, md)]
             b = run.metrics
             eb = _energy(run, params)
             row = {"scenario": n, "strategy": f"safety factor 1.3, {md} mu",
@@ -398,11 +422,145 @@ def _energy(run: ClosedLoopResult, params: Params) -> dict[str, Any]:
     kin = model.options.kinematics if model is not None else "equal-translation"
     e = run_energy(run.result, params, kin)
     d = e["duration"]
-    losses = {k: v / d for k, v in e["losses"].items()}
+    terms = loss_terms(model) if model is not None else tuple(e["losses"])
+    losses = {k: v / d for k, v in e["losses"].items() if k in terms}
     total = sum(losses.values())
     return {"variator_losses": losses, "variator_losses_total": total,
             "actuation": e["servo_electrical"] / d, "pump": e["pump"] / d,
             "total": total + e["servo_electrical"] / d}
+
+
+def _energy_saving(pair: tuple[ClosedLoopResult, ClosedLoopResult], params: Params) -> float:
+    """Slip control's energy saving against the ratio-blind safety factor [-]: 1 - its total
+    (variator losses plus the servos' electrical power, `_energy`) over the twin's."""
+    return 1.0 - _energy(pair[0], params)["total"] / _energy(pair[1], params)["total"]
+
+
+def _steady_saving(params: Params) -> dict[str, Any]:
+    """The steady-state energy saving of the ``slip`` strategy against ``sf1.3``
+    (`empact.efficiency.efficiency_map`) over `STEADY_TORQUES` x `STEADY_RATIOS` at
+    `STEADY_SPEED`: 1 - its variator losses plus actuation over sf1.3's, point by point;
+    ``least`` and ``largest`` [-] over the points both strategies trim, ``untrimmed`` the
+    others' reasons."""
+    m = efficiency_map(params, STEADY_TORQUES, STEADY_SPEED, STEADY_RATIOS,
+                       strategies=("sf1.3", "slip"))
+    cost = {s: m.grid("P_in", s) - m.grid("P_out", s) + sum(m.grid(k, s) for k in m.actuation)
+            for s in ("sf1.3", "slip")}
+    saving = 1.0 - cost["slip"] / cost["sf1.3"]
+    both = np.isfinite(saving)
+    return {"least": float(np.min(saving[both])), "largest": float(np.max(saving[both])),
+            "untrimmed": [f"{m.strategy[k]} at {m.T_in[k]:g} N m, r_g {m.r_g[k]:g}: "
+                          f"{m.reason[k]}" for k in np.flatnonzero(~m.ok)]}
+
+
+def saving_sensitivity(params: Params, scenarios: dict[str, Scenario],
+                       pairs: dict[str, tuple[ClosedLoopResult, ClosedLoopResult]]
+                       ) -> list[dict[str, Any]]:
+    """Slip control's energy saving against the ratio-blind safety factor 1.3 (the claim
+    ``control.clamping_saving``) and the steady-state one (`_steady_saving`) with each loss
+    and servo parameter at each end of its plausible band (`SENSITIVITY_LOSSES`,
+    `SENSITIVITY_SERVO`; the rest shipped), then at the two corners: every parameter at the
+    end that lowers (raises) the scenarios' mean saving the more.  A loss parameter's runs
+    are repeated (it acts on the machine); a servo parameter bills the shipped runs anew.
+
+    Parameters
+    ----------
+    params : Params
+        The shipped parameter set.
+    scenarios : dict of str to Scenario
+        The closed-loop scenarios of the saving.
+    pairs : dict of str to (ClosedLoopResult, ClosedLoopResult)
+        Each scenario's run under slip control and its ratio-blind safety-factor twin on
+        `params`.
+
+    Returns
+    -------
+    list of dict
+        Rows ``{"case", "parameter", "value", "saving", "steady"}``: ``case`` ``"shipped"``,
+        ``"low"``, ``"high"``, ``"worst corner"`` or ``"best corner"``; ``parameter`` the
+        dotted name (a corner's: ``""``) and ``value`` its value (a corner's: the values by
+        name, a dict); ``saving`` the energy saving by scenario [-]; ``steady`` the
+        steady-state saving (`_steady_saving`: ``least``, ``largest`` [-], ``untrimmed``).
+    """
+    bands = parameter_sources()
+
+    def row(case, name, value, p, runs):
+        return {"case": case, "parameter": name, "value": value,
+                "saving": {n: _energy_saving(runs[n], p) for n in scenarios},
+                "steady": _steady_saving(p)}
+
+    def rerun(p):
+        return {n: (run_closed_loop(sc, p),
+                    run_closed_loop(safety_factor_twin(sc, p, "ratio-blind"), p))
+                for n, sc in scenarios.items()}
+
+    rows = [row("shipped", "", {}, params, pairs)]
+    for name in SENSITIVITY_LOSSES + SENSITIVITY_SERVO:
+        for case, value in zip(("low", "high"), bands[name]["band"]):
+            p = params.from_dotted({name: float(value)})
+            rows.append(row(case, name, float(value), p,
+                            rerun(p) if name in SENSITIVITY_LOSSES else pairs))
+    mean = lambda r: float(np.mean(list(r["saving"].values())))  # noqa: E731
+    for case, pick in (("worst corner", min), ("best corner", max)):
+        values = {}
+        for name in SENSITIVITY_LOSSES + SENSITIVITY_SERVO:
+            ends = [r for r in rows if r["parameter"] == name]
+            values[name] = pick(ends, key=mean)["value"]
+        p = params.from_dotted(values)
+        rows.append(row(case, "", values, p, rerun(p)))
+    return rows
+
+
+def sensitivity_text(rows: list[dict[str, Any]]) -> str:
+    """The sensitivity's sentence for the claim: where the energy saving keeps its sign and
+    where it flips (every one-at-a-time band end that gives a scenario a loss, then the
+    corners).
+
+    Parameters
+    ----------
+    rows : list of dict
+        `saving_sensitivity`'s rows.
+
+    Returns
+    -------
+    str
+        One sentence per finding, computed from the rows.
+    """
+    ends = [r for r in rows if r["case"] in ("low", "high")]
+    shipped = next(r for r in rows if r["case"] == "shipped")
+    sign = {n: np.sign(v) for n, v in shipped["saving"].items()}
+
+    def flipped(r):
+        return {n: v for n, v in r["saving"].items() if np.sign(v) != sign[n]}
+
+    def fmt(values):
+        return ", ".join(f"{n} {100 * v:+.1f} %" for n, v in values.items())
+
+    flips = [r for r in ends if flipped(r)]
+    same = sorted({r["parameter"] for r in ends} - {r["parameter"] for r in flips})
+    corner = {r["case"]: r for r in rows if "corner" in r["case"]}
+    text = (f"The energy saving against the ratio-blind strategy ({fmt(shipped['saving'])} "
+            "with the shipped values) over the loss and servo parameters' plausible bands, "
+            "one at a time: the same sign at both ends of "
+            + (", ".join(same) if same else "no parameter"))
+    if flips:
+        text += "; the sign flips at " + "; ".join(
+            f"{r['parameter']} = {r['value']:g} ({fmt(flipped(r))})" for r in flips)
+    steady = [r["steady"] for r in rows]
+    worst = corner["worst corner"]["steady"]
+    text += (f". At the worst corner (each parameter at the end that lowers the mean saving): "
+             f"{fmt(corner['worst corner']['saving'])}; at the best: "
+             f"{fmt(corner['best corner']['saving'])}. "
+             f"In steady state (slip against sf1.3, {len(STEADY_TORQUES)} torques x "
+             f"{len(STEADY_RATIOS)} ratios at {STEADY_SPEED:g} rad/s) the saving spans "
+             f"{100 * shipped['steady']['least']:+.1f} to "
+             f"{100 * shipped['steady']['largest']:+.1f} % with the shipped values, "
+             f"{100 * min(s['least'] for s in steady):+.1f} to "
+             f"{100 * max(s['largest'] for s in steady):+.1f} % over all these cases "
+             f"({100 * worst['least']:+.1f} to {100 * worst['largest']:+.1f} % at the worst "
+             "corner" + (f", where {'; '.join(worst['untrimmed'])}" if worst["untrimmed"]
+                         else "") + ")")
+    return text
 
 
 def _claims(family, loops, runs, targets, predictions, envelope) -> list[Claim]:
@@ -479,7 +637,7 @@ def _claims(family, loops, runs, targets, predictions, envelope) -> list[Claim]:
     return claims
 
 
-def _study_claims(traction_error, mc, saving) -> list[Claim]:
+def _study_claims(traction_error, mc, saving, sensitivity=()) -> list[Claim]:
     claims = []
     te = [(k, m) for k, m in traction_error.items()]
     bad = [f"{n} x{f:.3g}" for (n, f), m in te if m.get("macro_slip", True)]
@@ -525,12 +683,27 @@ def _study_claims(traction_error, mc, saving) -> list[Claim]:
                              for r in blind)
                  + "; against the hydraulic reference: "
                  + "; ".join(f"{r['scenario']}: {100 * r['saving_energy']:.1f} %"
-                             for r in saving if r["strategy"] == HYDRAULIC_ROW),
+                             for r in saving if r["strategy"] == HYDRAULIC_ROW)
+                 + (". " + sensitivity_text(list(sensitivity)) if sensitivity else ""),
         shown=bool(steps and all(r["saving"] >= SAVING_TARGET for r in steps)),
         explanation="The saving is below the target at a ratio.",
         values={**{r["scenario"]: r["saving"] for r in blind},
-                **{f"{r['scenario']}@energy": r["saving_energy"] for r in blind}}))
+                **{f"{r['scenario']}@energy": r["saving_energy"] for r in blind},
+                **{f"{n}@energy@{_case_key(r)}": v for r in sensitivity
+                   if "corner" in r["case"] or r["parameter"] in SIGN_PARAMETERS
+                   for n, v in r["saving"].items()}}))
     return claims
+
+
+#: the parameters the energy saving's sign was said to rest on (issue 32's stop-39 note):
+#: the claim's values carry the saving at both ends of their bands
+SIGN_PARAMETERS = ("losses.lambda_F", "servo.k_m_ms")
+
+
+def _case_key(row: dict[str, Any]) -> str:
+    """A sensitivity row's name in the claim's values: ``worst corner``, ``best corner`` or
+    ``parameter=value``."""
+    return row["case"] if "corner" in row["case"] else f"{row['parameter']}={row['value']:g}"
 
 
 def scenarios_claim(name: str) -> str:

@@ -35,7 +35,7 @@ from ..variator.traction import TractionCurves, traction_curves, traction_from_p
 from .claims import Claim
 from .linear import MACHINE, READING
 
-__all__ = ["MachineSection", "machine", "curve_statistics", "efficiency_at_torque",
+__all__ = ["MachineSection", "machine", "curve_statistics", "efficiency_at_torque", "loss_terms",
            "CURVE_RATIOS", "BANDS", "EFFICIENCY_TORQUES", "EFFICIENCY_RATIOS",
            "EFFICIENCY_TAUS", "CLAMPING_TAUS"]
 
@@ -92,12 +92,14 @@ class MachineSection:
     efficiency_rows : list of list of float
         Per `EFFICIENCY_TAUS` x `EFFICIENCY_TORQUES` x `EFFICIENCY_RATIOS` at 300 rad/s:
         tau, input torque [N m], r_g, F_s [kN], efficiency [%], the losses of
-        `VARIATOR_LOSSES` [W].
+        `loss_terms` [W].
     clamping_rows : list of list of float
         The clamping sweep at r_g 1, 60 N m, 300 rad/s, per `CLAMPING_TAUS`: tau, F_s [kN],
         efficiency [%], the losses [W].
     claims : tuple of Claim
         The checks.
+    loss_terms : tuple of str
+        The variator's loss terms the rows hold (`loss_terms`).
     """
 
     curves: TractionCurves
@@ -108,6 +110,7 @@ class MachineSection:
     efficiency_rows: list[list[float]]
     clamping_rows: list[list[float]]
     claims: tuple[Claim, ...]
+    loss_terms: tuple[str, ...] = ()
 
 
 def curve_statistics(traction, r_g: float, nu: np.ndarray) -> list[float]:
@@ -186,10 +189,29 @@ def efficiency_at_torque(model: EmpactModel, r_g: ArrayLike, T_in: ArrayLike,
     raise RuntimeError("efficiency_at_torque: the clamping force did not converge")
 
 
+def loss_terms(model: EmpactModel) -> tuple[str, ...]:
+    """The variator's loss terms a model's law produces (of `VARIATOR_LOSSES`): the slip and
+    the measured map's, or the slip and the analytic clamping, load and drag terms.
+
+    Parameters
+    ----------
+    model : EmpactModel
+        The nonlinear model.
+
+    Returns
+    -------
+    tuple of str
+        Output names [W].
+    """
+    if model.options.loss_map is not None:
+        return ("P_loss_slip", "P_loss_map")
+    return tuple(k for k in VARIATOR_LOSSES if k != "P_loss_map")
+
+
 def _efficiency(params: Params) -> tuple[list[list[float]], list[list[float]]]:
     """The efficiency table and the clamping sweep of `MachineSection`."""
     model = nonlinear_model(params)
-    cols = [model.output_index(k) for k in VARIATOR_LOSSES]
+    cols = [model.output_index(k) for k in loss_terms(model)]
     i_in, i_out = model.output_index("P_var_in"), model.output_index("P_var_out")
 
     def rows(heads: list[list[float]], g: TrimGrid) -> list[list[float]]:
@@ -330,7 +352,7 @@ def machine(params: Params) -> MachineSection:
                           "torque ratios.", reading=ec["reading"], values=ec["clamp_values"]),
     )
     return MachineSection(curves, curve_rows, creep_rows, reserve_rows, smap, eff_rows,
-                          clamp_rows, claims)
+                          clamp_rows, claims, loss_terms(nonlinear_model(params)))
 
 
 def _efficiency_checks(params: Params, eff_rows: list[list[float]],

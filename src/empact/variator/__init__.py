@@ -8,6 +8,8 @@
                     resistance to a ratio change; the ``[shift]`` block
    thrust_ratio  -- the equilibrium thrust ratio kappa*(tau, r_g): analytic, tabulated; the
                     ``[thrust_ratio]`` block
+   losses        -- the losses beside the slip (clamping, load, drag), the ``[losses]``
+                    block, or a measured torque-loss map
    _tables       -- the one reader of tabulated curves (CSV, TOML)
 
 Compute only; nothing here imports the rest of empact but its checkers and error types.
