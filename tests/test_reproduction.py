@@ -34,6 +34,10 @@ KNOWN_DEVIATIONS = {
     # the cycle, the pump's leakage and friction at that pressure dominate); the reference
     # pump's shaft power is 04CVT-49's ideal V omega p over its 0.85 efficiency (+18 %)
     "cycle.slip_control_saving", "cycle.pump_power",
+    # issue 33 item 3: with the reserve ahead and the honoured torque request one 50 % step
+    # within the servo's capacity misses 0.6 pp: r_g = 0.5 at 5 kN (0.77 pp), a light-load
+    # peak of the loop that neither protection addresses (the servo has room)
+    "control.saturation",
 }
 
 

@@ -319,3 +319,17 @@ def test_the_fair_saving_compares_equal_reserves_under_traction_error(params):
     for r in rows:
         if r["start"] == "trimmed":
             assert r["total"] > r["variator_losses_total"] > 0 and r["actuation"] > 0
+
+
+@pytest.mark.slow
+def test_the_sweep_beyond_the_capacity_keeps_the_belt(params):
+    """`saturation_sweep` at 25 kN and r_g = 1 (a 50 % step needs about 39 kN, the servo
+    holds about 31 kN): beyond the capacity; as shipped the belt goes slack, protected
+    (reserve ahead, honoured request) it does not and the load is cut."""
+    from empact.reproduction.control import saturation_sweep
+
+    (row,) = saturation_sweep(params, {"r_g": (1.0,), "F_s": (25e3,)})
+    assert not row["within_capacity"]
+    assert row["plain"]["belt_slack"] and row["plain"]["macro_slip"]
+    assert not row["protected"]["belt_slack"] and not row["protected"]["macro_slip"]
+    assert row["protected"]["peak_slip_error"] <= 0.006 and row["torque_reduction"] > 0

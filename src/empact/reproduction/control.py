@@ -48,7 +48,8 @@ from .claims import Claim
 __all__ = ["DESIGN_GRID", "SHIPPED_DESIGNS", "ControlSection", "StudiesSection", "control",
            "control_studies", "shipped_controller", "MC_RUNS", "MC_SCENARIO",
            "ESTIMATE_ERRORS", "ESTIMATE_SIGNALS", "estimate_targets", "estimate_label",
-           "FAIR_TRACTION_ERRORS", "FAIR_SIGNAL", "fair_saving"]
+           "FAIR_TRACTION_ERRORS", "FAIR_SIGNAL", "fair_saving", "SATURATION_GRID",
+           "PROTECTION", "saturation_sweep"]
 
 #: how the shipped controllers (``data/control/pi.json``, ``hinf.json``) are designed:
 #: ``empact control design --method pi --schedule --bandwidth 0.5,1 --alpha-min 0.5 --out
@@ -99,6 +100,16 @@ FAIR_STRATEGIES = {
     "safety factor 1.3, ratio-aware mu": ("safety-factor", "ratio-aware", 1.3),
     "open loop at tau = 0.9 (ratio-aware mu, no feedback)": ("safety-factor", "ratio-aware",
                                                              1 / OPEN_LOOP_TAU)}
+
+#: the saturation sweep (issue 33 item 3): 50 % load steps at these ratios [-] and starting
+#: clamping forces [N] (the servo's static capacity for the step, F_max / (1 + 0.5 / 0.9),
+#: is about 20.2 kN)
+SATURATION_GRID = {"r_g": (0.5, 0.7, 1.0, 1.4, 2.0),
+                   "F_s": (5e3, 10e3, 12.5e3, 15e3, 17.5e3, 20e3)}
+#: the protections the sweep runs with (``[controller]`` keys): the reserve ahead and the
+#: honoured torque request (off in the shipped scenarios: the reserve ahead lowers the wide
+#: Monte Carlo spread's clean runs at r_g = 0.5, CHANGELOG)
+PROTECTION = {"reserve_ahead": True, "torque_request": "honoured"}
 
 SRC = "issue 21 (beyond the paper)"
 
@@ -203,6 +214,8 @@ class StudiesSection:
         ``saving_energy`` [-] (`_saving`)
     fair : list of dict
         The fair comparison under traction errors (`fair_saving`'s rows).
+    saturation : list of dict
+        The saturation sweep (`saturation_sweep`'s rows).
     claims : tuple of Claim
         The targets checked.
     """
@@ -211,6 +224,7 @@ class StudiesSection:
     montecarlo: MonteCarloResult
     saving: list[dict[str, Any]]
     fair: list[dict[str, Any]]
+    saturation: list[dict[str, Any]]
     claims: tuple[Claim, ...]
 
 
@@ -373,9 +387,10 @@ def control_studies(params: Params) -> StudiesSection:
     runs = {n: run_closed_loop(scenarios[n], params) for n in names}
     saving = _saving(params, scenarios, runs, names)
     fair = fair_saving(params)
-    return StudiesSection(traction_error, mc, saving, fair,
+    sat = saturation_sweep(params)
+    return StudiesSection(traction_error, mc, saving, fair, sat,
                           tuple(_study_claims(traction_error, mc, saving)
-                                + [_fair_claim(fair)]))
+                                + [_fair_claim(fair), _saturation_claim(sat)]))
 
 
 def _saving(params, scenarios, runs, names) -> list[dict[str, Any]]:
@@ -647,6 +662,92 @@ def _study_claims(traction_error, mc, saving) -> list[Claim]:
         values={**{r["scenario"]: r["saving"] for r in blind},
                 **{f"{r['scenario']}@energy": r["saving_energy"] for r in blind}}))
     return claims
+
+
+def saturation_sweep(params: Params, grid: dict[str, tuple[float, ...]] | None = None,
+                     protection: dict[str, Any] | None = None,
+                     duration: float = 1.5) -> list[dict[str, Any]]:
+    """50 % load steps over ratio x starting clamping force, each run as shipped and with
+    the protections `protection` (`PROTECTION`): the peak slip error, macro slip and belt
+    slack, and what the protected law did.
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set.
+    grid : dict, optional
+        ``{"r_g": ratios [-], "F_s": starting clamping forces [N]}`` (`SATURATION_GRID`).
+    protection : dict, optional
+        ``[controller]`` keys of the protected runs (`PROTECTION`).
+    duration : float
+        Length of each run [s] (the step at 0.5 s).
+
+    Returns
+    -------
+    list of dict
+        One row per point: ``r_g`` [-], ``F_s`` [N], ``within_capacity`` (bool: the step's
+        steady clamping ``F_s (1 + step / tau)`` within the servo's ``F_max``), and for
+        ``plain`` and ``protected`` each ``peak_slip_error`` [-], ``macro_slip`` and
+        ``belt_slack`` (bools); ``torque_reduction`` [N m] (the honoured request's largest
+        cut, 0 without it) and ``slip_setpoint_lowest`` [-] (the reserve ahead's).
+    """
+    grid = SATURATION_GRID if grid is None else grid
+    protection = PROTECTION if protection is None else protection
+    rows = []
+    for r in grid["r_g"]:
+        base = load_scenario(control_example_path("slip-load-step-r0.5" if r < 0.75 else
+                                                  "slip-load-step-r1"))
+        tau0 = float(base.references["tau"][0, 1])
+        for F in grid["F_s"]:
+            sc = replace(base, duration=duration, initial=replace(base.initial, F_s=F, r_g=r))
+            row: dict[str, Any] = {"r_g": r, "F_s": F}
+            for kind, spec in (("plain", {}), ("protected", protection)):
+                run = run_closed_loop(replace(sc, controller=replace(sc.controller, **spec)),
+                                      params)
+                m = run.metrics
+                row[kind] = {"peak_slip_error": m["peak_slip_error"],
+                             "macro_slip": bool(m.get("macro_slip", True)),
+                             "belt_slack": bool(m["min_clamping_force"] <= 0.0
+                                                or not m["complete"])}
+                if kind == "protected":
+                    row["torque_reduction"] = float(m.get("torque_reduction", 0.0))
+                    row["slip_setpoint_lowest"] = float(m.get("slip_setpoint_lowest",
+                                                              float("nan")))
+                    row["within_capacity"] = bool(
+                        F * (1 + float(sc.load_step or 0.0) / tau0) <= run.law._F_max)
+            rows.append(row)
+    return rows
+
+
+def _saturation_claim(rows: list[dict[str, Any]]) -> Claim:
+    """Every step within the servo's static capacity meets 0.6 pp with the protections."""
+    inside = [r for r in rows if r["within_capacity"]]
+    miss = [r for r in inside if r["protected"]["peak_slip_error"] > 0.006
+            or r["protected"]["macro_slip"]]
+    miss_plain = [r for r in inside if r["plain"]["peak_slip_error"] > 0.006
+                  or r["plain"]["macro_slip"]]
+    beyond = [r for r in rows if not r["within_capacity"]]
+
+    def pts(rs: list[dict[str, Any]], kind: str) -> str:
+        return ", ".join(f"r_g {r['r_g']:g} at {r['F_s'] / 1e3:g} kN "
+                         f"({100 * r[kind]['peak_slip_error']:.3g} pp)" for r in rs) or "none"
+
+    return Claim(
+        key="control.saturation", source="issue 33 item 3 (beyond the paper)",
+        claim="with the reserve ahead and the honoured torque request, every 50 % load step "
+              "within the secondary servo's static capacity meets a peak slip error of 0.6 "
+              "pp, and none beyond it slackens the belt",
+        computed=f"{len(inside)} steps within the capacity (r_g "
+                 f"{', '.join(f'{x:g}' for x in sorted({r['r_g'] for r in rows}))} x F_s "
+                 f"{', '.join(f'{x / 1e3:g}' for x in sorted({r['F_s'] for r in rows}))} "
+                 f"kN); missed as shipped: {pts(miss_plain, 'plain')}; missed protected: "
+                 f"{pts(miss, 'protected')}; beyond the capacity: {len(beyond)} steps, belt "
+                 f"slack protected in {sum(r['protected']['belt_slack'] for r in beyond)}",
+        shown=not miss and not any(r["protected"]["belt_slack"] for r in beyond),
+        explanation="A step misses with the protections: at light load (5 kN, r_g = 0.5) "
+                    "neither acts (the servo has room); the peak is the loop's.",
+        values={f"r_g={r['r_g']:g},F_s={r['F_s']:g}": r["protected"]["peak_slip_error"]
+                for r in rows})
 
 
 def _fair_claim(fair: list[dict[str, Any]]) -> Claim:
