@@ -34,6 +34,10 @@ KNOWN_DEVIATIONS = {
     # the cycle, the pump's leakage and friction at that pressure dominate); the reference
     # pump's shaft power is 04CVT-49's ideal V omega p over its 0.85 efficiency (+18 %)
     "cycle.slip_control_saving", "cycle.pump_power",
+    # issue 33 item 3: with the reserve ahead and the honoured torque request one 50 % step
+    # within the servo's capacity misses 0.6 pp: r_g = 0.5 at 5 kN (0.77 pp), a light-load
+    # peak of the loop that neither protection addresses (the servo has room)
+    "control.saturation",
 }
 
 
@@ -146,3 +150,19 @@ def test_energy_saving_sign_at_a_band_end_is_recomputed(params, claims):
     assert (f"losses.lambda_F = {low:g} (" in claim["computed"]) == bool(flips)
     if n in flips:
         assert f"{n} {100 * got:+.1f} %" in claim["computed"]
+
+
+def test_fair_saving_claim(claims):
+    """Issue 33 item 7: `control.fair_saving` is shown (slip control never macro-slips under
+    the traction errors, the open loop at its reserve does at some error, both safety
+    factors clamp more at the exact estimate); its values record each case's macro slip
+    (1.0 / 0.0): slip control's are all 0 and the open loop's at -10 % all 1 (measured:
+    every ratio; the machine cannot hold its clamping)."""
+    by = {c["key"]: c for c in claims}
+    c = by["control.fair_saving"]
+    assert c["shown"]
+    v = c["values"]
+    slip = [x for k, x in v.items() if k.endswith("@slip control (tau = 0.9)")]
+    open_10 = [x for k, x in v.items() if "@-0.1@open loop" in k]
+    assert len(slip) == 9 and not any(slip)
+    assert len(open_10) == 3 and all(open_10)

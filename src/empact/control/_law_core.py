@@ -95,6 +95,14 @@ class LawConstants(NamedTuple):
     request: bool  #: compute the torque request
     honour: bool  #: the bench's load torque follows it (the law commands ``T_l``)
     F_cap: float  #: the clamping the secondary servo holds within its margin [N]
+    # the reserve ahead and the slip-runaway guard (issue 33; `empact.control.law` notes)
+    ahead: bool  #: lower the set-point's torque ratio as the servo's headroom shrinks
+    F_max: float  #: the clamping the secondary servo's torque limit holds [N]
+    ahead_h0: float  #: the headroom share below which the set-point moves [-]
+    guard: bool  #: the slip-runaway guard (its state last of the pre-processing's)
+    guard_margin: float  #: the slip's share above its set-point where it acts [-]
+    guard_gain: float  #: its clamping per share of slip beyond the margin [-]
+    guard_decay: float  #: its release per sample, ``exp(-dt / guard_release)`` [-]
 
 
 class LawTables(NamedTuple):
@@ -105,6 +113,8 @@ class LawTables(NamedTuple):
     r_g: np.ndarray  #: ratio reference [-]
     slip: np.ndarray  #: slip set-point [-]
     mu: np.ndarray  #: its traction coefficient [-]
+    slip_lo: np.ndarray  #: the reserve ahead's lowest set-point [-] (its torque ratio's)
+    mu_lo: np.ndarray  #: its traction coefficient [-]
     rdot: np.ndarray  #: the ratio reference's rate [1/s]
     decoupling: np.ndarray  #: the decoupler's torque ratio [-]
     mu_max: np.ndarray  #: the traction peak at the reference ratio [-] (scheduled laws)
@@ -132,6 +142,8 @@ class LawWork(NamedTuple):
     u: np.ndarray  #: (2,) the servo torques [N m]
     one: np.ndarray  #: (2,) the traction peak's argument and value
     trace: np.ndarray  #: (n_k, 2) per sample the torque request and the load applied [N m]
+    setpoint: np.ndarray  #: (n_k, 2) per sample the set-point run [-] and the guard's
+    #: clamping share [-] (the reserve ahead or the guard; NaN until written)
 
 
 #: each constant's type
@@ -150,11 +162,12 @@ def tables(**arrays: object) -> LawTables:
                         for k, v in arrays.items()})
 
 
-def work(n_raw: int, n_cmd: int = 2, n_trace: int = 1) -> LawWork:
+def work(n_raw: int, n_cmd: int = 2, n_trace: int = 1, n_setpoint: int = 1) -> LawWork:
     """Fresh work arrays for a law reading `n_raw` signals and commanding `n_cmd` inputs,
-    with `n_trace` samples of the torque request's trace (NaN until written)."""
+    with `n_trace` samples of the torque request's trace and `n_setpoint` of the set-point's
+    (NaN until written)."""
     return LawWork(np.full(2, np.nan), np.zeros(n_raw), np.zeros(n_cmd), np.zeros(2),
-                   np.full((n_trace, 2), np.nan))
+                   np.full((n_trace, 2), np.nan), np.full((n_setpoint, 2), np.nan))
 
 
 @structref.register
@@ -331,7 +344,8 @@ def sense(buf, n_raw, c, ideal, m):
 @njit(cache=True)
 def safety_torque(T, r_m, c, tb, wk):
     """The safety-factor clamping's secondary servo torque [N m] for the torque `T` [N m] a
-    production controller knows (here the driveshaft torque) at the measured ratio `r_m`:
+    production controller knows (the feedforward's signal: the driveshaft torque, or its
+    estimate) at the measured ratio `r_m`:
     ``SF |T| cos(beta) / (2 mu_design R_s)`` (``mu_design`` the peak at `r_m` when NaN)."""
     mu_d = c.mu_design
     if mu_d != mu_d:
@@ -374,7 +388,7 @@ def pre(law, s, out, raw, k, ideal):
     schedule's gains) and the servo torques without the controller's share.  `ideal` drops
     noise and quantisation."""
     c, tb, wk = law.c, law.tb, law.wk
-    nb = c.n_pre - 2 - c.n_est - (1 if c.obs else 0)
+    nb = c.n_pre - 2 - c.n_est - (1 if c.obs else 0) - (1 if c.guard else 0)
     nbuf = c.n_buf
     n_last = tb.r_g.shape[0] - 1
     kk = k if k < n_last else n_last
@@ -395,6 +409,37 @@ def pre(law, s, out, raw, k, ideal):
     r_m, w_p, w_s, T_ds = m[0], m[1], m[2], m[3]
     base = r_m if c.slip_nu else c.r_ref0
     y = 1.0 - w_s / (base * w_p)
+    # the torque the clamping is computed for (the feedforward's signal; the safety-factor
+    # clamping reads the same, so that every strategy has the same information)
+    if c.ff_est:  # the torque source's torque as its controller reports it: late, off
+        T_b = c.est_gain * out[nb + 2 + c.n_est - 1]
+        if c.obs:  # the driveshaft torque: the twist rate integrated (output speed
+            # less wheel speed, raw), pulled slowly to the estimate
+            o = nb + 2 + c.n_est
+            T_h = s[o]
+            T_h = T_h + c.obs_k * (out[2 * nbuf] - raw[n_raw]) + c.obs_a * (T_b - T_h)
+            out[o] = T_h
+            T_b = T_h
+    else:
+        T_b = T_ds if c.ff_t_ds else m[6]
+    F_full = 0.0  # the clamping that holds the set-point at T_b (feedforward gain 1) [N]
+    if c.ahead or c.guard:
+        R_s = _radius(r_m, c.L_belt, c.a, wk.radius)
+        if R_s != R_s:
+            return 1, 0.0, 0.0, c.bias0, c.bias1
+        F_full = abs(T_b) * c.cosb / (c.ff_den * mu_ref * R_s)
+    if c.ahead:  # the reserve ahead: the set-point moves towards slip_lo as the servo's
+        # headroom h (the share of its torque limit the clamping F_full leaves) falls
+        # below ahead_h0, never past the clamping the servo holds
+        h = 1.0 - F_full / c.F_max
+        h = 0.0 if 0.0 > h else h
+        w = (c.ahead_h0 - h) / c.ahead_h0
+        cap = mu_ref * h / (mu_ref - tb.mu_lo[kk]) if mu_ref > tb.mu_lo[kk] else 0.0
+        w = cap if cap < w else w
+        w = _lo_hi(w, 0.0, 1.0)
+        slip_ref = slip_ref + w * (tb.slip_lo[kk] - slip_ref)
+        mu_ref = mu_ref + w * (tb.mu_lo[kk] - mu_ref)
+        wk.setpoint[kk, 0] = slip_ref
     if c.log_r:
         e0 = math.log(1e-9 if 1e-9 > r_ref else r_ref) - math.log(1e-9 if 1e-9 > r_m else r_m)
     else:
@@ -418,21 +463,10 @@ def pre(law, s, out, raw, k, ideal):
     if c.safety:
         e1 = 0.0  # the slip loop is replaced by the open-loop clamping strategy
         f = 0.0
-        u1 = safety_torque(T_ds, r_m, c, tb, wk)
+        u1 = safety_torque(T_b, r_m, c, tb, wk)
         if wk.radius[1] != wk.radius[1]:
             return 1, e0, e1, c.bias0, u1
     elif c.feedforward:
-        if c.ff_est:  # the torque source's torque as its controller reports it: late, off
-            T_b = c.est_gain * out[nb + 2 + c.n_est - 1]
-            if c.obs:  # the driveshaft torque: the twist rate integrated (output speed
-                # less wheel speed, raw), pulled slowly to the estimate
-                o = nb + 2 + c.n_est
-                T_h = s[o]
-                T_h = T_h + c.obs_k * (out[2 * nbuf] - raw[n_raw]) + c.obs_a * (T_b - T_h)
-                out[o] = T_h
-                T_b = T_h
-        else:
-            T_b = T_ds if c.ff_t_ds else m[6]
         if c.shift_ff:  # the secondary pulley's acceleration torque
             T_b = T_b + c.J_s * w_p * rdot
         a = c.alpha_ff
@@ -443,6 +477,16 @@ def pre(law, s, out, raw, k, ideal):
             ff = scheduled_ff(tb.ff_table, T_b * c.cosb / (c.ff_den * mu_ref * R_s))
         else:
             ff = c.ff_gain * T_b * c.cosb / (c.ff_den * mu_ref * R_s)
+        if c.guard:  # the slip-runaway guard: clamping at once when the measured slip
+            # passes its set-point by more than the margin, held and released slowly
+            og = c.n_pre - 1
+            x = c.guard_gain * (y / slip_ref - 1.0 - c.guard_margin)
+            g = c.guard_decay * s[og]
+            g = x if x > g else g
+            g = 1.0 if g > 1.0 else g  # at most twice the set-point's clamping
+            out[og] = g
+            ff += g * F_full
+            wk.setpoint[kk, 1] = g
         f = a * f + (1 - a) * ff
         u1 += c.tpf * f
     else:

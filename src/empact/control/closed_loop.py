@@ -32,7 +32,7 @@ from .law import LoopConfig, LoopLaw
 __all__ = ["LoopLaw", "ClosedLoopResult", "run_closed_loop", "build_law", "metrics",
            "resolve_controller", "control_examples", "control_example_path",
            "safety_factor_twin", "check_targets", "SLIP_METRICS", "shown_metric",
-           "torque_request_metrics"]
+           "torque_request_metrics", "protection_metrics"]
 
 
 def __getattr__(name: str) -> Any:
@@ -272,8 +272,12 @@ def run_closed_loop(scenario: Scenario, params: Params, controller: Controller |
     model, op = scenario_model(scenario, params)
     law = build_law(scenario, params, controller, model, op, ideal, nominal)
     res = run_scenario(scenario, params, controller=law, progress=progress)
+    slip = law.refs.slip
+    if law.config.spec.reserve_ahead:  # the set-point the law ran (the reserve ahead's)
+        ran = law.setpoint_trace[:, 0]
+        slip = np.where(np.isfinite(ran), ran, slip)
     refs = {"r_g": np.interp(res.t, law.t_k, law.refs.r_g),
-            law.slip_signal: np.interp(res.t, law.t_k, law.refs.slip)}
+            law.slip_signal: np.interp(res.t, law.t_k, slip)}
     out = ClosedLoopResult(res, refs, op, scenario, law.controller, law=law)
     return replace(out, metrics=metrics(out))
 
@@ -377,7 +381,46 @@ def metrics(run: ClosedLoopResult) -> dict[str, Any]:
         out["saturated"] = 0.0
     if run.law is not None and run.law.config.spec.torque_request != "off":
         out.update(torque_request_metrics(run))
+    if run.law is not None and (run.law.config.spec.reserve_ahead
+                                or run.law.config.spec.slip_guard):
+        out.update(protection_metrics(run))
     return out
+
+
+def protection_metrics(run: ClosedLoopResult) -> dict[str, Any]:
+    """What the reserve ahead and the slip-runaway guard (``controller.reserve_ahead``,
+    ``slip_guard``) did over a run, from the law's trace (`LoopLaw.setpoint_trace`):
+
+    * ``slip_setpoint_lowest`` [-]: the lowest slip set-point the law ran (the reference's
+      where the reserve ahead did not move it), ``reserve_ahead_time`` [s]: the time the
+      set-point was below the reference's;
+    * ``guard_peak`` [-]: the guard's largest clamping share (of the clamping that holds the
+      set-point), ``guard_time`` [s]: the time it added more than 1 % of it.
+
+    Parameters
+    ----------
+    run : ClosedLoopResult
+        A run whose law had the reserve ahead or the guard.
+
+    Returns
+    -------
+    dict str -> float
+        The numbers above (NaN for the one that did not run).
+    """
+    law = run.law
+    assert law is not None
+    tr = law.setpoint_trace
+    n = tr.shape[0]
+    sp, g = tr[:, 0], tr[:, 1]
+    ran = np.isfinite(sp)
+    nan = float("nan")
+    below = ran & (sp < law.refs.slip[:n] * (1 - 1e-12))
+    ran_g = np.isfinite(g)
+    return {"slip_setpoint_lowest": float(np.min(sp[ran])) if ran.any() else nan,
+            "reserve_ahead_time": float(np.count_nonzero(below) * law.dt) if ran.any() else nan,
+            "guard_peak": float(np.max(g[ran_g])) if ran_g.any() else nan,
+            "guard_time": float(np.count_nonzero(ran_g & (g > 0.01)) * law.dt)
+            if ran_g.any() else nan}
 
 
 def torque_request_metrics(run: ClosedLoopResult) -> dict[str, Any]:

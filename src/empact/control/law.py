@@ -271,6 +271,8 @@ class _Refs:
     mu: NDArray[np.float64]
     rdot: NDArray[np.float64]
     decoupling: NDArray[np.float64]
+    slip_lo: NDArray[np.float64]
+    mu_lo: NDArray[np.float64]
 
 
 class LoopLaw:
@@ -362,6 +364,8 @@ class LoopLaw:
         if self._estimate:
             est_delay = s.engine_torque_delay if s is not None else 0.0
             self._n_est = int(round(est_delay / dt)) + 1
+        self._ahead = spec.reserve_ahead and spec.clamping == "feedback"
+        self._guard = spec.slip_guard and spec.feedforward and spec.clamping == "feedback"
         self._request = spec.torque_request != "off"
         self._honour = spec.torque_request == "honoured"
         if self._honour:
@@ -373,7 +377,7 @@ class LoopLaw:
         # the law's state: buffers, feedforward filter, controller
         self._nb = len(RAW_SIGNALS) * self._n_buf
         self._R_s_last = (float("nan"), float("nan"))
-        self.n_state = self._nb + 2 + self._n_est + self._observer + cd.n
+        self.n_state = self._nb + 2 + self._n_est + self._observer + self._guard + cd.n
         self._alpha_ff = float(np.exp(-2 * np.pi * spec.feedforward_filter_hz * dt))
         self._alpha_dec = float(np.exp(-2 * np.pi * spec.decoupling_filter_hz * dt))
         self._decoupling0 = float(self.refs.decoupling[0])
@@ -381,16 +385,22 @@ class LoopLaw:
         self._L_aw = _antiwindup_gain(cd.A, cd.C) if spec.anti_windup else \
             np.zeros((cd.n, 2))
         self.raw0 = self.raw_at_rest(self.point)
-        F0 = self._ff_force(self._ff_torque0(), self.raw0[0], self.refs.mu[0])
+        # the clamping the secondary servo's torque limit holds (the reserve ahead's and
+        # the guard's bound): its rating even where the loop runs without limits (the
+        # linear model's law is the law that runs); the holding torque is tpf F_s (no
+        # constant share on this machine's actuation: T_0 = 0 to rounding at every trim)
+        servo = cfg.limits if cfg.limits is not None else model.params.servo
+        self._F_max = float(servo.T_ms_max / abs(self._tpf))
+        F0 = self._ff_force(self._ff_torque0(), self.raw0[0], self._mu_at_rest())
         self._F0 = F0 if spec.feedforward else 0.0
         self._bias = np.array([self.u0[0], self.u0[1] - self._tpf * self._F0])
         self._T_ms_start = float(self.u0[1])
-        self._F_cap = self._servo_capacity()
+        self._F_cap = self._servo_capacity(spec.torque_request_margin)
         self._pack()
         if spec.clamping == "safety-factor":
             # the pre-processing's secondary servo torque at rest (the decoupler's zero)
-            self._T_ms_start = float(core.safety_torque(self.raw0[3], self.raw0[0], self._c,
-                                                        self._tb, self._wk))
+            self._T_ms_start = float(core.safety_torque(self._ff_torque0(), self.raw0[0],
+                                                        self._c, self._tb, self._wk))
             self._c = self._c._replace(T_ms_start=self._T_ms_start)
         self._law = core.law(self._c, self._tb, self._wk)
         self.z0 = self.initial_state()
@@ -429,7 +439,11 @@ class LoopLaw:
             est_gain=self._c_est_gain() if self._estimate else 1.0,
             obs=self._observer, obs_k=p.driveline.k_ds * self.dt,
             obs_a=-float(np.expm1(-2 * np.pi * spec.observer_hz * self.dt)),
-            request=self._request, honour=self._honour, F_cap=self._F_cap)
+            request=self._request, honour=self._honour, F_cap=self._F_cap,
+            ahead=self._ahead, F_max=self._F_max,
+            ahead_h0=spec.reserve_ahead_headroom, guard=self._guard,
+            guard_margin=spec.slip_guard_margin, guard_gain=spec.slip_guard_gain,
+            guard_decay=float(np.exp(-self.dt / spec.slip_guard_release)))
         # the shift feedforward's geometry at the reference ratio where it moves
         geo = [np.full(self.n_k, np.nan) for _ in range(4)]
         ks = np.flatnonzero(refs.rdot != 0.0) if spec.shift_feedforward else np.zeros(0, int)
@@ -438,15 +452,16 @@ class LoopLaw:
                 col[ks] = v
         c = self.controller
         self._tb = core.tables(
-            r_g=refs.r_g, slip=refs.slip, mu=refs.mu, rdot=refs.rdot,
-            decoupling=refs.decoupling,
+            r_g=refs.r_g, slip=refs.slip, mu=refs.mu, slip_lo=refs.slip_lo,
+            mu_lo=refs.mu_lo, rdot=refs.rdot, decoupling=refs.decoupling,
             mu_max=self.model.mu_max(refs.r_g) if sched is not None else np.zeros(self.n_k),
             R_p=geo[0], R_s=geo[1], phi=geo[2], kappa_geo=geo[3], noise=self._noise,
             schedule=sched._packed if sched is not None else np.zeros(2), A=c.A, B=c.B,
             C=c.C, D=c.D, L=self._L_aw, ff_table=self._ff_table, p=self.model.p,
             load=self._load)
         self._wk = core.work(len(self.measured), len(self.commands),
-                             self.n_k if self._request else 1)
+                             self.n_k if self._request else 1,
+                             self.n_k if self._ahead or self._guard else 1)
 
     def _law_at(self, ref: NDArray, k: int) -> Any:
         """The law on one row of tables: sample `k`'s noise, the references `ref` (``r_g,
@@ -459,7 +474,8 @@ class LoopLaw:
             one = list(self._shift_geometry(rr))
         kk = min(int(k), self.n_k - 1)
         return core.law(self._c, core.tables(
-            r_g=rr, slip=[slip], mu=[mu], rdot=[rdot], decoupling=[self._decoupling0],
+            r_g=rr, slip=[slip], mu=[mu], slip_lo=self._tb.slip_lo[kk:kk + 1],
+            mu_lo=self._tb.mu_lo[kk:kk + 1], rdot=[rdot], decoupling=[self._decoupling0],
             mu_max=(self.model.mu_max(rr) if self.controller.schedule is not None
                     else np.zeros(1)),
             R_p=one[0], R_s=one[1], phi=one[2], kappa_geo=one[3],
@@ -513,8 +529,17 @@ class LoopLaw:
                 raise ParameterError(f"decoupling: the machine does not trim at the reference "
                                      f"ratio {bad:g} ({g.reason[~g.ok][0]})")
             dec = (g.u[:, 0] / g.u[:, 1])[inv]
+        slip_lo, mu_lo = np.asarray(slip, float), np.asarray(mu, float)
+        if self.config.spec.reserve_ahead:
+            # the reserve ahead's lowest set-point: its torque ratio at each reference ratio
+            # (never above the reference's own)
+            ru, inv = np.unique(r, return_inverse=True)
+            tau_lo = np.full(ru.shape, self.config.spec.reserve_ahead_tau)
+            nu_lo = slip_at_torque_ratio(self.model, tau_lo, ru)[inv.ravel()]
+            slip_lo = np.minimum(nu_lo, slip_lo)
+            mu_lo = np.asarray(self.model.traction(slip_lo, r), float)
         return _Refs(r_g=r, slip=np.asarray(slip, float), mu=np.asarray(mu, float), rdot=rdot,
-                     decoupling=dec)
+                     decoupling=dec, slip_lo=slip_lo, mu_lo=mu_lo)
 
     def _make_noise(self) -> NDArray[np.float64]:
         s = self.config.sensors
@@ -548,7 +573,7 @@ class LoopLaw:
         measurements, the feedforward filter settled, the controller state zero)."""
         z = np.zeros(self.n_state)
         z[:self._nb] = np.repeat(self.raw0[:len(RAW_SIGNALS)], self._n_buf)
-        z[self._nb] = self._ff_force(self._ff_torque0(), self.raw0[0], self.refs.mu[0])
+        z[self._nb] = self._ff_force(self._ff_torque0(), self.raw0[0], self._mu_at_rest())
         if self._n_est:  # the estimate at rest: its value of the start, settled
             z[self._nb + 2:self._nb + 2 + self._n_est] = self.raw0[6]
         if self._observer:  # the observer at rest: the estimate's torque
@@ -588,18 +613,64 @@ class LoopLaw:
         s = self.config.sensors
         return 1.0 + (s.engine_torque_error if s is not None else 0.0)
 
-    def _servo_capacity(self) -> float:
-        """The clamping force [N] the secondary servo holds with ``torque_request_margin``
-        of its torque limit held back: ``(+-(1 - margin) T_ms_max - T_0) / tpf`` (the sign
-        of ``tpf``, the servo torque per N of clamping, which the sheaves' sense sets),
-        ``T_0`` the holding torque's share that does not scale with the clamping (at the
-        start); NaN without limits."""
+    def _servo_capacity(self, margin: float) -> float:
+        """The clamping force [N] the secondary servo holds with `margin` of its torque
+        limit held back: ``(+-(1 - margin) T_ms_max - T_0) / tpf`` (the sign of ``tpf``, the
+        servo torque per N of clamping, which the sheaves' sense sets), ``T_0`` the holding
+        torque's share that does not scale with the clamping (at the start); NaN without
+        limits."""
         lim = self.config.limits
         if lim is None:
             return float("nan")
         T_0 = self.u0[1] - self._tpf * self.point["F_s"]
-        margin = self.config.spec.torque_request_margin
         return float((np.copysign((1 - margin) * lim.T_ms_max, self._tpf) - T_0) / self._tpf)
+
+    def setpoint(self, T: float, r_g: float, k: int = 0) -> tuple[float, float]:
+        """The set-point the law runs at sample `k` with the torque `T` [N m] (the
+        feedforward's signal) at the measured ratio `r_g`: the reference's slip and traction
+        coefficient, moved by the reserve ahead (``controller.reserve_ahead``) towards the
+        lowest set-point's as the secondary servo's headroom shrinks (the compiled sample's
+        law, `empact.control._law_core.pre`).
+
+        Parameters
+        ----------
+        T : float
+            The torque the clamping is computed for [N m].
+        r_g : float
+            The measured ratio [-].
+        k : int, optional
+            The sample (its references; default the first).
+
+        Returns
+        -------
+        slip, mu : float
+            The set-point's slip [-] and traction coefficient [-].
+        """
+        kk = min(int(k), self.n_k - 1)
+        slip, mu = float(self.refs.slip[kk]), float(self.refs.mu[kk])
+        if not self._ahead:
+            return slip, mu
+        F_full = abs(T) * self._cosb / (2 * self.config.spec.traction_error * mu
+                                        * self._R_s(r_g))
+        h = max(1.0 - F_full / self._F_max, 0.0)
+        mu_lo, slip_lo = float(self.refs.mu_lo[kk]), float(self.refs.slip_lo[kk])
+        w = (self.config.spec.reserve_ahead_headroom - h) / \
+            self.config.spec.reserve_ahead_headroom
+        cap = mu * h / (mu - mu_lo) if mu > mu_lo else 0.0
+        w = min(max(min(w, cap), 0.0), 1.0)
+        return slip + w * (slip_lo - slip), mu + w * (mu_lo - mu)
+
+    def _mu_at_rest(self) -> float:
+        """The set-point's traction coefficient at the start (`setpoint` of the start's
+        torque and ratio)."""
+        return self.setpoint(self._ff_torque0(), float(self.raw0[0]))[1]
+
+    @property
+    def setpoint_trace(self) -> NDArray[np.float64]:
+        """Per sample (`t_k`) the slip set-point the law ran [-] (the reserve ahead's) and
+        the slip-runaway guard's clamping share [-] (NaN where neither runs, or not
+        reached), shape (n_k, 2); shape (1, 2) of NaN without either."""
+        return self._wk.setpoint.copy()
 
     @property
     def servo_capacity(self) -> float:
@@ -677,7 +748,7 @@ class LoopLaw:
     def n_pre(self) -> int:
         """Size of the sensor, feedforward and decoupler state (`preprocess`; with the
         engine-torque estimate's buffer)."""
-        return self._nb + 2 + self._n_est + self._observer
+        return self._nb + 2 + self._n_est + self._observer + self._guard
 
     @property
     def output_mask(self) -> NDArray[np.float64]:

@@ -118,7 +118,8 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
     y0 = law.raw0
     r0 = np.array([law.refs.r_g[0], law.refs.slip[0], law.refs.mu[0], 0.0])
     n_buf = (law.n_pre - 2) // len(RAW_SIGNALS)
-    h_s = np.concatenate([np.repeat(_H_RAW, n_buf), [1e-3, 1e-6]])
+    n_more = law.n_pre - 2 - n_buf * len(RAW_SIGNALS)  # the slip-runaway guard's state
+    h_s = np.concatenate([np.repeat(_H_RAW, n_buf), [1e-3, 1e-6], np.full(n_more, 1e-6)])
 
     def f(s, y, r):
         s1, e, u, _ = law.preprocess(s, y, 0, r, ideal=True)
