@@ -124,9 +124,10 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
         s1, e, u, _ = law.preprocess(s, y, 0, r, ideal=True)
         return s1, e, u
 
-    out: dict[str, list] = {k: [] for k in ("Sz", "Ez", "Fz", "Sy", "Ey", "Fy", "Sr", "Er",
-                                            "Fr")}
+    out: dict[str, NDArray[np.float64]] = {}
+    eps = np.finfo(float).eps
     for which, x0, h in (("z", s0, h_s), ("y", y0, _H_RAW), ("r", r0, _H_REF)):
+        vals: list[tuple[list, list]] = [([], []) for _ in range(3)]  # S, E, F: +h, -h
         for i in range(len(x0)):
             xp, xm = x0.copy(), x0.copy()
             xp[i] += h[i]
@@ -135,13 +136,17 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
             args_m = [s0, y0, r0]
             k = {"z": 0, "y": 1, "r": 2}[which]
             args_p[k], args_m[k] = xp, xm
-            fp, fm = f(*args_p), f(*args_m)
-            for name, a, b in zip(("S", "E", "F"), fp, fm):
-                d = (a - b) / (2 * h[i])
-                # differences at the rounding level of the values are no derivative
-                floor = 64 * np.finfo(float).eps * np.maximum(np.abs(a), np.abs(b)) / (2 * h[i])
-                out[name + which].append(np.where(np.abs(d) > floor, d, 0.0))
-    return {k: np.array(v).T for k, v in out.items()}
+            for v, a, b in zip(vals, f(*args_p), f(*args_m)):
+                v[0].append(a)
+                v[1].append(b)
+        h2 = 2 * np.asarray(h, float)[:len(x0), None]
+        for name, (plus, minus) in zip(("S", "E", "F"), vals):
+            a, b = np.array(plus), np.array(minus)  # (columns, rows)
+            d = (a - b) / h2
+            # differences at the rounding level of the values are no derivative
+            floor = 64 * eps * np.maximum(np.abs(a), np.abs(b)) / h2
+            out[name + which] = np.where(np.abs(d) > floor, d, 0.0).T
+    return {k: out[k] for k in ("Sz", "Ez", "Fz", "Sy", "Ey", "Fy", "Sr", "Er", "Fr")}
 
 
 @dataclass(frozen=True, eq=False)
