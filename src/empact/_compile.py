@@ -16,7 +16,10 @@ from __future__ import annotations
 
 import ast
 import gc
+import hashlib
 import json
+import os
+import platform
 import sys
 import time
 from pathlib import Path
@@ -41,7 +44,8 @@ from .variator.geometry import secondary_radius
 from .variator.thrust_ratio import TabulatedThrustRatio
 from .variator.traction import TabulatedTraction
 
-__all__ = ["compile_all", "compiled_sources", "drop_stale_cache", "loaded_signatures"]
+__all__ = ["compile_all", "compiled_sources", "cold_signatures", "drop_stale_cache",
+           "loaded_signatures", "record_if_cold", "record_path", "sources_digest"]
 
 
 def drop_stale_cache(folder: Path | None = None) -> int:
@@ -282,8 +286,84 @@ def loaded_signatures(roots: tuple[Path, ...] | None = None) -> set[tuple[str, s
     return out
 
 
+def sources_digest() -> str:
+    """A digest of what `compile_all` compiles from: every file of the package (sources and
+    data, not caches) with the versions of Python, numba, llvmlite and numpy.
+
+    Returns
+    -------
+    str
+        The SHA-256 hex digest.
+    """
+    import llvmlite
+    import numba
+
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256(" ".join([sys.version, platform.machine(), numba.__version__,
+                                 llvmlite.__version__, np.__version__]).encode())
+    for path in sorted(root.rglob("*")):
+        if path.is_file() and "__pycache__" not in path.parts and path.suffix != ".pyc":
+            h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
+    return h.hexdigest()
+
+
+def record_path() -> Path:
+    """Where a compile on an empty cache records what it held (`record_if_cold`): numba's
+    cache folder.
+
+    Returns
+    -------
+    Path
+        The record's file (it may not exist).
+    """
+    import numba
+
+    folder = numba.config.CACHE_DIR
+    return (Path(folder) if folder else Path(__file__).resolve().parent / "__pycache__") \
+        / "empact-compile-all.json"
+
+
+def record_if_cold() -> bool:
+    """After `compile_all`: when this process loaded nothing from numba's cache (it compiled
+    every routine, as ``make`` does on a fresh install), record the signatures it holds
+    with `sources_digest` (`cold_signatures` reads them); returns whether it recorded."""
+    dispatchers = [obj for obj in gc.get_objects()
+                   if issubclass(type(obj), CPUDispatcher) and obj.overloads
+                   and Path(obj.py_func.__code__.co_filename).resolve().is_relative_to(
+                       Path(__file__).resolve().parent)]
+    if not dispatchers or any(d.stats.cache_hits for d in dispatchers):
+        return False
+    path = record_path()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_text(json.dumps({"digest": sources_digest(),
+                               "signatures": sorted(loaded_signatures())}))
+    tmp.replace(path)
+    return True
+
+
+def cold_signatures() -> set[tuple[str, str, str]] | None:
+    """The signatures `compile_all` holds on an empty cache, as recorded by the last compile
+    on an empty cache (``make``'s, `record_if_cold`) if it compiled these sources
+    (`sources_digest`); None when there is no such record.
+
+    Returns
+    -------
+    set of (str, str, str) or None
+        As `loaded_signatures`.
+    """
+    try:
+        doc = json.loads(record_path().read_text())
+    except (OSError, ValueError):
+        return None
+    if doc.get("digest") != sources_digest():
+        return None
+    return {tuple(s) for s in doc["signatures"]}
+
+
 if __name__ == "__main__":  # pragma: no cover - ``python -m empact._compile [--json]``
     seconds = compile_all()
+    record_if_cold()
     if "--json" in sys.argv[1:]:  # what it loaded (``tests/test_compile.py``)
         print(json.dumps({"seconds": seconds, "signatures": sorted(loaded_signatures())}))
     else:

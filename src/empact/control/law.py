@@ -74,6 +74,7 @@ law); `run_compiled` runs it with the integrator in one compiled loop
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, replace
 from typing import Any, Mapping
 
@@ -261,7 +262,17 @@ def reference_table(references: Mapping[str, NDArray], t: NDArray) -> dict[str, 
 
 def _antiwindup_gain(A: NDArray, C: NDArray) -> NDArray:
     """Observer gain ``L`` of the discrete controller ``(A, C)``: the steady Kalman gain for
-    unit state and output noise (``A - L C`` stable whenever ``(A, C)`` is detectable)."""
+    unit state and output noise (``A - L C`` stable whenever ``(A, C)`` is detectable);
+    solved once per controller (a Monte Carlo builds a law per run of one controller)."""
+    A, C = np.ascontiguousarray(A, float), np.ascontiguousarray(C, float)
+    return _antiwindup_solved(A.shape, C.shape, A.tobytes(), C.tobytes()).copy()
+
+
+@functools.lru_cache(maxsize=32)
+def _antiwindup_solved(a_shape: tuple[int, ...], c_shape: tuple[int, ...], a: bytes,
+                       c: bytes) -> NDArray:
+    """`_antiwindup_gain` of the matrices given by their shapes and bytes (cached)."""
+    A, C = np.frombuffer(a).reshape(a_shape), np.frombuffer(c).reshape(c_shape)
     n, m = A.shape[0], C.shape[0]
     if n == 0:
         return np.zeros((0, m))

@@ -288,7 +288,18 @@ class LoopModel(Result):
 
     def poles(self) -> NDArray[np.complex128]:
         """Closed-loop eigenvalues (``z``-plane), shape ``shape + (n,)``."""
-        return np.linalg.eigvals(self.closed_loop()[0])
+        key = ("poles", self._controller_key())
+        if key not in self._cache:
+            self._cache[key] = np.linalg.eigvals(self.closed_loop()[0])
+        return self._cache[key].copy()
+
+    def _controller_key(self) -> bytes:
+        """What the closed loop's results depend on besides the shared augmented plant: the
+        controller's matrices and the output mask (a key of `_cache`, which
+        `with_controller` shares)."""
+        c = self.controller
+        return b"".join(np.ascontiguousarray(m, float).tobytes()
+                        for m in (c.A, c.B, c.C, c.D, self.mask, [c.dt]))
 
     def spectral_radius(self) -> NDArray[np.float64]:
         """Largest ``|z|`` of the closed loop (< 1: stable), shape `shape`."""
@@ -354,13 +365,16 @@ class LoopModel(Result):
             frequency).
         """
         w = default_omega(self.dt) if omega is None else np.asarray(omega, float)
-        G = self.plant_response(w)
-        K = self.controller_response(w) * self.mask[None, :, None]
-        a_in = disk_margin(K @ G)
-        a_out = disk_margin(G @ K)
-        stable = self.spectral_radius() < 1
-        return {"input": a_in, "output": a_out,
-                "alpha": np.where(stable, np.minimum(a_in, a_out), 0.0)}
+        key = ("disk margins", w.tobytes(), self._controller_key())
+        if key not in self._cache:  # (the design table, the claims and the map read them)
+            G = self.plant_response(w)
+            K = self.controller_response(w) * self.mask[None, :, None]
+            a_in = disk_margin(K @ G)
+            a_out = disk_margin(G @ K)
+            stable = self.spectral_radius() < 1
+            self._cache[key] = {"input": a_in, "output": a_out,
+                                "alpha": np.where(stable, np.minimum(a_in, a_out), 0.0)}
+        return {k: v.copy() for k, v in self._cache[key].items()}
 
     def sensitivity_peaks(self, omega: NDArray | None = None) -> dict[str, NDArray[np.float64]]:
         """Loop-at-a-time sensitivity peaks ``Ms_j = max_w |S_jj|`` of each loop, the other
