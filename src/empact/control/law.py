@@ -75,6 +75,8 @@ law); `run_compiled` runs it with the integrator in one compiled loop
 from __future__ import annotations
 
 import functools
+import hashlib
+from collections import OrderedDict
 from dataclasses import dataclass, replace
 from typing import Any, Mapping
 
@@ -280,6 +282,11 @@ def _antiwindup_solved(a_shape: tuple[int, ...], c_shape: tuple[int, ...], a: by
     return A @ P @ C.T @ np.linalg.inv(C @ P @ C.T + np.eye(m))
 
 
+#: the references of the last laws built (`LoopLaw._cached_references`), by a digest of
+#: what they are computed from
+_REFERENCES: "OrderedDict[bytes, tuple[_Refs, float]]" = OrderedDict()
+
+
 @dataclass(frozen=True, eq=False)
 class _Refs:
     """References on the sample grid: ratio, slip set-point, its traction coefficient, the
@@ -361,7 +368,7 @@ class LoopLaw:
         self.n_k = max(int(round(duration / dt)), 0) + 2
         self.t_k = np.arange(self.n_k) * dt
         self.references = references
-        self.refs = self._references(references)
+        self.refs = self._cached_references(references)
         # the safety-factor strategy's traction coefficient
         self._mu_design = None
         if spec.mu_design == "ratio-blind":
@@ -494,6 +501,30 @@ class LoopLaw:
         return law
 
     # -- set-up ----------------------------------------------------------------------------
+    def _cached_references(self, references: Mapping[str, NDArray]) -> _Refs:
+        """`_references`, computed once for the same model, start, references and loop (a
+        shift's cost a trim and a traction-peak search per distinct reference ratio, and
+        the report builds one scenario's law for its run, the ideal run, the linear model
+        and the feedforward's estimates: the same references each time)."""
+        h = hashlib.sha256()
+        for part in (self.model.p.tobytes(), repr(self.model.options).encode(),
+                     repr(self.model.params).encode(), repr(sorted(self.point.items())).encode(),
+                     repr((self.n_k, self.dt, self.slip_signal,
+                           self.config.spec.decoupling)).encode()):
+            h.update(part + b"\0")
+        for name in sorted(references):
+            h.update(name.encode() + np.ascontiguousarray(references[name], float).tobytes())
+        key = h.digest()
+        if key not in _REFERENCES:
+            refs = self._references(references)
+            _REFERENCES[key] = (refs, self._tau_ref)
+            while len(_REFERENCES) > 16:
+                _REFERENCES.popitem(last=False)
+        _REFERENCES.move_to_end(key)
+        refs, self._tau_ref = _REFERENCES[key]
+        return _Refs(**{f: getattr(refs, f).copy() for f in ("r_g", "slip", "mu", "rdot",
+                                                               "decoupling")})
+
     def _references(self, references: Mapping[str, NDArray]) -> _Refs:
         t = self.t_k
         tab = reference_table(references, t)

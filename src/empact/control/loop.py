@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from .._lazy import lazy_module
 from .._results import Result, TableResult
 from ..errors import ParameterError
-from ..nonlinear.linearization import linearize
+from ..nonlinear.linearization import linearized_plant
 from ..nonlinear.model import EmpactModel, nonlinear_model
 from ..nonlinear.scenario import Scenario
 from ..nonlinear.simulation import scenario_model, scenario_signals
@@ -632,8 +632,8 @@ def loop_model(scenario: Scenario, params: Params,
                     scenario.references, scenario.duration)
     dist = tuple(n for n in model.inputs if n not in LoopLaw.commands)
     outs = RAW_SIGNALS + PERFORMANCE
-    sys = linearize(op, LoopLaw.commands + dist, outs)
-    A, B, C, D = (np.asarray(M) for M in (sys.A, sys.B, sys.C, sys.D))
+    pl = linearized_plant(op, LoopLaw.commands + dist, outs)  # (no python-control object)
+    A, B, C, D = (np.asarray(M) for M in (pl.A, pl.B, pl.C, pl.D))
     Phi, Gam = zoh(A, B, ideal.dt)
     nr = len(RAW_SIGNALS)
     _check_no_feedthrough(D[:nr, :2])
