@@ -4,7 +4,10 @@ Workload: every shipped closed-loop scenario, run by the one simulator (`run_sce
 Rodas4) with the scenario's `empact.control.law.LoopLaw`; per scenario the law's own cost per
 1 ms sample (the time inside ``step``, the law wrapped so that the simulator's Python loop
 calls it) and the whole run's wall time with the law itself in the loop (compiled with the
-integrator where the law offers `run_compiled`); then, unless ``--no-montecarlo``, the
+integrator where the law offers `run_compiled`); the compiled loop's CPU time per sample
+(issue 36: a shift's within 1.5x a load step's), the law's construction (`build_law`, CPU)
+and its share of the whole `run_closed_loop` (issue 36: at most 10 % on a shift); then,
+unless ``--no-montecarlo``, the
 200-run closed-loop Monte Carlo of the shipped example spread (slip-load-step-r1, serial, in
 process; `_montecarlo_workload.py`).
 
@@ -19,6 +22,7 @@ Run: ``.venv/bin/python bench/bench_loop_law.py [--against /path/to/other/src]
 """
 from __future__ import annotations
 
+import inspect
 import json
 import os
 import statistics
@@ -55,27 +59,47 @@ def worker(montecarlo: bool) -> None:
     """One process's numbers, as JSON on stdout: per scenario the law's median cost per
     sample [s] and the median run [s]; the Monte Carlo's time [s]."""
     sys.path.insert(0, str(HERE))
-    from empact.control.closed_loop import build_law, control_example_path, control_examples
+    from empact.control.closed_loop import (build_law, control_example_path, control_examples,
+                                            run_closed_loop)
     from empact.nonlinear.scenario import load_scenario
     from empact.nonlinear.simulation import run_scenario, scenario_model
     from empact.params import default_params
 
     params = default_params()
     out: dict = {}
+    # (a tree from before run_scenario took the caller's trim trims again: not timed)
+    has_start = "start" in inspect.signature(run_scenario).parameters
+
+    def start(model, op):
+        return {"start": (model, op)} if has_start else {}
+
     for name in sorted(control_examples()):
         sc = load_scenario(control_example_path(name))
         model, op = scenario_model(sc, params)
         run_scenario(sc, params, controller=build_law(sc, params, None, model, op))  # warm
-        per, wall = [], []
+        per, wall, build, sample, whole = [], [], [], [], []
         for _ in range(3):
             timed = _Timed(build_law(sc, params, None, model, op))
             run_scenario(sc, params, controller=timed)
             per.append(timed.spent / timed.calls)
+            c0 = time.process_time()
             law = build_law(sc, params, None, model, op)
+            c1 = time.process_time()
             t0 = time.perf_counter()
-            run_scenario(sc, params, controller=law)
+            run_scenario(sc, params, controller=law, **start(model, op))
             wall.append(time.perf_counter() - t0)
-        out[name] = (statistics.median(per), statistics.median(wall))
+            c2 = time.process_time()
+            if not has_start:  # that run trimmed again: less a trim's CPU
+                c_t = time.process_time()
+                scenario_model(sc, params)
+                c2 -= time.process_time() - c_t
+            build.append(c1 - c0)
+            sample.append((c2 - c1) / law._k)  # the compiled loop's CPU a 1 ms sample
+            c3 = time.process_time()
+            run_closed_loop(sc, params)
+            whole.append(time.process_time() - c3)
+        out[name] = (statistics.median(per), statistics.median(wall), statistics.median(build),
+                     statistics.median(sample), statistics.median(whole))
     if montecarlo:
         from _montecarlo_workload import shipped_monte_carlo
 
@@ -106,19 +130,36 @@ def main() -> None:
     for _ in range(REPEATS):
         for key, src in trees.items():
             got[key].append(_run(src, montecarlo))
-    med = {key: {name: [statistics.median(r[name][i] for r in runs) for i in (0, 1)]
+    med = {key: {name: [statistics.median(r[name][i] for r in runs)
+                        for i in range(len(runs[0][name]))]
                  for name in runs[0] if name != "montecarlo"} for key, runs in got.items()}
     other = "against" if "against" in trees else "this"
     print(f"{'scenario':22s} {'law [us/sample]':>16s} {'against':>8s} {'ratio':>6s}  "
           f"{'run [s]':>8s} {'against':>8s} {'ratio':>6s}")
     for name in med["this"]:
-        (pn, wn), (po, wo) = med["this"][name], med[other][name]
+        (pn, wn), (po, wo) = med["this"][name][:2], med[other][name][:2]
         print(f"{name:22s} {1e6 * pn:16.2f} {1e6 * po:8.2f} {pn / po:6.3f}  {wn:8.3f} "
               f"{wo:8.3f} {wn / wo:6.3f}")
     load = [v[0] for k, v in med["this"].items() if k.startswith("slip-load-step")]
     shift = [v[0] for k, v in med["this"].items() if k.startswith("shift")]
     print(f"a shift's sample over a load step's: {max(shift) / statistics.median(load):.2f} "
           f"(largest shift over the load steps' median)")
+    # the compiled loop (`run_compiled`: law and integrator in one numba loop) and the law's
+    # set-up, CPU time: per 1 ms sample, and the build's share of the whole run_closed_loop
+    print(f"{'scenario':22s} {'sample [us]':>11s} {'against':>8s}  {'build [ms]':>10s} "
+          f"{'against':>8s} {'ratio':>6s}  {'run [ms]':>9s} {'against':>8s}  "
+          f"{'build share':>11s} {'against':>8s}")
+    for name in med["this"]:
+        _, _, bn, sn, rn = med["this"][name]
+        _, _, bo, so, ro = med[other][name]
+        print(f"{name:22s} {1e6 * sn:11.1f} {1e6 * so:8.1f}  {1e3 * bn:10.1f} {1e3 * bo:8.1f} "
+              f"{bn / bo:6.3f}  {1e3 * rn:9.1f} {1e3 * ro:8.1f}  {bn / rn:11.2f} {bo / ro:8.2f}")
+    for key in ("this", other):
+        cl = [v[3] for k, v in med[key].items() if k.startswith("slip-load-step")]
+        cs = [v[3] for k, v in med[key].items() if k.startswith("shift")]
+        print(f"{key}: compiled shift sample over the load steps': "
+              f"{max(cs) / statistics.median(cl):.2f} (largest shift); law build share of a "
+              f"shift's run_closed_loop: {max(v[2] / v[4] for k, v in med[key].items() if k.startswith('shift')):.2f} (largest)")
     if montecarlo:
         mc = {k: statistics.median(r["montecarlo"] for r in runs) for k, runs in got.items()}
         print(f"Monte Carlo, 200 closed-loop runs of slip-load-step-r1, serial: this "

@@ -11,7 +11,11 @@ before and after (the machine is shared: another busy core moves wall times).  T
 study's table is checked bitwise against a resume of its folder with one chunk's shard
 removed (one chunk recomputed).
 
-Run: ``.venv/bin/python bench/bench_study.py [--runs 10000] [--base 200] [--workers 2]``
+Then the baseline study again on one worker (``--one-worker-large``: the large one too), its
+table compared bitwise with the ``--workers`` one.
+
+Run: ``.venv/bin/python bench/bench_study.py [--runs 10000] [--base 200] [--workers 2]
+[--one-worker-large]``
 """
 from __future__ import annotations
 
@@ -50,6 +54,8 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=10_000)
     ap.add_argument("--base", type=int, default=200)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--one-worker-large", action="store_true",
+                    help="also run the large study on one worker (its table compared)")
     a = ap.parse_args()
     root = Path(tempfile.mkdtemp(prefix="bench-study-"))
     try:
@@ -74,6 +80,16 @@ def main() -> None:
         print(f"resume with chunk {k} of {len(manifest['chunks'])} lost: wall {r['wall']:.1f} s, "
               f"runs.csv bitwise equal: {same}; load average after {os.getloadavg()}")
         assert same
+        # the same tables on one worker: the baseline study (and the large one with
+        # --one-worker-large, another ~40 ms of CPU a run)
+        for n in (a.base, a.runs) if a.one_worker_large else (a.base,):
+            r = study(n, root / f"one{n}", 1)
+            same = (root / f"one{n}" / "runs.csv").read_bytes() == \
+                (root / f"s{n}" / "runs.csv").read_bytes()
+            print(f"{n:6d} runs on 1 worker: wall {r['wall']:.1f} s, CPU {r['cpu']:.1f} s, peak "
+                  f"RSS {r['rss']:.1f} MiB; runs.csv bitwise the {a.workers}-worker table's: "
+                  f"{same}; load average {os.getloadavg()}", flush=True)
+            assert same
     finally:
         shutil.rmtree(root, ignore_errors=True)
 

@@ -251,3 +251,28 @@ def test_stale_numba_cache_is_dropped(tmp_path):
     os.utime(files[2], (500.0, 500.0))  # one index older than the source
     assert drop_stale_cache(tmp_path) == 3 and not any(f.exists() for f in files)
     assert drop_stale_cache(tmp_path) == 0  # nothing left to drop
+
+
+def test_the_cache_depends_on_the_compiled_modules_and_what_they_import():
+    """`compiled_sources`: the kernel's, integrators' and batches' modules with the modules
+    they import from (the variator's laws and the tabulated traction law compiled in, the
+    kernel's constants) make their cache stale; the trims, the model's set-up and the
+    simulator's Python loop (imported by none of them) do not, so editing those costs no
+    compile."""
+    from pathlib import Path
+
+    import empact
+    from empact._compile import compiled_sources
+
+    root = Path(empact.__file__).resolve().parent
+    kernel = {p.relative_to(root).as_posix()
+              for p in compiled_sources([root / "nonlinear" / "_rodas.py"])}
+    assert {"nonlinear/_rodas.py", "nonlinear/_rosenbrock.py", "nonlinear/_kernel.py",
+            "nonlinear/_tangent.py", "nonlinear/_constants.py", "variator/_laws.py",
+            "variator/_compiled.py", "variator/_traction_table.py"} <= kernel
+    assert not kernel & {"nonlinear/equilibrium.py", "nonlinear/simulation.py",
+                         "nonlinear/model.py", "nonlinear/__init__.py", "variator/__init__.py"}
+    loop = {p.relative_to(root).as_posix()
+            for p in compiled_sources([root / "control" / "_loop_core.py"])}
+    assert kernel | {"control/_law_core.py", "control/_loop_core.py",
+                     "nonlinear/_batch.py"} == loop

@@ -14,8 +14,12 @@ that a run of the commands and of the test suite loads nothing `compile_all` doe
 """
 from __future__ import annotations
 
+import ast
 import gc
+import hashlib
 import json
+import os
+import platform
 import sys
 import time
 from pathlib import Path
@@ -42,7 +46,8 @@ from .variator.losses import LossMap
 from .variator.thrust_ratio import TabulatedThrustRatio
 from .variator.traction import TabulatedTraction
 
-__all__ = ["compile_all", "drop_stale_cache", "loaded_signatures"]
+__all__ = ["compile_all", "compiled_sources", "cold_signatures", "drop_stale_cache",
+           "loaded_signatures", "record_if_cold", "record_path", "sources_digest"]
 
 
 def drop_stale_cache(folder: Path | None = None) -> int:
@@ -60,7 +65,9 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     creep law, and the compiled closed loop (``control/_loop_core.py``) with the kernel, the
     integrators and the law's sample: their caches are dropped likewise.  The test session
     calls this first, so that an edited kernel is never tested through stale integrators;
-    the price is one compile (about 20 s) after a source changed.
+    the price is one compile (about 20 s, more for the test suite's entries) after a source
+    changed.  The sources are the compiled modules and what they import from
+    (`compiled_sources`): editing the trims or the simulator's Python leaves the cache.
 
     Parameters
     ----------
@@ -77,18 +84,68 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     if folder is not None:
         return _drop_stale(Path(folder) / "__pycache__", "*", list(Path(folder).glob("*.py")))
     here = Path(__file__).resolve().parent
-    # the variator's laws, compiled into the kernel and the law's sample, and the tabulated
-    # traction law the kernel compiles in
-    laws = [here / "variator" / "_laws.py", here / "variator" / "_compiled.py",
-            here / "variator" / "_traction_table.py", here / "variator" / "_loss_table.py"]
-    nonlinear = list((here / "nonlinear").glob("*.py")) + laws
-    # the law's sample calls the kernel (traction peak, creep law)
-    law_core = [here / "control" / "_law_core.py"] + nonlinear
-    # the compiled closed loop calls the kernel, the integrator and the law's sample
-    loop_sources = law_core + [here / "control" / "_loop_core.py"]
+    # the kernel, its tangent, batches and integrators with what they compile in (the
+    # variator's laws, the tabulated traction law) and take constants from
+    compiled = [f for f in (here / "nonlinear").glob("*.py") if _compiles(f)]
+    nonlinear = compiled_sources(compiled)
+    # the law's sample calls the kernel (traction peak, creep law); the compiled closed loop
+    # the kernel, the integrator and the law's sample
+    law_core = compiled_sources([here / "control" / "_law_core.py"])
+    loop_sources = compiled_sources([here / "control" / "_loop_core.py"])
     return (_drop_stale(here / "nonlinear" / "__pycache__", "*", nonlinear)
             + _drop_stale(here / "control" / "__pycache__", "_law_core.*", law_core)
             + _drop_stale(here / "control" / "__pycache__", "_loop_core.*", loop_sources))
+
+
+def _compiles(path: Path) -> bool:
+    """Whether the module at `path` imports numba (defines compiled code)."""
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import) and any(a.name.split(".")[0] == "numba"
+                                                for a in node.names):
+            return True
+        if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "numba" \
+                and not node.level:
+            return True
+    return False
+
+
+def compiled_sources(modules: list[Path]) -> list[Path]:
+    """The source files whose change makes numba's cache of the compiled `modules` stale:
+    the modules and, transitively, the package modules they import from (``from .x import
+    f``: a compiled callee is compiled into its caller, a module constant frozen into it;
+    numba keys a function's cache on its own file only).  A module of the package that the
+    compiled code does not import from (the trims, the simulator's Python loop, the model's
+    set-up) is not one: editing it leaves the compiled code as it is.
+
+    Parameters
+    ----------
+    modules : list of Path
+        Source files of compiled modules.
+
+    Returns
+    -------
+    list of Path
+        Those files and the package's files they import from, sorted.
+    """
+    seen: set[Path] = set()
+    todo = [Path(m).resolve() for m in modules]
+    while todo:
+        path = todo.pop()
+        if path in seen:
+            continue
+        seen.add(path)
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not isinstance(node, ast.ImportFrom) or not node.level:
+                continue
+            base = path.parent
+            for _ in range(node.level - 1):
+                base = base.parent
+            target = base.joinpath(*(node.module.split(".") if node.module else []))
+            for alias in node.names:  # a submodule imported by name, or a name of a module
+                sub = target / f"{alias.name}.py"
+                todo += [sub] if sub.is_file() else [f for f in (
+                    target.with_suffix(".py"), target / "__init__.py") if f.is_file()][:1]
+    return sorted(seen)
 
 
 def _drop_stale(cache: Path, pattern: str, sources: list[Path]) -> int:
@@ -240,8 +297,84 @@ def loaded_signatures(roots: tuple[Path, ...] | None = None) -> set[tuple[str, s
     return out
 
 
+def sources_digest() -> str:
+    """A digest of what `compile_all` compiles from: every file of the package (sources and
+    data, not caches) with the versions of Python, numba, llvmlite and numpy.
+
+    Returns
+    -------
+    str
+        The SHA-256 hex digest.
+    """
+    import llvmlite
+    import numba
+
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256(" ".join([sys.version, platform.machine(), numba.__version__,
+                                 llvmlite.__version__, np.__version__]).encode())
+    for path in sorted(root.rglob("*")):
+        if path.is_file() and "__pycache__" not in path.parts and path.suffix != ".pyc":
+            h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
+    return h.hexdigest()
+
+
+def record_path() -> Path:
+    """Where a compile on an empty cache records what it held (`record_if_cold`): numba's
+    cache folder.
+
+    Returns
+    -------
+    Path
+        The record's file (it may not exist).
+    """
+    import numba
+
+    folder = numba.config.CACHE_DIR
+    return (Path(folder) if folder else Path(__file__).resolve().parent / "__pycache__") \
+        / "empact-compile-all.json"
+
+
+def record_if_cold() -> bool:
+    """After `compile_all`: when this process loaded nothing from numba's cache (it compiled
+    every routine, as ``make`` does on a fresh install), record the signatures it holds
+    with `sources_digest` (`cold_signatures` reads them); returns whether it recorded."""
+    dispatchers = [obj for obj in gc.get_objects()
+                   if issubclass(type(obj), CPUDispatcher) and obj.overloads
+                   and Path(obj.py_func.__code__.co_filename).resolve().is_relative_to(
+                       Path(__file__).resolve().parent)]
+    if not dispatchers or any(d.stats.cache_hits for d in dispatchers):
+        return False
+    path = record_path()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_text(json.dumps({"digest": sources_digest(),
+                               "signatures": sorted(loaded_signatures())}))
+    tmp.replace(path)
+    return True
+
+
+def cold_signatures() -> set[tuple[str, str, str]] | None:
+    """The signatures `compile_all` holds on an empty cache, as recorded by the last compile
+    on an empty cache (``make``'s, `record_if_cold`) if it compiled these sources
+    (`sources_digest`); None when there is no such record.
+
+    Returns
+    -------
+    set of (str, str, str) or None
+        As `loaded_signatures`.
+    """
+    try:
+        doc = json.loads(record_path().read_text())
+    except (OSError, ValueError):
+        return None
+    if doc.get("digest") != sources_digest():
+        return None
+    return {tuple(s) for s in doc["signatures"]}
+
+
 if __name__ == "__main__":  # pragma: no cover - ``python -m empact._compile [--json]``
     seconds = compile_all()
+    record_if_cold()
     if "--json" in sys.argv[1:]:  # what it loaded (``tests/test_compile.py``)
         print(json.dumps({"seconds": seconds, "signatures": sorted(loaded_signatures())}))
     else:

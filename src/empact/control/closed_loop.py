@@ -22,9 +22,15 @@ from .._deprecate import warn_renamed
 from .._results import Result
 from ..errors import ParameterError
 from ..nonlinear.equilibrium import TrimResult, smallest_slip_reserve
-from ..nonlinear.model import EmpactModel
+from ..nonlinear.model import EmpactModel, nonlinear_model
 from ..nonlinear.scenario import Scenario, example_path, list_examples, load_scenario
-from ..nonlinear.simulation import SimulationResult, run_scenario, scenario_model, scenario_signals
+from ..nonlinear.simulation import (
+    SimulationResult,
+    run_scenario,
+    scenario_model,
+    scenario_options,
+    scenario_signals,
+)
 from ..params import OperatingPoint, Params
 from .controller import Controller, load_controller
 from .law import LoopConfig, LoopLaw
@@ -216,7 +222,8 @@ def build_law(scenario: Scenario, params: Params, controller: Controller | None 
     if model is None or op is None:
         model, op = scenario_model(scenario, params)
     point = {"r_g": op.r_g, "nu": op.nu, "omega_p": op.omega_p, "T_l": op.T_l, "F_s": op.F_s}
-    knows = model if nominal is None else scenario_model(scenario, nominal)[0]
+    # the model the controller knows (its trim is the machine's: `op`)
+    knows = model if nominal is None else nonlinear_model(nominal, scenario_options(scenario))
     cfg = LoopConfig.for_scenario(scenario, params if nominal is None else nominal)
     load = None
     if scenario.controller.torque_request == "honoured":
@@ -271,7 +278,7 @@ def run_closed_loop(scenario: Scenario, params: Params, controller: Controller |
     """
     model, op = scenario_model(scenario, params)
     law = build_law(scenario, params, controller, model, op, ideal, nominal)
-    res = run_scenario(scenario, params, controller=law, progress=progress)
+    res = run_scenario(scenario, params, controller=law, progress=progress, start=(model, op))
     slip = law.refs.slip
     if law.config.spec.reserve_ahead:  # the set-point the law ran (the reserve ahead's)
         ran = law.setpoint_trace[:, 0]

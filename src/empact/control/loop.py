@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from .._lazy import lazy_module
 from .._results import Result, TableResult
 from ..errors import ParameterError
-from ..nonlinear.linearization import linearize
+from ..nonlinear.linearization import linearized_plant
 from ..nonlinear.model import EmpactModel, nonlinear_model
 from ..nonlinear.scenario import Scenario
 from ..nonlinear.simulation import scenario_model, scenario_signals
@@ -125,9 +125,10 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
         s1, e, u, _ = law.preprocess(s, y, 0, r, ideal=True)
         return s1, e, u
 
-    out: dict[str, list] = {k: [] for k in ("Sz", "Ez", "Fz", "Sy", "Ey", "Fy", "Sr", "Er",
-                                            "Fr")}
+    out: dict[str, NDArray[np.float64]] = {}
+    eps = np.finfo(float).eps
     for which, x0, h in (("z", s0, h_s), ("y", y0, _H_RAW), ("r", r0, _H_REF)):
+        vals: list[tuple[list, list]] = [([], []) for _ in range(3)]  # S, E, F: +h, -h
         for i in range(len(x0)):
             xp, xm = x0.copy(), x0.copy()
             xp[i] += h[i]
@@ -136,13 +137,17 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
             args_m = [s0, y0, r0]
             k = {"z": 0, "y": 1, "r": 2}[which]
             args_p[k], args_m[k] = xp, xm
-            fp, fm = f(*args_p), f(*args_m)
-            for name, a, b in zip(("S", "E", "F"), fp, fm):
-                d = (a - b) / (2 * h[i])
-                # differences at the rounding level of the values are no derivative
-                floor = 64 * np.finfo(float).eps * np.maximum(np.abs(a), np.abs(b)) / (2 * h[i])
-                out[name + which].append(np.where(np.abs(d) > floor, d, 0.0))
-    return {k: np.array(v).T for k, v in out.items()}
+            for v, a, b in zip(vals, f(*args_p), f(*args_m)):
+                v[0].append(a)
+                v[1].append(b)
+        h2 = 2 * np.asarray(h, float)[:len(x0), None]
+        for name, (plus, minus) in zip(("S", "E", "F"), vals):
+            a, b = np.array(plus), np.array(minus)  # (columns, rows)
+            d = (a - b) / h2
+            # differences at the rounding level of the values are no derivative
+            floor = 64 * eps * np.maximum(np.abs(a), np.abs(b)) / h2
+            out[name + which] = np.where(np.abs(d) > floor, d, 0.0).T
+    return {k: out[k] for k in ("Sz", "Ez", "Fz", "Sy", "Ey", "Fy", "Sr", "Er", "Fr")}
 
 
 @dataclass(frozen=True, eq=False)
@@ -284,7 +289,18 @@ class LoopModel(Result):
 
     def poles(self) -> NDArray[np.complex128]:
         """Closed-loop eigenvalues (``z``-plane), shape ``shape + (n,)``."""
-        return np.linalg.eigvals(self.closed_loop()[0])
+        key = ("poles", self._controller_key())
+        if key not in self._cache:
+            self._cache[key] = np.linalg.eigvals(self.closed_loop()[0])
+        return self._cache[key].copy()
+
+    def _controller_key(self) -> bytes:
+        """What the closed loop's results depend on besides the shared augmented plant: the
+        controller's matrices and the output mask (a key of `_cache`, which
+        `with_controller` shares)."""
+        c = self.controller
+        return b"".join(np.ascontiguousarray(m, float).tobytes()
+                        for m in (c.A, c.B, c.C, c.D, self.mask, [c.dt]))
 
     def spectral_radius(self) -> NDArray[np.float64]:
         """Largest ``|z|`` of the closed loop (< 1: stable), shape `shape`."""
@@ -350,13 +366,16 @@ class LoopModel(Result):
             frequency).
         """
         w = default_omega(self.dt) if omega is None else np.asarray(omega, float)
-        G = self.plant_response(w)
-        K = self.controller_response(w) * self.mask[None, :, None]
-        a_in = disk_margin(K @ G)
-        a_out = disk_margin(G @ K)
-        stable = self.spectral_radius() < 1
-        return {"input": a_in, "output": a_out,
-                "alpha": np.where(stable, np.minimum(a_in, a_out), 0.0)}
+        key = ("disk margins", w.tobytes(), self._controller_key())
+        if key not in self._cache:  # (the design table, the claims and the map read them)
+            G = self.plant_response(w)
+            K = self.controller_response(w) * self.mask[None, :, None]
+            a_in = disk_margin(K @ G)
+            a_out = disk_margin(G @ K)
+            stable = self.spectral_radius() < 1
+            self._cache[key] = {"input": a_in, "output": a_out,
+                                "alpha": np.where(stable, np.minimum(a_in, a_out), 0.0)}
+        return {k: v.copy() for k, v in self._cache[key].items()}
 
     def sensitivity_peaks(self, omega: NDArray | None = None) -> dict[str, NDArray[np.float64]]:
         """Loop-at-a-time sensitivity peaks ``Ms_j = max_w |S_jj|`` of each loop, the other
@@ -614,8 +633,8 @@ def loop_model(scenario: Scenario, params: Params,
                     scenario.references, scenario.duration)
     dist = tuple(n for n in model.inputs if n not in LoopLaw.commands)
     outs = RAW_SIGNALS + PERFORMANCE
-    sys = linearize(op, LoopLaw.commands + dist, outs)
-    A, B, C, D = (np.asarray(M) for M in (sys.A, sys.B, sys.C, sys.D))
+    pl = linearized_plant(op, LoopLaw.commands + dist, outs)  # (no python-control object)
+    A, B, C, D = (np.asarray(M) for M in (pl.A, pl.B, pl.C, pl.D))
     Phi, Gam = zoh(A, B, ideal.dt)
     nr = len(RAW_SIGNALS)
     _check_no_feedthrough(D[:nr, :2])

@@ -315,8 +315,9 @@ def trim(model: EmpactModel, op: OperatingPoint | float, omega_p: float | None =
                       residual=float(grid.residual[0]), tau=y["tau"], request=op)
 
 
-def slip_at_torque_ratio(model: EmpactModel, tau: ArrayLike,
-                         r_g: ArrayLike) -> NDArray[np.float64]:
+def slip_at_torque_ratio(model: EmpactModel, tau: ArrayLike, r_g: ArrayLike, *,
+                         peak: tuple[ArrayLike, ArrayLike] | None = None
+                         ) -> NDArray[np.float64]:
     """The slip on the rising branch of the kernel's traction curve where ``mu = tau mu_max``
     (a set-point with the torque reserve ``1 - tau``), at ratio(s) `r_g` (broadcast; to
     rounding).
@@ -329,6 +330,9 @@ def slip_at_torque_ratio(model: EmpactModel, tau: ArrayLike,
         Torque ratio(s) ``mu / mu_max`` [-] in [0, 1] (the torque reserve is ``1 - tau``).
     r_g : array_like
         Geometric ratio(s) [-], broadcast with `tau`.
+    peak : (array_like, array_like), optional
+        The traction peak ``(nu_peak, mu_peak)`` at `r_g` (`traction_peak`'s, broadcast with
+        it) when the caller has searched it already (not searched again: the same result).
 
     Returns
     -------
@@ -347,9 +351,20 @@ def slip_at_torque_ratio(model: EmpactModel, tau: ArrayLike,
         raise ParameterError(f"tau = {bad:g}: a torque ratio lies in [0, 1]")
     shape = t.shape
     t, r = t.ravel(), r.ravel()
-    nu_pk, mu_pk = traction_peak(model, r)
+    nu_pk, mu_pk = _peak_at(model, r, peak, shape)
     goal = np.minimum(t * model.mu_max(r), mu_pk)
     return _bisect_rising(model, r, goal, np.atleast_1d(nu_pk)).reshape(shape)
+
+
+def _peak_at(model: EmpactModel, r: NDArray, peak: tuple[ArrayLike, ArrayLike] | None,
+             shape: tuple[int, ...]) -> tuple[NDArray, NDArray]:
+    """The traction peak ``(nu_peak, mu_peak)`` at the ratios `r` (1-D): `peak` (given at
+    ratios of the broadcast shape `shape`, flattened), else searched (`traction_peak`)."""
+    if peak is None:
+        nu_pk, mu_pk = traction_peak(model, r)
+        return np.atleast_1d(nu_pk), np.atleast_1d(mu_pk)
+    return tuple(np.broadcast_to(np.asarray(v, float), shape).ravel()  # type: ignore[return-value]
+                 for v in peak)
 
 
 def _bisect_rising(model: EmpactModel, r: NDArray, target: NDArray, nu_pk: NDArray) -> NDArray:
@@ -391,7 +406,7 @@ def _contact(model: EmpactModel, r, F_contact, tau_of):
 
 
 def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
-              tau=None) -> TrimGrid:
+              tau=None, peak=None) -> TrimGrid:
     """`trim` at many points at once (1-D arrays, broadcast): the closed-form assembly and
     the root finds of the module notes, vectorised, then the residual check.  Points that
     cannot be trimmed are marked (``ok``, ``reason``), never dropped.
@@ -414,6 +429,9 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
     tau : array_like, shape (N,), optional
         Torque ratios ``mu / mu_max`` [-] (a slip on the rising branch of the traction
         curve), in place of `nu`.
+    peak : (array_like, array_like), shape (N,) each, optional
+        The traction peak ``(nu_peak, mu_peak)`` at `r_g` (`traction_peak`'s) when the
+        caller has searched it already (not searched again: the same result).
 
     Returns
     -------
@@ -455,7 +473,7 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
     r = np.where(good, r, 1.0)
     mu_max = model.mu_max(r)
     if tau is not None:  # the slip where mu = tau mu_max, on the rising branch
-        nu_pk, mu_pk = traction_peak(model, r)
+        nu_pk, mu_pk = _peak_at(model, r, peak, r.shape)
         for k in np.flatnonzero(good & ~(np.abs(tau_) * mu_max <= mu_pk)):
             reason[k] = (f"tau = {tau_[k]:g} needs mu = {abs(tau_[k]) * mu_max[k]:.4g}, above "
                          f"the traction peak {mu_pk[k]:.4g} at r_g = {r[k]:g}")
@@ -500,7 +518,7 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
         tau_kernel = lambda R_s, F_el: mu / mu_max  # noqa: E731
     else:  # F_s and T_l: the slip on the rising branch (with the drag at that slip: a fixed
         # point that contracts by ~1e-5 per pass, the drag's slope in the slip being small)
-        nu_pk, mu_pk = traction_peak(model, r)
+        nu_pk, mu_pk = _peak_at(model, r, peak, r.shape)
         nu_ = np.zeros(N)
         for _ in range(4):
             Tb = belt_torque(nu_)

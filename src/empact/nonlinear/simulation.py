@@ -38,12 +38,13 @@ from ._rodas import integrate_ros2 as integrate
 from ._rosenbrock import STATUS
 from .equilibrium import TrimResult, trim
 from .model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
+from .options import ModelOptions
 from .scenario import DEFAULT_METHOD, METHODS, Scenario
 
 __all__ = ["SimulationResult", "SampledController", "CompiledSampledController", "SampledLoop",
            "Stepper", "simulate", "run_scenario", "energy_balance",
-           "scenario_model", "scenario_signals", "csv_text", "write_csv", "state_tolerances",
-           "STATUS", "METHODS", "DEFAULT_METHOD"]
+           "scenario_model", "scenario_options", "scenario_signals", "csv_text", "write_csv",
+           "state_tolerances", "STATUS", "METHODS", "DEFAULT_METHOD"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -867,11 +868,26 @@ def scenario_model(scenario: Scenario, params: Params) -> tuple[EmpactModel, Tri
     TrimError
         When the initial point cannot be trimmed.
     """
-    options = replace(scenario.options, reference_ratio=scenario.options.reference_ratio
-                      if scenario.options.reference_ratio is not None
-                      else scenario.initial.r_g)
-    model = nonlinear_model(params, options)
+    model = nonlinear_model(params, scenario_options(scenario))
     return model, trim(model, scenario.initial)
+
+
+def scenario_options(scenario: Scenario) -> ModelOptions:
+    """The model options of a scenario (`scenario_model`'s): its own, with
+    ``reference_ratio`` the initial ratio unless they set one.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario.
+
+    Returns
+    -------
+    ModelOptions
+    """
+    return replace(scenario.options, reference_ratio=scenario.options.reference_ratio
+                   if scenario.options.reference_ratio is not None
+                   else scenario.initial.r_g)
 
 
 def scenario_signals(scenario: Scenario, model: EmpactModel,
@@ -923,7 +939,8 @@ def scenario_signals(scenario: Scenario, model: EmpactModel,
 
 def run_scenario(scenario: Scenario, params: Params, *,
                  controller: SampledController | None = None,
-                 progress: bool = False) -> SimulationResult:
+                 progress: bool = False,
+                 start: tuple[EmpactModel, TrimResult] | None = None) -> SimulationResult:
     """Trim the scenario's initial point and simulate it (see `simulate`).
 
     A closed-loop scenario (one with a ``[controller]`` table) needs its `controller` built
@@ -938,6 +955,9 @@ def run_scenario(scenario: Scenario, params: Params, *,
         The sampled law of a closed-loop scenario.
     progress : bool
         A progress bar on stderr.
+    start : (EmpactModel, TrimResult), optional
+        The scenario's model and trimmed start (`scenario_model` of `scenario` and
+        `params`) when the caller has them (not trimmed again).
 
     Returns
     -------
@@ -948,7 +968,7 @@ def run_scenario(scenario: Scenario, params: Params, *,
     if scenario.closed_loop and controller is None:
         raise ParameterError(f"scenario {scenario.name!r} has a [controller] table: run it "
                              "with empact.run_closed_loop (or 'empact control simulate')")
-    model, op = scenario_model(scenario, params)
+    model, op = scenario_model(scenario, params) if start is None else start
     return simulate(model, op.x, scenario_signals(scenario, model, op), scenario.duration,
                     u0=op.u, controller=controller, sample_rate=scenario.sample_rate,
                     rtol=scenario.rtol, max_step=scenario.max_step,
