@@ -329,7 +329,7 @@ def record_path() -> Path:
     """
     import numba
 
-    folder = numba.config.CACHE_DIR
+    folder = getattr(numba.config, "CACHE_DIR", "")
     return (Path(folder) if folder else Path(__file__).resolve().parent / "__pycache__") \
         / "empact-compile-all.json"
 

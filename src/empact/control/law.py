@@ -333,6 +333,7 @@ class LoopLaw:
     _c: core.LawConstants
     _tb: core.LawTables
     _wk: core.LawWork
+    _tau_ref: float
 
     def __init__(self, controller: Controller, model: EmpactModel, point: Mapping[str, float],
                  u0: NDArray, config: LoopConfig,
@@ -538,7 +539,8 @@ class LoopLaw:
             while len(_REFERENCES) > 16:
                 _REFERENCES.popitem(last=False)
         _REFERENCES.move_to_end(key)
-        refs, self._tau_ref = _REFERENCES[key]
+        refs, tau_ref = _REFERENCES[key]
+        self._tau_ref = float(tau_ref)
         return _Refs(**{f: getattr(refs, f).copy() for f in ("r_g", "slip", "mu", "rdot",
                                                                "decoupling")})
 
@@ -560,10 +562,10 @@ class LoopLaw:
         by_tau = None  # the distinct (tau, r_g) of a torque-ratio reference and their slips
         if "tau" in tab:
             pairs, inv = _unique_rows(tab["tau"], r)
-            k = np.searchsorted(ru, pairs[:, 1])
+            at_pk = np.searchsorted(ru, pairs[:, 1])
             assert peak is not None
             at = slip_at_torque_ratio(self.model, pairs[:, 0], pairs[:, 1],
-                                      peak=(peak[0][k], peak[1][k]))
+                                      peak=(peak[0][at_pk], peak[1][at_pk]))
             by_tau, slip = (pairs, at), at[inv]
         else:
             slip = tab.get(self.slip_signal if self.slip_signal in tab else
