@@ -77,7 +77,7 @@ from __future__ import annotations
 import functools
 import hashlib
 from collections import OrderedDict
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any, Mapping
 
 import numpy as np
@@ -541,8 +541,7 @@ class LoopLaw:
         _REFERENCES.move_to_end(key)
         refs, tau_ref = _REFERENCES[key]
         self._tau_ref = float(tau_ref)
-        return _Refs(**{f: getattr(refs, f).copy() for f in ("r_g", "slip", "mu", "rdot",
-                                                               "decoupling")})
+        return _Refs(**{f.name: getattr(refs, f.name).copy() for f in fields(_Refs)})
 
     def _references(self, references: Mapping[str, NDArray]) -> _Refs:
         t = self.t_k
