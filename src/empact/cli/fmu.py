@@ -83,7 +83,6 @@ def export_cmd(out: str, controller: str | None, rate: float, duration: float, r
                          f"analytic law ({DEFAULT_TRACTION_LAW}) or measured curves (--traction)")
     options = _options(drive, load, damping, kinematics, shift_law, thrust_ratio, creep_map,
                        traction_table)
-    path = export_fmu(out, params, options=options, point=point, controller=controller,
+    export_fmu(out, params, options=options, point=point, controller=controller,
                       rate=rate, method=method, rtol=rtol, max_step=max_step,
                       duration=duration)
-    click.echo(str(path))
