@@ -233,7 +233,7 @@ SETUP_FILES = {
 SETUP_PYTHON = """
 import numpy as np, empact
 tr = empact.traction_from_params(empact.load_params())
-rows = ["r_g,nu,mu"] + [f"{r},{n!r},{float(tr.mu(n, r))!r}" for r in (0.5, 1.0, 2.0)
+rows = ["r_g,nu,mu"] + [f"{r},{float(n)!r},{float(tr.mu(n, r))!r}" for r in (0.5, 1.0, 2.0)
                         for n in np.linspace(0.0, 0.08, 33)]
 open("curves.csv", "w").write("\\n".join(rows) + "\\n")
 """

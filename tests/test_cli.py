@@ -1494,3 +1494,71 @@ def test_a_closing_line_names_the_files_written(tmp_path, monkeypatch):
     assert res.stderr.splitlines()[-1] == "written: m.json"
     res = run("modes", "driveline", "--json-out", "q.json", "--quiet")
     assert res.exit_code == 0 and res.stderr == "" and (tmp_path / "q.json").is_file()
+
+
+# -- issue 35, round 4 ---------------------------------------------------------------------------
+def test_modes_names_the_parameter_of_every_spring(tmp_path):
+    """`modes` says which stiffness each spring is (`spring_parameters`): the actuation's
+    belt is actuation.k_belt (paper_sec21.k_belt with the Sec. 2.1 rows), the driveline's is
+    driveline.k_belt; each named parameter's value is the stiffness the model used."""
+    from empact.linear.actuation import actuation_model
+    from empact.linear.driveline import driveline_model
+
+    p = load_params()
+    for name, model in (("actuation", actuation_model(p, 1.0)),
+                        ("paper", actuation_model(p, 1.0, kinematics="paper-sec2.1")),
+                        ("driveline", driveline_model(p, 1.0))):
+        names = model.modes().spring_parameters
+        assert len(names) == len(model.springs), name
+        for key, k in zip(names, model.stiffness):
+            section, field = key.split(".")
+            assert getattr(getattr(p, section), field) == k, (name, key)
+    res = run("modes", "driveline", "--json", "--quiet")
+    assert json.loads(res.stdout)["spring_parameters"] == ["driveline.k_tc", "driveline.k_belt",
+                                                           "driveline.k_ds"]
+    res = run("modes", "actuation", "--kinematics", "paper-sec2.1", "--quiet")
+    assert "belt = paper_sec21.k_belt" in res.stdout, res.stdout
+
+
+def test_validate_lists_values_outside_their_band_with_what_they_are_for(tmp_path):
+    """`params validate` accepts a value outside its plausible band and lists it by its
+    dotted name with its meaning: a driveline.k_belt of 1000 N/m says it is the linear
+    driveline's belt and the nonlinear model's only with belt = "locked"."""
+    f = write(tmp_path, "[driveline]\nk_belt = 1e3\n")
+    res = run("params", "validate", f, "--quiet")
+    assert res.exit_code == 0, res.output
+    lines = res.stdout.splitlines()
+    assert lines[0] == f"{f}: ok (1 value outside the plausible band, below)"
+    assert lines[1].startswith("  driveline.k_belt = 1000 [N/m]: outside the plausible band "
+                               "[5e+06, 5e+07] [N/m]; pushbelt stiffness as a torque-carrying")
+    assert 'belt = "locked"' in lines[1] and len(lines) == 2
+    res = run("params", "validate", write(tmp_path, "", "empty.toml"), "--quiet")
+    assert res.stdout.strip().endswith("empty.toml: ok")
+
+
+def test_every_controller_reader_takes_a_shipped_name(tmp_path):
+    """``shipped:pi`` names the shipped controller for every reader (`load_controller`), as
+    the docs say: `control discretize` took a file only (the campaign's `check`, `tune`,
+    `fmu export` and `discretize` refused it); an unknown name lists the shipped ones."""
+    from importlib import resources
+
+    from empact.control.controller import load_controller
+
+    shipped = load_controller("shipped:pi")
+    path = resources.files("empact.data").joinpath("control", "pi.json")
+    np.testing.assert_array_equal(shipped.B, load_controller(str(path)).B)
+    res = run("control", "discretize", "shipped:pi", "--rate", "1000", "--out",
+              tmp_path / "k.json", "--quiet")
+    assert res.exit_code == 0 and (tmp_path / "k.json").is_file(), res.output
+
+
+def test_a_map_with_no_point_trimmed_exits_1_and_writes_nothing(tmp_path, monkeypatch):
+    """`efficiency` over clamping forces none of which carries the torque: exit 1, one line
+    naming a point and why, nothing written (it exited 0 with a table of failures)."""
+    monkeypatch.chdir(tmp_path)
+    res = run("efficiency", "--clamp", "100:200:3", "--torque", "150", "--ratio", "1",
+              "--strategy", "slip", "--json-out", "e.json", "--quiet")
+    assert res.exit_code == 1, res.output
+    assert res.output.startswith("error: none of the 3 points trims (e.g. slip at r_g = 1, "
+                                 "T_in = 150 N m: ") and res.output.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []

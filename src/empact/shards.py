@@ -44,10 +44,10 @@ class StudyMismatch(ParameterError):
 
 def _manifest(doc: Any, where: str) -> tuple[list[tuple[int, int]], set[int], dict]:
     """The chunks, completed chunks and spec of a manifest document, checked: one line
-    (`StudyMismatch`) naming `where` and what is wrong."""
+    (`StudyMismatch`) naming `where` (the option and the folder) and what is wrong."""
     def bad(what: str) -> StudyMismatch:
-        return StudyMismatch(f"{where}: {what}; not a study's manifest (start the study with "
-                             "--out alone)")
+        return StudyMismatch(f"{where}: not a study folder ({MANIFEST}: {what}); start it "
+                             "with --out alone")
 
     def whole(x: Any) -> bool:
         return isinstance(x, int) and not isinstance(x, bool)
@@ -59,8 +59,8 @@ def _manifest(doc: Any, where: str) -> tuple[list[tuple[int, int]], set[int], di
     if not whole(version) or version < 1:
         raise bad(f"schema version {version!r}: must be a whole number >= 1")
     if version > SCHEMA["version"]:
-        raise StudyMismatch(f"{where}: schema version {version} is newer than this empact "
-                            f"reads (up to {SCHEMA['version']}); update empact")
+        raise StudyMismatch(f"{where}: {MANIFEST}: schema version {version} is newer than "
+                            f"this empact reads (up to {SCHEMA['version']}); update empact")
     raw, done, spec = doc.get("chunks"), doc.get("completed"), doc.get("spec")
     if not isinstance(spec, dict):
         raise bad("no spec table")
@@ -172,8 +172,12 @@ class ShardStore:
             study's spec differs from `spec` (the message names the fields that differ).
         """
         path = Path(folder)
-        doc = parse_json(path / MANIFEST, "study manifest", error=StudyMismatch)
-        chunks, completed, old = _manifest(doc, f"{option} {folder}: {MANIFEST}")
+        try:
+            doc = parse_json(path / MANIFEST, "study manifest", error=StudyMismatch)
+        except StudyMismatch as exc:
+            raise StudyMismatch(f"{option} {folder}: not a study folder ({exc}); start it "
+                                "with --out alone") from None
+        chunks, completed, old = _manifest(doc, f"{option} {folder}")
         if spec_hash(old) != spec_hash(spec):
             diff = sorted(k for k in set(old) | set(spec) if old.get(k) != spec.get(k))
             shown = ", ".join(f"{k} {old.get(k)!s:.16} there, {spec.get(k)!s:.16} here"

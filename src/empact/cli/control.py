@@ -320,9 +320,9 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
 @quiet_option
 def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, traction_table,
               params_file, as_json, json_out, force, quiet) -> None:
-    """Closed-loop poles and disk margins of CONTROLLER on the loop that runs (sampled, with
-    the loop's sensors and feedforwards; empact.control.loop) against every plant of a
-    family."""
+    """Closed-loop poles and disk margins of CONTROLLER (a controller file, or shipped:pi,
+    shipped:hinf) on the loop that runs (sampled, with the loop's sensors and feedforwards;
+    empact.control.loop) against every plant of a family."""
     from ..control.controller import load_controller
     from ..control.family import design_family, load_family
     from ..control.loop import family_loops
@@ -422,10 +422,10 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
 def tune_cmd(controller, family_file, loop_scenario, out, parameters, min_dm, max_ms,
              bw_floor, seed, maxiter, strict, traction_table, params_file, as_json, json_out,
              force, quiet) -> None:
-    """Tune CONTROLLER's PI structure (gains, integral corners, roll-offs per loop, the
-    schedule's shape kept) to maximise the worst multiloop disk margin over every plant of a
-    family on the loop that runs, with an Ms penalty and a bandwidth floor
-    (empact.control.tune)."""
+    """Tune CONTROLLER's PI structure (a controller file, or shipped:pi; gains, integral
+    corners, roll-offs per loop, the schedule's shape kept) to maximise the worst multiloop
+    disk margin over every plant of a family on the loop that runs, with an Ms penalty and a
+    bandwidth floor (empact.control.tune)."""
     from ..control.controller import load_controller
     from ..control.family import design_family, load_family
     from ..control.tune import TuneOptions, check_pi, parse_parameters, tune_pi
@@ -605,7 +605,8 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
 @force_option
 def discretize_cmd(controller, rate, method, at, loop_scenario, out, params_file,
                    force) -> None:
-    """Write CONTROLLER as a discrete-time state space at its sample rate (x[k+1] = A x[k] +
+    """Write CONTROLLER (a controller file, or shipped:pi, shipped:hinf) as a discrete-time
+    state space at its sample rate (x[k+1] = A x[k] +
     B e[k], du[k] = C x[k] + D e[k]; a schedule's gains act on e as before, or, with --at,
     are folded in at that point, with the loop it closes there)."""
     from ..control.controller import load_controller
