@@ -26,8 +26,8 @@ def check_inside(fig: Figure, where: str) -> None:
     """Raise RuntimeError naming `where` and the edge when something drawn on `fig` (a
     label, a title, tick labels, a legend) reaches beyond the figure's edge: it would be cut
     off in the saved image."""
-    fig.canvas.draw()
-    tight = fig.get_tightbbox(fig.canvas.get_renderer())
+    fig.draw_without_rendering()  # (its layout too; empact's figures have no canvas of their own)
+    tight = fig.get_tightbbox()
     w, h = fig.get_size_inches()
     edges = {"left": -tight.x0, "bottom": -tight.y0, "right": tight.x1 - w, "top": tight.y1 - h}
     cut = {k: v for k, v in edges.items() if v > TOLERANCE}

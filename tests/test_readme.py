@@ -4,8 +4,9 @@ interpreter and the figure call its prose shows (``empact.plotting.plot_bode(...
 ``import empact`` alone).  Then the docs site's shell and Python snippets run in the same
 folder, and the pages' MATLAB and data snippets are checked against the files the commands
 wrote (issue 35, item 3; `readme_tour.COVERAGE` lists how each snippet is covered).  The
-tour (30-50 s, mostly process start-up) runs in the background from the start of the session
-(`conftest.py`, `readme_tour.py`); its tests read the records."""
+tour (mostly process start-up: 85 s at load 6, 468 s at load 14 on the shared 2-core machine;
+the pages' snippets add 110 s at load 14) runs in the background from the start of the
+session (`conftest.py`, `readme_tour.py`); its tests read the records."""
 import json
 import re
 

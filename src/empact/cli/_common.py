@@ -53,8 +53,7 @@ __all__ = ["sweep_options", "sweep_from_options",
            "OutputFile", "check_outputs", "quiet_option", "Interrupted",
            "EXIT_INTERRUPTED", "parse_list", "formats_option", "parse_choices", "schema_version",
            "traction_option", "check_path", "compact_json", "closing_line", "written_line",
-           "guard_params",
-           "shown_path", "MIN_FREE_BYTES", "OPERATING_RANGES",
+           "guard_params", "shown_path", "MIN_FREE_BYTES", "OPERATING_RANGES",
            "announce_compilation", "COMPILING"]
 
 #: suffixes of ``--plot`` files (the figure's format)

@@ -674,11 +674,11 @@ def parse_point(text: str, params: Any = None) -> dict[str, float]:
             raise InputError(f"--at {text!r}: {name} given twice")
         point[name] = number
     if params is not None:
-        for name, value in point.items():
+        for key, v in point.items():
             try:
-                operating_values(params, AT_VARIABLES[name], value, trim=True)
+                operating_values(params, AT_VARIABLES[key], v, trim=True)
             except ParameterError as exc:
-                raise InputError(f"--at {name}={value:g}: "
+                raise InputError(f"--at {key}={v:g}: "
                                  f"{str(exc).partition(': ')[2] or exc}") from None
     if "nu" in point and "tau" in point:
         raise InputError(f"--at {text!r}: give nu or tau, not both (one slip set-point)")
