@@ -646,7 +646,7 @@ BAD_INPUT = [
     (["slip", "poles", "--slip", "0.001:0.04:x"], "count must be a whole number"),
     (["slip", "poles", "--slip", "abc"], "not a number"),
     (["slip", "poles", "--ratio", "5"], "--ratio = 5: outside the geometric ratio range"),
-    (["slip", "poles", "--speed", "0"], "--speed = 0: allowed range is (0, inf) [rad/s]"),
+    (["slip", "poles", "--speed", "0"], "--speed = 0: allowed range is (0, 2000] [rad/s]"),
     (["slip", "statespace", "--slip", "0.3"], "--slip = 0.3: allowed range is [-0.2, 0.2]"),
     (["slip", "statespace", "--clamp", "-1"], "--clamp = -1: allowed range is [0, inf) [N]"),
     (["slip", "poles", "--slip", "0.01,0.02", "--ratio", "1,2"], "at most 1"),
@@ -859,7 +859,7 @@ BAD_INPUT = [
      "give at most two of --slip (or --tau), --clamp, --load-torque"),
     (["linearize", "--drive", "fast"], "invalid value for '--drive'"),
     (["linearize", "--load", "50"], "invalid value for '--load'"),
-    (["linearize", "--speed", "inf"], "--speed = inf: must be a finite number in (0, inf)"),
+    (["linearize", "--speed", "inf"], "--speed = inf: must be a finite number in (0, 2000]"),
     (["linearize", "--thrust-ratio", "bad_traction.csv"], "must name exactly the columns r_g, "
                                                           "tau, kappa"),
     (["nmp", "--tau", "5"], "--tau = 5: allowed range is [-1, 1]"),

@@ -18,7 +18,7 @@ __all__ = ["HEADER_UNITS", "header_cell", "column_name", "column_unit", "si_fact
 #: without a unit is taken as SI
 HEADER_UNITS: dict[str, tuple[float, str]] = {
     "s": (1.0, "time"), "ms": (1e-3, "time"), "us": (1e-6, "time"), "\u00b5s": (1e-6, "time"),
-    "min": (60.0, "time"), "h": (3600.0, "time"),
+    "min": (60.0, "time"),
     "N m": (1.0, "torque"), "Nm": (1.0, "torque"), "N*m": (1.0, "torque"),
     "N\u00b7m": (1.0, "torque"),
     "rad": (1.0, "angle"), "rad/s": (1.0, "angular speed"),
