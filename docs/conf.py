@@ -58,7 +58,7 @@ sphinx_gallery_conf = {
     "download_all_examples": False,
     "remove_config_comments": True,
     "matplotlib_animations": False,
-    "image_scrapers": ("_scraper.plot_scraper", "matplotlib"),
+    "image_scrapers": ("_scraper.plot_scraper", "_scraper.pyplot_scraper"),
     "reset_modules": ("matplotlib",),
     "abort_on_example_error": True,
     "show_memory": False,
@@ -77,7 +77,13 @@ html_theme_options = {
     "footer_end": [],
 }
 html_show_sourcelink = False
-html_static_path: list[str] = []
+# nothing wider than its column (tests/test_docs_site.py): long names break, code is set a
+# little smaller, and the API pages, whose docstrings hold code and diagrams of up to 110
+# columns, give the article the width of the section navigation (the navbar links the
+# pages; the page's own contents stay on the right)
+html_static_path = ["_static"]
+html_css_files = ["empact.css"]
+html_sidebars = {"api/**": []}
 
 # the docs import every public module; importing here fails the build early with its name
 for _name in empact.SUBMODULES:

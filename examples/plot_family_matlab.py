@@ -50,7 +50,7 @@ H_fam = frequency_response(plant.A, plant.B, plant.C, plant.D, omega, plant.inpu
                            plant.outputs).H[plant.outputs.index("r_g"),
                                             plant.inputs.index("T_mp")]
 print("largest relative difference:", np.max(np.abs(H_mat - H_fam) / np.abs(H_fam)))
-fig, ax = plt.subplots(figsize=(7, 4))
+fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
 ax.loglog(omega / (2 * np.pi), np.abs(H_fam), label="family plant")
 ax.loglog(omega / (2 * np.pi), np.abs(H_mat), "--", label="read back from family.mat")
 ax.set(xlabel="frequency [Hz]", ylabel="|r_g / T_mp| [1/(N m)]",

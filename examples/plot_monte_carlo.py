@@ -19,7 +19,9 @@ import empact
 
 params = empact.load_params()
 spread = empact.load_spread(files("empact.data") / "montecarlo" / "example-spread.toml", params)
-print("spread over:", ", ".join(spread.names))
+print("spread over:")
+for name in spread.names:
+    print("   ", name)
 study = empact.monte_carlo(params, spread, 200, "plant", seed=1)
 summary = study.summary()
 print(f"{summary['succeeded']} of {summary['runs']} runs succeeded; failures: "
@@ -27,7 +29,7 @@ print(f"{summary['succeeded']} of {summary['runs']} runs succeeded; failures: "
 
 # %%
 # The distributions of the slowest resonant pair [Hz] and of the RHP zero [Hz].
-fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
+fig, axes = plt.subplots(1, 2, figsize=(10, 3.5), layout="constrained")
 for ax, name in zip(axes, ("f_slow_hz", "rhp_zero_hz")):
     v = study.values[:, study.outputs.index(name)]
     v = v[np.isfinite(v)]

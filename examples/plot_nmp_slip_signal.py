@@ -16,7 +16,7 @@ from empact.plotting import plot_nmp
 params = empact.load_params()
 ratios = (0.5, 1.0, 2.0)
 
-fig, axes = plt.subplots(2, 2, figsize=(10, 7))
+fig, axes = plt.subplots(2, 2, figsize=(10, 7), layout="constrained")
 for ax, slip in zip(axes, ("nu", "nu_r")):   # one row of two panels per slip signal
     res = empact.nmp_analysis(params, ratios, slip=slip)
     for r, n_real in zip(res.r_g, res.n_rhp_real):

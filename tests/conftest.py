@@ -99,8 +99,9 @@ class _Tour:
              str(self.folder / "tour"), str(self.results)],
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
-    def result(self, timeout: float = 380.0):
-        """(the records of the steps, the tour's folder), once the tour has finished."""
+    def result(self, timeout: float = 900.0):
+        """(the records of the steps, the tour's folder), once the tour (and the docs' snippets
+        after it) has finished."""
         import json
 
         self.proc.wait(timeout=timeout)
@@ -193,6 +194,9 @@ SLOW_TESTS = {
     "test_shift_law.py": ("test_creep_power_closes_the_balance",
                           "test_load_step_with_held_servos_moves_ratio_as_kappa_predicts"),
     "test_slip.py": ("test_sign_of_largest_real_part_follows_sign_of_the_traction_slope",),
+    "test_speaking.py": ("test_the_closing_line_lists_every_file_written",
+                         "test_new_commands_show_progress_and_quiet_silences_stderr",
+                         "test_new_commands_give_a_unit_for_every_number"),
     "test_shards.py": ("test_a_sigkilled_study_resumes_bitwise",
                        "test_one_and_two_workers_and_a_resume_on_two_are_bitwise_equal",
                        "test_cli_resume_bad_input_one_line_exit_2"),

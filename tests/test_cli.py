@@ -500,6 +500,33 @@ def files(tmp_path, monkeypatch):
     w("t_miss.toml", GOOD_TARGETS.replace("frequency_hz = 24.6\n", ""))
     w("sc_steps.toml", SCENARIO + "[solver]\nmax_steps = 1.5\n")
     w("sp_ln100.toml", sp + 'distribution = "lognormal"\nsigma = 100\n')
+    # issue 35, round 4: the campaign on cycle, efficiency, tune, fmu export, --resume, --at
+    hdr = "time [s],speed [km/h]\n"
+    for name, rows in {"t_back": "0,0\n2,10\n1,20\n4,0\n", "t_neg": "0,0\n2,-10\n4,0\n",
+                       "t_one": "0,0\n", "t_text": "0,0\n2,fast\n4,0\n",
+                       "t_huge": "0,0\n10,100000\n20,0\n", "t_dup": "0,0\n2,10\n2,12\n"}.items():
+        w(f"{name}.csv", hdr + rows)
+    w("t_knots.csv", "time [s],speed [knots]\n0,0\n2,5\n")
+    w("t_rpm.csv", "time [s],speed [rpm]\n0,0\n2,5\n")
+    w("t_fortnight.csv", "time [fortnight],speed [km/h]\n0,0\n2,5\n")
+    w("t_nounit.csv", "time [s],speed\n0,0\n2,5\n")
+    w("t_semi.csv", "time [s];speed [km/h]\n0;0\n2;5\n")
+    w("t_phase.csv", "time [s],speed [km/h],phase\n0,0," + "p" * 300 + "\n2,5,x\n")
+    w("veh_neg.toml", "[vehicle]\nmass = -1300\n")
+    w("k_disc.json", json.dumps({**pi, "dt": 0.001}))
+    man = {"schema": {"name": "empact.study.manifest", "version": 1}, "spec_hash": "0",
+           "spec": {}, "runs": 4, "chunk_size": 4, "chunks": [[0, 4]], "completed": [0]}
+    for name, doc in {"st_v99": {**man, "schema": {**man["schema"], "version": 99}},
+                      "st_chunks": {**man, "chunks": [["a", "b"]]},
+                      "st_gap": {**man, "chunks": [[0, 2], [3, 4]]},
+                      "st_done": {**man, "completed": [-5, 10**9]},
+                      "st_schema": {**man, "schema": {"name": "other"}}}.items():
+        (tmp_path / name).mkdir()
+        w(f"{name}/manifest.json", json.dumps(doc))
+    (tmp_path / "st_bad").mkdir()
+    w("st_bad/manifest.json", "{not json")
+    (tmp_path / "st_deep").mkdir()
+    w("st_deep/manifest.json", "[" * 50_000 + "]" * 50_000)
     return tmp_path
 
 
@@ -622,7 +649,7 @@ BAD_INPUT = [
     (["slip", "poles", "--slip", "0.001:0.04:x"], "count must be a whole number"),
     (["slip", "poles", "--slip", "abc"], "not a number"),
     (["slip", "poles", "--ratio", "5"], "--ratio = 5: outside the geometric ratio range"),
-    (["slip", "poles", "--speed", "0"], "--speed = 0: allowed range is (0, inf) [rad/s]"),
+    (["slip", "poles", "--speed", "0"], "--speed = 0: allowed range is (0, 2000] [rad/s]"),
     (["slip", "statespace", "--slip", "0.3"], "--slip = 0.3: allowed range is [-0.2, 0.2]"),
     (["slip", "statespace", "--clamp", "-1"], "--clamp = -1: allowed range is [0, inf) [N]"),
     (["slip", "poles", "--slip", "0.01,0.02", "--ratio", "1,2"], "at most 1"),
@@ -852,7 +879,7 @@ BAD_INPUT = [
      "give at most two of --slip (or --tau), --clamp, --load-torque"),
     (["linearize", "--drive", "fast"], "invalid value for '--drive'"),
     (["linearize", "--load", "50"], "invalid value for '--load'"),
-    (["linearize", "--speed", "inf"], "--speed = inf: must be a finite number in (0, inf)"),
+    (["linearize", "--speed", "inf"], "--speed = inf: must be a finite number in (0, 2000]"),
     (["linearize", "--thrust-ratio", "bad_traction.csv"], "must name exactly the columns r_g, "
                                                           "tau, kappa"),
     (["nmp", "--tau", "5"], "--tau = 5: allowed range is [-1, 1]"),
@@ -999,6 +1026,97 @@ BAD_INPUT = [
     (["plants", "--ratio", "1", "--scheduler", "host:99999"], "a port from 1 to 65535"),
     (["slip", "poles", "--slip", "0.001,,0.04"], "--slip '0.001,,0.04': not a number"),
     (["slip", "rootlocus", "--cb-max", "inf"], "--cb-max = inf: must be a finite number"),
+    # issue 35, round 4: a campaign on the commands added since (cycle, efficiency, control
+    # tune, fmu export, montecarlo --resume, control check --strict, control discretize --at)
+    (["cycle", "--cycle", "t_back.csv"], "t_back.csv: data row 3: time = 1 s: must increase"),
+    (["cycle", "--cycle", "t_neg.csv"], "t_neg.csv: data row 2: speed = -10: must be finite"),
+    (["cycle", "--cycle", "t_one.csv"], "t_one.csv: 1 samples: a trace needs at least 2"),
+    (["cycle", "--cycle", "t_text.csv"], "t_text.csv: data row 2: '2', 'fast': not numbers"),
+    (["cycle", "--cycle", "t_dup.csv"], "t_dup.csv: data row 3: time = 2 s: must increase"),
+    (["cycle", "--cycle", "t_knots.csv"],
+     "t_knots.csv: column 'speed' has unit [knots], which empact does not convert; give one "
+     "of m/s, km/h, mph"),
+    (["cycle", "--cycle", "t_rpm.csv"], "column 'speed' has unit [rpm], a unit of angular "
+     "speed; the column is a speed"),
+    (["cycle", "--cycle", "t_fortnight.csv"], "column 'time' has unit [fortnight], which"),
+    (["cycle", "--cycle", "t_nounit.csv"], "t_nounit.csv: column 'speed' has no unit"),
+    (["cycle", "--cycle", "t_semi.csv"], "need the columns 'time [s]' and 'speed [km/h]'"),
+    (["cycle", "--cycle", "t_phase.csv"], "(300 characters): a phase name holds at most 40"),
+    (["cycle", "--cycle", "t_huge.csv"], "t_huge.csv: speed 1e+05 km/h at t = 10 s (1 sample "
+     "above): the car's top speed by its gearing is 293.6 km/h"),
+    (["cycle", "--cycle", "fifo.csv"], "fifo.csv: is a FIFO (named pipe), not a trace file"),
+    (["cycle", "--cycle", LONG], "--cycle 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxx...(300 characters)'"),
+    (["cycle", "--cycle", "nedc", "--strategies", "sf1.3,,slip"], "--strategies = ''"),
+    (["cycle", "--cycle", "nedc", "--params", "veh_neg.toml"], "vehicle.mass = -1300"),
+    (["cycle", "--cycle", "nedc", "--out", "out.csv"], "Directory 'out.csv' is a file"),
+    (["efficiency", "--torque", "1e6"], "--torque = 1e+06: allowed range is (0, 10000] [N m]"),
+    (["efficiency", "--speed", "1e6"], "--speed = 1e+06: allowed range is (0, 2000] [rad/s]"),
+    (["efficiency", "--torque", "-5"], "--torque = -5: allowed range is (0, 10000]"),
+    (["efficiency", "--ratio", "5"], "--ratio = 5: outside the geometric ratio range"),
+    (["efficiency", "--clamp", "1:2"], "--clamp '1:2': a clamping sweep is A:B:N"),
+    (["efficiency", "--clamp", "0:1000:3", "--torque", "50", "--ratio", "1"], "--clamp = 0"),
+    (["efficiency", "--clamp", "1000:30000:3"], "--clamp: give one --torque, one --speed"),
+    (["efficiency", "--tau", "1"], "--tau = 1: allowed range is (0, 1)"),
+    (["efficiency", "--torque", "1:200:10000"], "120000 points: at most 20000 per map"),
+    (["control", "tune", "pi.json", "--out", "t.json", "--parameters", "kp_ratio,,ki_slip"],
+     "--parameters kp_ratio,,ki_slip: choose distinct names from kp_ratio"),
+    (["control", "tune", "k_disc.json", "--out", "t.json"], "k_disc.json: tune: a continuous "
+     "two-loop PI"),
+    (["control", "tune", "shipped:nope", "--out", "t.json"],
+     "controller 'shipped:nope': no shipped controller 'nope' (shipped: hinf, pi)"),
+    (["control", "tune", "pi.json", "--family", "text.npz", "--out", "t.json"], "text.npz"),
+    (["fmu", "export", "--out", "m.fmu", "--rate", "0"], "--rate = 0: allowed range"),
+    (["fmu", "export", "--out", "m.fmu", "--max-step", "0"], "--max-step = 0: allowed range"),
+    (["fmu", "export", "--out", "m.fmu", "--ratio", "9"], "--ratio = 9"),
+    (["fmu", "export", "--out", "m.fmu", "--clamp", "-1"], "--clamp = -1"),
+    (["fmu", "export", "--out", "m.fmu", "--speed", "1e6"], "--speed = 1e+06: allowed range "
+     "is (0, 2000] [rad/s]"),
+    (["fmu", "export", "--out", "m.fmu", "--controller", "c_text.json"], "c_text.json"),
+    (["fmu", "export", "--out", "m.fmu", "--controller", "fifo.json"], "fifo.json: is a FIFO"),
+    (["fmu", "export", "--out", "m.fmu", "--controller", "shipped:x"], "no shipped controller"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--runs", "4", "--resume", "--out", "st_bad"],
+     "st_bad/manifest.json: not a study manifest file (not JSON text)"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--runs", "4", "--resume", "--out", "st_deep"],
+     "st_deep/manifest.json: nested deeper than 32 levels"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--runs", "4", "--resume", "--out", "st_v99"],
+     "manifest.json: schema version 99 is newer than this empact reads (up to 1)"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--runs", "4", "--resume", "--out", "st_chunks"],
+     "manifest.json: chunks must be a list of [start, stop] run pairs"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--runs", "4", "--resume", "--out", "st_gap"],
+     "manifest.json: chunks must cover the runs from 0, in order"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--runs", "4", "--resume", "--out", "st_done"],
+     "manifest.json: completed must list chunk indices 0 to 0"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--runs", "4", "--resume", "--out", "st_schema"],
+     "manifest.json: schema 'empact.study.manifest' expected"),
+    (["montecarlo", "--spread", "sp_ok.toml", "--runs", "4", "--resume", "--out", "full"],
+     "--resume full: not a study folder (no manifest.json)"),
+    (["control", "check", "pi.json", "--family", "f.npz", "--strict", "--min-disk-margin",
+      "nan"], "--min-disk-margin = nan: must be a finite number"),
+    (["control", "check", "pi.json", "--family", "f.npz", "--strict", "--min-disk-margin",
+      "-0.1"], "--min-disk-margin = -0.1"),
+    (["control", "check", "pi.json", "--family", "f.npz", "--strict", "--loop-scenario",
+      "sc_rtol.toml"], "sc_rtol.toml: solver.rtol = 2"),
+    (["control", "check", "shipped:nope", "--strict"], "no shipped controller 'nope'"),
+    (["control", "discretize", "pi.json", "--out", "k.json", "--at", "r_g=1,r_g=2,tau=0.9"],
+     "--at 'r_g=1,r_g=2,tau=0.9': r_g given twice"),
+    (["control", "discretize", "pi.json", "--out", "k.json", "--at", "x=1,tau=0.9"],
+     "'x' is not an operating variable; give r_g and two of nu (or tau), F_s, T_l"),
+    (["control", "discretize", "pi.json", "--out", "k.json", "--at", "r_g=1,tau=0.9,F_s=1e9"],
+     "--at F_s=1e+09: allowed range is [0, 1e+06] [N]"),
+    (["control", "discretize", "pi.json", "--out", "k.json", "--at", "r_g=9,tau=0.9"],
+     "--at r_g=9: outside the geometric ratio range"),
+    (["control", "discretize", "pi.json", "--out", "k.json", "--at", "r_g=1,tau=2"],
+     "--at tau=2: allowed range is [-1, 1]"),
+    (["control", "discretize", "pi.json", "--out", "k.json", "--at", "r_g=1,nu=0.5"],
+     "--at nu=0.5: allowed range is"),
+    (["control", "discretize", "pi.json", "--out", "k.json", "--at", "r_g=1,tau=0.9,nu=0.01"],
+     "give nu or tau, not both"),
+    (["control", "discretize", "pi.json", "--out", "k.json", "--at",
+      "r_g=1,tau=0.9,F_s=1e4,T_l=5"], "give at most two of nu (or tau), F_s, T_l"),
+    (["control", "discretize", "pi.json", "--out", "k.json", "--at", "r_g=1;tau=0.9"],
+     "is not NAME=VALUE with a number"),
+    (["control", "discretize", "k_disc.json", "--out", "k.json", "--at", "r_g=1,tau=0.9"],
+     "k_disc.json: already discrete (dt = 0.001 s)"),
 ]
 
 
@@ -1048,7 +1166,8 @@ def test_the_leak_scan_sees_leaks():
 def test_bad_input_table_covers_every_command():
     covered = {a[0] for a, _ in BAD_INPUT}
     assert set(COMMANDS) <= covered, set(COMMANDS) - covered
-    assert len(BAD_INPUT) >= 300  # 159 before issue 22, 244 before issue 35
+    assert len(BAD_INPUT) >= 380  # 159 before issue 22, 244 before issue 35, 325 before
+    # its round 4
 
 
 def test_failed_calibration_exits_1_and_writes_nothing(tmp_path):
@@ -1395,3 +1514,71 @@ def test_a_closing_line_names_the_files_written(tmp_path, monkeypatch):
     assert res.stderr.splitlines()[-1] == "written: m.json"
     res = run("modes", "driveline", "--json-out", "q.json", "--quiet")
     assert res.exit_code == 0 and res.stderr == "" and (tmp_path / "q.json").is_file()
+
+
+# -- issue 35, round 4 ---------------------------------------------------------------------------
+def test_modes_names_the_parameter_of_every_spring(tmp_path):
+    """`modes` says which stiffness each spring is (`spring_parameters`): the actuation's
+    belt is actuation.k_belt (paper_sec21.k_belt with the Sec. 2.1 rows), the driveline's is
+    driveline.k_belt; each named parameter's value is the stiffness the model used."""
+    from empact.linear.actuation import actuation_model
+    from empact.linear.driveline import driveline_model
+
+    p = load_params()
+    for name, model in (("actuation", actuation_model(p, 1.0)),
+                        ("paper", actuation_model(p, 1.0, kinematics="paper-sec2.1")),
+                        ("driveline", driveline_model(p, 1.0))):
+        names = model.modes().spring_parameters
+        assert len(names) == len(model.springs), name
+        for key, k in zip(names, model.stiffness):
+            section, field = key.split(".")
+            assert getattr(getattr(p, section), field) == k, (name, key)
+    res = run("modes", "driveline", "--json", "--quiet")
+    assert json.loads(res.stdout)["spring_parameters"] == ["driveline.k_tc", "driveline.k_belt",
+                                                           "driveline.k_ds"]
+    res = run("modes", "actuation", "--kinematics", "paper-sec2.1", "--quiet")
+    assert "belt = paper_sec21.k_belt" in res.stdout, res.stdout
+
+
+def test_validate_lists_values_outside_their_band_with_what_they_are_for(tmp_path):
+    """`params validate` accepts a value outside its plausible band and lists it by its
+    dotted name with its meaning: a driveline.k_belt of 1000 N/m says it is the linear
+    driveline's belt and the nonlinear model's only with belt = "locked"."""
+    f = write(tmp_path, "[driveline]\nk_belt = 1e3\n")
+    res = run("params", "validate", f, "--quiet")
+    assert res.exit_code == 0, res.output
+    lines = res.stdout.splitlines()
+    assert lines[0] == f"{f}: ok (1 value outside the plausible band, below)"
+    assert lines[1].startswith("  driveline.k_belt = 1000 [N/m]: outside the plausible band "
+                               "[5e+06, 5e+07] [N/m]; pushbelt stiffness as a torque-carrying")
+    assert 'belt = "locked"' in lines[1] and len(lines) == 2
+    res = run("params", "validate", write(tmp_path, "", "empty.toml"), "--quiet")
+    assert res.stdout.strip().endswith("empty.toml: ok")
+
+
+def test_every_controller_reader_takes_a_shipped_name(tmp_path):
+    """``shipped:pi`` names the shipped controller for every reader (`load_controller`), as
+    the docs say: `control discretize` took a file only (the campaign's `check`, `tune`,
+    `fmu export` and `discretize` refused it); an unknown name lists the shipped ones."""
+    from importlib import resources
+
+    from empact.control.controller import load_controller
+
+    shipped = load_controller("shipped:pi")
+    path = resources.files("empact.data").joinpath("control", "pi.json")
+    np.testing.assert_array_equal(shipped.B, load_controller(str(path)).B)
+    res = run("control", "discretize", "shipped:pi", "--rate", "1000", "--out",
+              tmp_path / "k.json", "--quiet")
+    assert res.exit_code == 0 and (tmp_path / "k.json").is_file(), res.output
+
+
+def test_a_map_with_no_point_trimmed_exits_1_and_writes_nothing(tmp_path, monkeypatch):
+    """`efficiency` over clamping forces none of which carries the torque: exit 1, one line
+    naming a point and why, nothing written (it exited 0 with a table of failures)."""
+    monkeypatch.chdir(tmp_path)
+    res = run("efficiency", "--clamp", "100:200:3", "--torque", "150", "--ratio", "1",
+              "--strategy", "slip", "--json-out", "e.json", "--quiet")
+    assert res.exit_code == 1, res.output
+    assert res.output.startswith("error: none of the 3 points trims (e.g. slip at r_g = 1, "
+                                 "T_in = 150 N m: ") and res.output.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []

@@ -228,3 +228,28 @@ def test_control_chapter_examples_run():
                if not m.name.startswith("_")}
     assert sorted(m for m in modules if f"empact.control.{m}" not in text) == []
     assert ":doc:`api/control`" in text
+
+
+def test_every_snippet_is_run_checked_or_excluded_in_one_list():
+    """Every code snippet of the README and of the site's pages (`readme_tour.snippets`) has
+    its entry in `readme_tour.COVERAGE` (issue 35, item 3): run by the tour's runner (a shell
+    or Python snippet), checked by a test that exists, or excluded with a reason; no entry
+    names a snippet that is gone."""
+    from readme_tour import COVERAGE, RUN, snippets
+
+    found = snippets()
+    keys = {s.key for s in found}
+    assert [f"{s.source}:{s.line} {s.key[1]!r}" for s in found if s.key not in COVERAGE] == []
+    assert [k for k in COVERAGE if k not in keys] == []
+    assert [f"{s.source}:{s.line}" for s in found
+            if COVERAGE[s.key] == (RUN,) and s.kind not in ("sh", "python")] == []
+    tests = Path(__file__).resolve().parent
+    for how in set(COVERAGE.values()):
+        if how[0] == "checked" and "::" in how[1]:
+            file, name = how[1].split("::")
+            assert f"def {name}(" in (tests / file).read_text(), how
+        elif how[0] == "excluded":
+            assert len(how[1]) > 20, how  # a reason, not a word
+    counts = {k: sum(COVERAGE[s.key][0] == k for s in found) for k in (RUN, "checked",
+                                                                       "excluded")}
+    assert counts[RUN] >= 5 and sum(counts.values()) == len(found), counts

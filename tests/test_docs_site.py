@@ -138,3 +138,88 @@ def test_the_index_renders(tmp_path):
                     (SITE / "index.html").as_uri()], capture_output=True, timeout=120)
     data = shot.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 50_000, len(data)
+
+
+#: the window width the layout check runs at [px] (a laptop's; the index screenshot's)
+WIDTH = 1280
+
+_OVERFLOW_JS = r"""
+const pages = %s;
+const out = {};
+function clipper(el) {  // the nearest ancestor that clips or scrolls what overflows it
+  for (let a = el.parentElement; a; a = a.parentElement)
+    if (a.ownerDocument.defaultView.getComputedStyle(a).overflowX !== "visible") return a;
+  return null;
+}
+function name(el) {
+  let s = el.tagName.toLowerCase();
+  if (typeof el.className === "string" && el.className.trim())
+    s += "." + el.className.trim().split(/\s+/).join(".");
+  return s;
+}
+function check(doc) {
+  const bad = [];
+  const scopes = doc.querySelectorAll("article.bd-article, .prev-next-area, footer.bd-footer");
+  for (const scope of scopes) for (const el of [scope, ...scope.querySelectorAll("*")]) {
+    if (!el.getClientRects().length) continue;
+    const r = el.getBoundingClientRect();
+    if (r.width === 0 || r.height === 0) continue;
+    const text = (el.innerText || el.getAttribute("src") || "").slice(0, 60);
+    if (el.clientWidth > 0 && el.scrollWidth > el.clientWidth + 1) {
+      bad.push(`${name(el)} holds ${el.scrollWidth} px in ${el.clientWidth} px: ${text}`);
+      continue;
+    }
+    const a = clipper(el);
+    if (a) {
+      const ra = a.getBoundingClientRect();
+      if (r.right > ra.right + 1 || r.left < ra.left - 1)
+        bad.push(`${name(el)} beyond its ${name(a)} by ` +
+                 `${Math.round(Math.max(r.right - ra.right, ra.left - r.left))} px: ${text}`);
+    }
+  }
+  return bad;
+}
+function open(url) {
+  return new Promise(ok => { const f = document.createElement("iframe");
+    f.style.width = "%dpx"; f.style.height = "900px";
+    f.onload = () => setTimeout(() => {
+      const bad = check(f.contentDocument);
+      if (bad.length) out[url] = bad;
+      f.remove(); ok(); }, 200);
+    f.src = url; document.body.appendChild(f); });
+}
+(async () => {
+  for (const p of pages) await open(p);
+  const pre = document.createElement("pre"); pre.id = "result";
+  pre.textContent = JSON.stringify({pages: pages.length, overflowing: out});
+  document.body.appendChild(pre);
+})();
+"""
+
+
+def test_no_element_is_wider_than_its_container(site, tmp_path):
+    """On every gallery and API page, at a window of `WIDTH` px, no element of the article or
+    the footer holds more than its box shows (a line of output or code that scrolls out of
+    sight, a table wider than its column) or stands beyond the box that clips it (the
+    footer's previous / next links, which were cut off on the API pages): a reader sees
+    every character without scrolling sideways (issue 35).  The figures themselves are
+    checked when the gallery builds (`docs/_scraper.py`: nothing drawn beyond a figure's
+    edge)."""
+    pages = sorted(p for p in site if p.relative_to(SITE).parts[0] in ("gallery", "api"))
+    assert len(pages) > 100, len(pages)
+    harness = tmp_path / "harness.html"
+    harness.write_text("<!doctype html><html><body><script>"
+                       + _OVERFLOW_JS % (json.dumps([p.as_uri() for p in pages]), WIDTH)
+                       + "</script></body></html>")
+    dom = subprocess.run([_chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'ud'}",
+                          "--allow-file-access-from-files", "--virtual-time-budget=600000",
+                          "--dump-dom", harness.as_uri()],
+                         capture_output=True, text=True, timeout=900).stdout
+    m = re.search(r'<pre id="result">(.*?)</pre>', dom, re.S)
+    assert m, "the harness did not finish: " + dom[-500:]
+    res = json.loads(m.group(1).replace("&quot;", '"').replace("&lt;", "<")
+                     .replace("&gt;", ">").replace("&amp;", "&"))
+    assert res["pages"] == len(pages)
+    shown = {Path(urlsplit(u).path).relative_to(SITE).as_posix(): v[:3]
+             for u, v in res["overflowing"].items()}
+    assert shown == {}, shown

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -206,3 +207,23 @@ def test_plot_draws_the_four_panels(short_run):
     p = plot_drive_cycle(short_run)
     assert p.axes.shape == (4, 1)
     assert len(p.artists) == 1 + 3 * len(short_run.strategies)
+
+
+def test_a_trace_header_unit_is_converted_or_refused():
+    """A trace's header units go through the one table of the CSV readers
+    (`empact._columns`): ``time [ms]``, ``[min]`` and ``speed [mph]`` give the trace of
+    ``time [s]``, ``speed [km/h]`` (1 mph = 1.609344 km/h exactly), an unknown unit or a
+    speed without one is one line (`time [ms]` was refused as a missing column)."""
+    rows = [(0, 0.0), (60, 36.0), (120, 72.0), (180, 0.0)]
+    ref = parse_trace("time [s],speed [km/h]\n" + "".join(f"{t},{v}\n" for t, v in rows), "s")
+    for header, ft, fv in (("time [ms],speed [km/h]", 1e3, 1.0),
+                           ("time [min],speed [km/h]", 1 / 60, 1.0),
+                           ("time [s],speed [mph]", 1.0, 1 / 1.609344)):
+        c = parse_trace(header + "\n" + "".join(f"{t * ft!r},{v * fv!r}\n" for t, v in rows),
+                        "x")
+        np.testing.assert_allclose(c.t, ref.t, rtol=1e-14, atol=0)
+        np.testing.assert_allclose(c.v, ref.v, rtol=1e-14, atol=0)
+    for header, match in (("time [s],speed [knots]", "unit [knots], which empact does not"),
+                          ("time [s],speed", "column 'speed' has no unit")):
+        with pytest.raises(ParameterError, match=re.escape(match)):
+            parse_trace(header + "\n0,0\n1,1\n", "x")

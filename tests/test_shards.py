@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -210,3 +211,38 @@ def test_a_sigkilled_study_resumes_bitwise(tmp_path):
     res = monte_carlo(P, SPREAD, 40, "slip", seed=7, store=tmp_path, resume=True,
                       chunk_seconds=2 * TINY)
     same_table(monte_carlo(P, SPREAD, 40, "slip", seed=7), res)
+
+
+def test_a_manifest_is_trusted_only_when_it_checks_and_a_damaged_shard_is_named(tmp_path):
+    """`ShardStore.open` reads the manifest through the guarded reader and checks it (issue
+    35's campaign: a manifest nested 50 000 deep raised RecursionError, one of schema version
+    99 or with completed chunks -5 and 1e9 was resumed, a damaged shard raised BadZipFile):
+    each is one `StudyMismatch` line naming the file and what is wrong."""
+    spec = {"analysis": "plant", "seed": 0, "runs": 4}
+    store = ShardStore.create(tmp_path / "s", spec, [(0, 2), (2, 4)])
+    store.write(0, {"x": np.arange(2.0)})
+    assert ShardStore.open(tmp_path / "s", spec).completed == {0}
+    doc = json.loads((tmp_path / "s" / MANIFEST).read_text())
+    cases = {"[" * 50_000 + "]" * 50_000: "nested deeper than 32 levels",
+             json.dumps({**doc, "schema": {**doc["schema"], "version": 99}}):
+                 "schema version 99 is newer than this empact reads (up to 1)",
+             json.dumps({**doc, "completed": [-5, 10**9]}):
+                 "completed must list chunk indices 0 to 1",
+             json.dumps({**doc, "chunks": [[0, 2], [3, 4]]}):
+                 "chunks must cover the runs from 0, in order",
+             json.dumps({**doc, "chunks": [[0, True], [2, 4]]}):
+                 "chunks must be a list of [start, stop] run pairs",
+             "{not json": "not a study manifest file (not JSON text)"}
+    for text, match in cases.items():
+        (tmp_path / "s" / MANIFEST).write_text(text)
+        with pytest.raises(StudyMismatch, match=re.escape(match)) as err:
+            ShardStore.open(tmp_path / "s", spec)
+        assert "\n" not in str(err.value) and "Error" not in str(err.value)
+    (tmp_path / "s" / MANIFEST).write_text(json.dumps(doc))
+    shard = tmp_path / "s" / SHARDS / "chunk-000000.npz"
+    shard.write_bytes(shard.read_bytes()[:50])
+    with pytest.raises(StudyMismatch, match="shards/chunk-000000.npz is damaged .not an .npz "
+                                            "archive.; delete it and --resume computes"):
+        ShardStore.open(tmp_path / "s", spec)
+    with pytest.raises(StudyMismatch, match="damaged"):
+        store.read(0)

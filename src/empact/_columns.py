@@ -1,7 +1,9 @@
-"""Named numeric columns of a CSV file with units in the header (private): the reader of
-measured records (`empact.identification.records`, which documents the format and re-exports
-these names) and of the measured loss map (`empact.variator.losses.load_loss_map`), in a
-module without the identification's dependencies (a parameter file may name a loss map).
+"""Named numeric columns of a CSV file with units in the header (private): the one style
+``name [unit]`` that empact writes, the units it converts to SI when it reads a column
+(`HEADER_UNITS`) and the reader of measured records (`empact.identification.records`, which
+documents the format and re-exports these names), of the measured loss map
+(`empact.variator.losses.load_loss_map`) and of speed traces (`empact.cycles`), in a module
+without the identification's dependencies (a parameter file may name a loss map).
 
 A header cell may carry a unit in brackets after the name (``time [s]``); the unit of every
 column that is read is converted to SI (`HEADER_UNITS`), a unit empact does not know is
@@ -17,7 +19,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ._io import read_input_text
-from .errors import DataError
+from .errors import DataError, ParameterError
 
 __all__ = ["load_records", "column_name", "header_cell", "HEADER_UNITS", "column_unit",
            "si_factor"]
@@ -32,7 +34,8 @@ HEADER_UNITS: dict[str, tuple[float, str]] = {
     "rad": (1.0, "angle"), "rad/s": (1.0, "angular speed"),
     "rpm": (2.0 * np.pi / 60.0, "angular speed"), "1/min": (2.0 * np.pi / 60.0, "angular speed"),
     "-": (1.0, "dimensionless"), "1": (1.0, "dimensionless"), "N": (1.0, "force"),
-    "m": (1.0, "length"), "m/s": (1.0, "speed"), "W": (1.0, "power"), "J": (1.0, "energy"),
+    "m": (1.0, "length"), "m/s": (1.0, "speed"), "km/h": (1.0 / 3.6, "speed"),
+    "mph": (0.44704, "speed"), "W": (1.0, "power"), "J": (1.0, "energy"),
     "1/s": (1.0, "rate"), "A": (1.0, "current"), "V": (1.0, "voltage"),
 }
 
@@ -89,44 +92,50 @@ def column_unit(header: str) -> str | None:
     return " ".join(m.group(1).split()) if m else None
 
 
-def si_factor(path: Path, name: str, unit: str | None, quantity: str | None) -> float:
-    """Factor from a column's header unit to SI; one line for an unknown unit or one of
-    another quantity than the column must have.
+def si_factor(where: str | Path, name: str, unit: str | None, quantity: str | None,
+              error: type[ParameterError] = DataError) -> float:
+    """The factor from a column's header unit to SI; one line for a unit empact does not
+    convert or one of another quantity than the column must have.
 
     Parameters
     ----------
-    path : Path
-        The file (named in the message).
+    where : str or Path
+        The file, for the message.
     name : str
-        The column's name.
+        The column's name, for the message.
     unit : str or None
         Its header unit (`column_unit`); None: SI.
     quantity : str or None
-        The quantity the column must be (a kind of `HEADER_UNITS`), None: any.
+        The quantity the column must be (``"time"``, ``"speed"``; the second entry of
+        `HEADER_UNITS`), None for any.
+    error : type
+        The error raised (a `ParameterError`; default `DataError`).
 
     Returns
     -------
     float
-        The factor to SI.
+        Multiply the column by it for SI [SI unit per header unit].
 
     Raises
     ------
-    DataError
-        For a unit not in `HEADER_UNITS` or of another quantity.
+    ParameterError
+        (`error`) For a unit not in `HEADER_UNITS`, or one of another quantity than
+        `quantity`: one line naming `where`, the column and the units it takes.
     """
     if unit is None:
         return 1.0
     if unit not in HEADER_UNITS:
         known = ", ".join(u for u, (_, k) in HEADER_UNITS.items()
                           if u.isascii() and quantity in (None, k))
-        raise DataError(f"{path}: column {name!r} has unit [{unit}], which empact does not "
-                        f"convert; give one of {known} (or no unit: SI)")
+        raise error(f"{where}: column {name!r} has unit [{unit}], which empact does not "
+                    f"convert; give one of {known}" + (" (or no unit: SI)" if quantity
+                                                       in (None, "time") else ""))
     factor, kind = HEADER_UNITS[unit]
     if quantity is not None and kind != quantity:
         units = ", ".join(u for u, (_, k) in HEADER_UNITS.items() if k == quantity
                           and u.isascii())
-        raise DataError(f"{path}: column {name!r} has unit [{unit}], a unit of {kind}; the "
-                        f"column is a {quantity} ({units})")
+        raise error(f"{where}: column {name!r} has unit [{unit}], a unit of {kind}; the "
+                    f"column is a {quantity} ({units})")
     return factor
 
 

@@ -7,6 +7,9 @@ and folders likewise (``0777`` less the umask), not the ``0600`` / ``0700`` of `
 A temporary name is never longer than the file system allows (`temp_prefix`), so a name that
 fits fits its temporary too.
 
+What a block of code wrote is known: `recording` collects the destination of every file that
+one of these writers moves into place meanwhile (the command line's closing line names them).
+
 Every input file is read through `check_input` (a regular file: not a folder, FIFO, device or
 socket, which would hang or never end; not larger than its kind allows) and, for text,
 `read_input_text` (UTF-8, no NUL bytes); `parse_json` and `parse_toml` refuse documents nested
@@ -28,7 +31,7 @@ from .errors import ParameterError
 
 __all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_file", "atomic_folder", "umask",
            "temp_prefix", "NAME_MAX", "check_input", "read_input_text", "parse_json",
-           "parse_toml", "MAX_DEPTH", "MAX_TEXT_BYTES", "file_kind"]
+           "parse_toml", "MAX_DEPTH", "MAX_TEXT_BYTES", "file_kind", "recording"]
 
 #: longest file name (one path component) in bytes on the file systems empact writes to
 NAME_MAX = 255
@@ -261,6 +264,40 @@ def parse_toml(path: str | os.PathLike[str], what: str, *,
 
 _UMASK: int | None = None
 
+#: the open `recording` blocks (each a dict used as an ordered set of written paths)
+_RECORDS: list[dict[Path, None]] = []
+
+
+@contextmanager
+def recording() -> Iterator[dict[Path, None]]:
+    """Collect what is written while the block runs: the destination of every file an atomic
+    writer of this module moves into place (`atomic_file` and the writers on it; every file
+    of an `atomic_folder`), absolute, once each, in the order written.  Files written into a
+    folder that `atomic_folder` later moves into place are recorded at their destination.
+
+    Yields
+    ------
+    dict of pathlib.Path to None
+        The written paths (its keys, an ordered set), filled as the block runs.
+    """
+    rec: dict[Path, None] = {}
+    _RECORDS.append(rec)
+    try:
+        yield rec
+    finally:
+        _RECORDS.remove(rec)
+
+
+def _record(paths: Iterator[Path] | list[Path], moved_from: Path | None = None) -> None:
+    """Record `paths` (absolute) in every open `recording`; `moved_from`: a temporary folder
+    whose recorded files are now at their destination (dropped from the records)."""
+    for rec in _RECORDS:
+        if moved_from is not None:
+            for old in [k for k in rec if k.is_relative_to(moved_from)]:
+                del rec[old]
+        for path in paths:
+            rec[path] = None
+
 
 def umask() -> int:
     """The process umask (read once)."""
@@ -288,6 +325,8 @@ def atomic_file(path: str | os.PathLike[str]) -> Iterator[Path]:
         yield tmp_path
         os.chmod(tmp_path, 0o666 & ~umask())
         os.replace(tmp_path, path)
+        if _RECORDS:
+            _record([path.absolute()])
     except BaseException:
         tmp_path.unlink(missing_ok=True)
         raise
@@ -325,16 +364,21 @@ def atomic_folder(dest: str | os.PathLike[str]) -> Iterator[Path]:
     try:
         yield tmp
         mode_file, mode_dir = 0o666 & ~umask(), 0o777 & ~umask()
-        for p in tmp.rglob("*"):
+        files = []
+        for p in sorted(tmp.rglob("*")):
             os.chmod(p, mode_dir if p.is_dir() else mode_file)
+            if not p.is_dir():
+                files.append(dest / p.relative_to(tmp))
         if not dest.exists():
             os.chmod(tmp, mode_dir)
             tmp.rename(dest)
-            return
-        for p in sorted(tmp.iterdir()):
-            target = dest / p.name
-            if target.is_dir() and not target.is_symlink():
-                shutil.rmtree(target)
-            os.replace(p, target)
+        else:
+            for p in sorted(tmp.iterdir()):
+                target = dest / p.name
+                if target.is_dir() and not target.is_symlink():
+                    shutil.rmtree(target)
+                os.replace(p, target)
+        if _RECORDS:
+            _record(files, moved_from=tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

@@ -15,9 +15,12 @@ The shipped cycles are data files (``empact/data/cycles/*.csv``), each with a pr
     phases cold-transient, stabilized, hot-transient.
 
 A file (shipped or a user's) is CSV: ``#`` comment lines, one header row with ``time [s]``
-and ``speed [km/h]`` or ``speed [m/s]`` (and optionally ``phase``, a name per sample), then
-one row per sample.  The time must increase strictly and the speed be finite and not
-negative; every bad row is named (one line per error, at most ten).
+and ``speed [km/h]`` or ``speed [m/s]`` (and optionally ``phase``, a name per sample of at
+most 40 characters), then one row per sample.  Header units are converted as every CSV
+reader of empact converts them (`empact._columns`: ``time [ms]``, ``[min]``, ``speed
+[mph]``, ...) and refused when unknown; the speed must have one.  The time must increase
+strictly and the speed be finite and not negative; every bad row is named (one line per
+error, at most ten).
 
 The distance is the trapezoid of the speed over time; on the standard cycles, which start
 and end at rest at 1 Hz, it equals the sum of the samples times 1 s (WLTC 3b: 83 758.6 km/h
@@ -35,6 +38,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ._columns import column_name, column_unit, si_factor
 from ._io import read_input_text
 from ._results import Result, plain
 from ._validate import check_choice
@@ -44,10 +48,10 @@ __all__ = ["CYCLES", "Cycle", "load_cycle", "read_trace", "parse_trace"]
 
 #: the shipped cycles: name -> file in ``empact/data/cycles``
 CYCLES = {"wltc3b": "wltc3b.csv", "nedc": "nedc.csv", "ftp75": "ftp75.csv"}
-#: the speed units a trace may give, to m/s
-_SPEED_UNITS = {"km/h": 1 / 3.6, "m/s": 1.0}
 #: most errors listed for a bad trace
 _MAX_ERRORS = 10
+#: longest phase name [characters] (it heads a column of the text and a key of the JSON)
+_MAX_PHASE = 40
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,13 +141,19 @@ def parse_trace(text: str, name: str) -> Cycle:
                              "'speed [m/s]')")
     rows = list(csv.reader(io.StringIO("\n".join(body))))
     cols = [c.strip() for c in rows[0]]
-    speed = [c for c in cols if c in ("speed [km/h]", "speed [m/s]")]
-    if "time [s]" not in cols or len(speed) != 1:
+    names = [column_name(c) for c in cols]
+    if names.count("time") != 1 or names.count("speed") != 1 or names.count("phase") > 1:
         raise ParameterError(f"{name}: header {','.join(cols)!r}: need the columns 'time [s]' "
-                             "and one of 'speed [km/h]', 'speed [m/s]'")
-    i_t, i_v = cols.index("time [s]"), cols.index(speed[0])
-    i_p = cols.index("phase") if "phase" in cols else None
-    scale = _SPEED_UNITS[speed[0][7:-1]]
+                             "and 'speed [km/h]' (or 'speed [m/s]'), once each")
+    i_t, i_v = names.index("time"), names.index("speed")
+    i_p = names.index("phase") if "phase" in names else None
+    t_unit, v_unit = column_unit(cols[i_t]), column_unit(cols[i_v])
+    if v_unit is None:
+        raise ParameterError(f"{name}: column 'speed' has no unit; give 'speed [km/h]' or "
+                             "'speed [m/s]'")
+    t_scale = si_factor(name, "time", t_unit, "time", ParameterError)
+    scale = si_factor(name, "speed", v_unit, "speed", ParameterError)
+    t_unit, v_unit = t_unit or "s", v_unit
     errors: list[str] = []
     t: list[float] = []
     v: list[float] = []
@@ -154,20 +164,24 @@ def parse_trace(text: str, name: str) -> Cycle:
             errors.append(f"{where}: {len(row)} fields, the header has {len(cols)}")
             continue
         try:
-            tk, vk = float(row[i_t]), float(row[i_v])
+            tk, vk = float(row[i_t]) * t_scale, float(row[i_v])
         except ValueError:
             errors.append(f"{where}: {row[i_t].strip()!r}, {row[i_v].strip()!r}: not numbers")
             continue
         if not np.isfinite(tk):
-            errors.append(f"{where}: time = {row[i_t].strip()}: must be finite [s]")
+            errors.append(f"{where}: time = {row[i_t].strip()}: must be finite [{t_unit}]")
         elif t and not tk > t[-1]:
             errors.append(f"{where}: time = {tk:g} s: must increase (previous {t[-1]:g} s)")
         if not (np.isfinite(vk) and vk >= 0):
             errors.append(f"{where}: speed = {row[i_v].strip()}: must be finite and >= 0 "
-                          f"[{speed[0][7:-1]}]")
+                          f"[{v_unit}]")
+        label = row[i_p].strip() if i_p is not None else "all"
+        if len(label) > _MAX_PHASE:
+            errors.append(f"{where}: phase {label[:20]!r}... ({len(label)} characters): a "
+                          f"phase name holds at most {_MAX_PHASE}")
         t.append(tk)
         v.append(vk * scale)
-        phase.append(row[i_p].strip() if i_p is not None else "all")
+        phase.append(label)
     if not errors and len(t) < 2:
         errors.append(f"{name}: {len(t)} samples: a trace needs at least 2")
     if errors:

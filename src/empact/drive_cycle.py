@@ -58,6 +58,7 @@ from .params import Params
 from .vehicle import wheel_force
 
 __all__ = ["STRATEGIES", "DEFAULT_STRATEGIES", "REFERENCE", "RATIO_LIMITS", "MIN_CLAMPING",
+           "top_speed", "check_trace",
            "TERMS", "CycleResult",
            "quasi_static_cycle"]
 
@@ -251,6 +252,60 @@ def _trim(model: EmpactModel, strategy: str, r: NDArray, w_s: NDArray, T_l: NDAr
     return y, w_p
 
 
+def top_speed(params: Params) -> float:
+    """The car's top speed by its gearing: the engine at ``omega_max`` through the highest
+    ratio of `RATIO_LIMITS` and the final drive [m/s].
+
+    Parameters
+    ----------
+    params : Params
+        Reads ``[engine] omega_max`` and ``[vehicle] i_fd, r_wheel``.
+
+    Returns
+    -------
+    float
+        ``omega_max r_max r_wheel / i_fd`` [m/s].
+    """
+    veh = params.vehicle
+    return float(params.engine.omega_max * RATIO_LIMITS[1] * veh.r_wheel / veh.i_fd)
+
+
+def check_trace(params: Params, cycle: Cycle) -> Cycle:
+    """Refuse, before any work, a trace the car cannot drive at any ratio: a speed above its
+    `top_speed` (the engine would exceed ``omega_max`` at every ratio; the variator's trim
+    fails far above it).
+
+    Parameters
+    ----------
+    params : Params
+        The parameter set.
+    cycle : Cycle
+        The speed trace.
+
+    Returns
+    -------
+    Cycle
+        `cycle` itself.
+
+    Raises
+    ------
+    ParameterError
+        One line naming the trace, the first sample above the top speed and the top speed.
+    """
+    v_top = top_speed(params)
+    over = np.flatnonzero(cycle.v > v_top * (1 + 1e-9))
+    if over.size:
+        k = int(over[0])
+        raise ParameterError(
+            f"{cycle.name}: speed {3.6 * cycle.v[k]:.4g} km/h at t = {cycle.t[k]:g} s "
+            f"({over.size} sample{'s' * (over.size > 1)} above): the car's top speed by its "
+            f"gearing is {3.6 * v_top:.4g} km/h (engine.omega_max "
+            f"{params.engine.omega_max:g} rad/s through the highest ratio "
+            f"{RATIO_LIMITS[1]:g}, vehicle.i_fd {params.vehicle.i_fd:g}, vehicle.r_wheel "
+            f"{params.vehicle.r_wheel:g} m)")
+    return cycle
+
+
 def quasi_static_cycle(params: Params, cycle: Cycle, *,
                        strategies: Sequence[str] = DEFAULT_STRATEGIES,
                        tau: float | None = None,
@@ -279,13 +334,14 @@ def quasi_static_cycle(params: Params, cycle: Cycle, *,
     Raises
     ------
     ParameterError
-        For an unknown strategy (before any work), or a sample the variator cannot be
-        trimmed at (naming it).
+        For an unknown strategy or a trace faster than the car's top speed (`check_trace`;
+        both before any work), or a sample the variator cannot be trimmed at (naming it).
     """
     strategies = tuple(dict.fromkeys(check_choice("strategy", s, tuple(STRATEGIES))
                                      for s in strategies))
     if not strategies:
         raise ParameterError("strategies: give at least one of " + ", ".join(STRATEGIES))
+    check_trace(params, cycle)
     if tau is None:
         tau = params.operating.tau if params.operating.tau is not None else 0.9
     model = nonlinear_model(params) if model is None else model

@@ -63,7 +63,7 @@ from pythonfmu.enums import Fmi2Status
 
 from ._io import atomic_file
 from ._validate import check_choice, check_int, check_number
-from .control.controller import Controller, load_controller
+from .control.controller import Controller, controller_path, load_controller
 from .control.law import RAW_SIGNALS, SHIPPED_LOOP, LoopConfig, LoopLaw
 from .errors import ParameterError
 from .nonlinear.equilibrium import trim
@@ -562,7 +562,7 @@ class CoSimulation:
                                                    "parameters of the FMU (empact fmu export)"))
         files.append(folder / _PARAMS)
         if controller_file is not None:
-            shutil.copyfile(controller_file, folder / _CONTROLLER)
+            shutil.copyfile(controller_path(controller_file), folder / _CONTROLLER)
             files.append(folder / _CONTROLLER)
         assert c.point is not None
         spec = {"options": options,

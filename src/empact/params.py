@@ -104,7 +104,10 @@ class ActuationParams(Section):
     k_w, k_c : float
         Worm stiffness (spring 1) and chain stiffness (spring 2) [N m/rad].
     k_belt : float
-        Longitudinal pushbelt stiffness (spring 3) [N/m].
+        Longitudinal pushbelt stiffness (spring 3) [N/m]: against a change of the belt's
+        running length by the sheaves' axial positions; the actuation model's belt and the
+        nonlinear model's belt element (`DrivelineParams.k_belt` is the belt as a
+        torque-carrying chain).
     k_tp, k_ts : float
         Primary and secondary thrust bearing stiffnesses (springs 4 and 5) [N/m].
     """
@@ -125,9 +128,11 @@ class ActuationParams(Section):
     s: float = param("m/rad", "screw pitch (translation per radian)", 1e-7, 1e-2)
     k_w: float = param("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
     k_c: float = param("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
-    k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3); the actuation "
-                          "model's and the nonlinear model's belt (not driveline.k_belt)",
-                          1e2, 1e11)
+    k_belt: float = param("N/m", "longitudinal pushbelt stiffness against a change of its "
+                          "running length by the sheaves' axial positions (spring 3): the "
+                          "actuation model's belt and the nonlinear model's belt element "
+                          "(clamping and ratio); not driveline.k_belt, the belt as a "
+                          "torque-carrying chain", 1e2, 1e11)
     k_tp: float = param("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
     k_ts: float = param("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
 
@@ -216,7 +221,10 @@ class DrivelineParams(Section):
     k_tc : float
         Torque converter lock-up clutch stiffness [N m/rad].
     k_belt : float
-        Pushbelt stiffness as a chain element, on the elongation ``R_p q2 - R_s q3`` [N/m].
+        Pushbelt stiffness as a torque-carrying chain element, on the elongation ``R_p q2 -
+        R_s q3`` [N/m]: the linear driveline model's belt, and the nonlinear model's only
+        with ``belt="locked"`` (no slip, in place of traction); the nonlinear model's belt
+        element is `ActuationParams.k_belt`.
     k_ds : float
         Driveshaft stiffness [N m/rad].
     """
@@ -227,9 +235,11 @@ class DrivelineParams(Section):
     J_s: float = param("kg m^2", "secondary pulley, q3", 1e-6, 1e2)
     J_l: float = param("kg m^2", "load motor inertia, q4", 1e-6, 1e3)
     k_tc: float = param("N m/rad", "torque converter lock-up clutch stiffness", 1e-2, 1e8)
-    k_belt: float = param("N/m", "pushbelt stiffness as a chain element (elongation R_p q2 - R_s "
-                              "q3); the linear driveline model's only (the nonlinear model's "
-                              "belt is actuation.k_belt)", 1e2, 1e11)
+    k_belt: float = param("N/m", "pushbelt stiffness as a torque-carrying chain element "
+                          "(elongation R_p q2 - R_s q3): the linear driveline model's belt, "
+                          "and the nonlinear model's only with belt = \"locked\" (no slip, "
+                          "in place of traction); not actuation.k_belt, the nonlinear model's "
+                          "belt element", 1e2, 1e11)
     k_ds: float = param("N m/rad", "driveshaft stiffness", 1e-2, 1e8)
 
 
@@ -253,7 +263,8 @@ class Sec21Stiffness(Section):
     k_w: float = param("N m/rad", "worm stiffness (spring 1)", 1e-3, 1e8)
     k_c: float = param("N m/rad", "chain stiffness (spring 2)", 1e-3, 1e8)
     k_belt: float = param("N/m", "longitudinal pushbelt stiffness (spring 3) of the Sec. 2.1 "
-                          "rows (--kinematics paper-sec2.1)", 1e2, 1e11)
+                          "rows (--kinematics paper-sec2.1): in place of actuation.k_belt "
+                          "there, in the actuation and the nonlinear model", 1e2, 1e11)
     k_tp: float = param("N/m", "primary thrust bearing stiffness (spring 4)", 1e4, 1e12)
     k_ts: float = param("N/m", "secondary thrust bearing stiffness (spring 5)", 1e4, 1e12)
 

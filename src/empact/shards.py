@@ -19,12 +19,13 @@ import hashlib
 import io
 import json
 import os
+import zipfile
 from pathlib import Path
 from typing import Any, Iterator, Mapping, Sequence
 
 import numpy as np
 
-from ._io import atomic_write_bytes, atomic_write_text
+from ._io import atomic_write_bytes, atomic_write_text, parse_json
 from .errors import ParameterError
 
 __all__ = ["ShardStore", "StudyMismatch", "spec_hash", "MANIFEST", "SHARDS"]
@@ -39,6 +40,40 @@ SCHEMA = {"name": "empact.study.manifest", "version": 1}
 
 class StudyMismatch(ParameterError):
     """A study folder that is not a study, or whose study differs from the one resumed."""
+
+
+def _manifest(doc: Any, where: str) -> tuple[list[tuple[int, int]], set[int], dict]:
+    """The chunks, completed chunks and spec of a manifest document, checked: one line
+    (`StudyMismatch`) naming `where` (the option and the folder) and what is wrong."""
+    def bad(what: str) -> StudyMismatch:
+        return StudyMismatch(f"{where}: not a study folder ({MANIFEST}: {what}); start it "
+                             "with --out alone")
+
+    def whole(x: Any) -> bool:
+        return isinstance(x, int) and not isinstance(x, bool)
+
+    if not isinstance(doc, dict) or not isinstance(doc.get("schema"), dict) \
+            or doc["schema"].get("name") != SCHEMA["name"]:
+        raise bad(f"schema {SCHEMA['name']!r} expected")
+    version = doc["schema"].get("version")
+    if not whole(version) or version < 1:
+        raise bad(f"schema version {version!r}: must be a whole number >= 1")
+    if version > SCHEMA["version"]:
+        raise StudyMismatch(f"{where}: {MANIFEST}: schema version {version} is newer than "
+                            f"this empact reads (up to {SCHEMA['version']}); update empact")
+    raw, done, spec = doc.get("chunks"), doc.get("completed"), doc.get("spec")
+    if not isinstance(spec, dict):
+        raise bad("no spec table")
+    if not isinstance(raw, list) or not raw or not all(
+            isinstance(c, list) and len(c) == 2 and all(whole(x) for x in c) for c in raw):
+        raise bad("chunks must be a list of [start, stop] run pairs")
+    chunks = [(int(a), int(b)) for a, b in raw]
+    if chunks[0][0] != 0 or any(a >= b for a, b in chunks) or any(
+            chunks[k][0] != chunks[k - 1][1] for k in range(1, len(chunks))):
+        raise bad("chunks must cover the runs from 0, in order, each non-empty")
+    if not isinstance(done, list) or not all(whole(k) and 0 <= k < len(chunks) for k in done):
+        raise bad(f"completed must list chunk indices 0 to {len(chunks) - 1}")
+    return chunks, set(done), dict(spec)
 
 
 def spec_hash(spec: Mapping[str, Any]) -> str:
@@ -130,21 +165,19 @@ class ShardStore:
         Raises
         ------
         StudyMismatch
-            When `folder` has no readable manifest, or its study's spec differs from `spec`
-            (the message names the fields that differ).
+            When `folder` has no manifest one can read (through `empact._io.parse_json`: a
+            regular UTF-8 file, JSON, nested at most 32 levels) and trust (the schema, a
+            version this empact reads, chunks that cover the runs from 0 in order, completed
+            chunks among them, a shard of a completed chunk that is an archive), or its
+            study's spec differs from `spec` (the message names the fields that differ).
         """
         path = Path(folder)
         try:
-            doc = json.loads((path / MANIFEST).read_text())
-            if doc.get("schema", {}).get("name") != SCHEMA["name"]:
-                raise ValueError("not a study manifest")
-            chunks = [(int(a), int(b)) for a, b in doc["chunks"]]
-            completed = {int(k) for k in doc["completed"]}
-            old = dict(doc["spec"])
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise StudyMismatch(f"{option} {folder}: not a study folder (no readable "
-                                f"{MANIFEST}: {type(exc).__name__}); start it with --out "
-                                "alone") from None
+            doc = parse_json(path / MANIFEST, "study manifest", error=StudyMismatch)
+        except StudyMismatch as exc:
+            raise StudyMismatch(f"{option} {folder}: not a study folder ({exc}); start it "
+                                "with --out alone") from None
+        chunks, completed, old = _manifest(doc, f"{option} {folder}")
         if spec_hash(old) != spec_hash(spec):
             diff = sorted(k for k in set(old) | set(spec) if old.get(k) != spec.get(k))
             shown = ", ".join(f"{k} {old.get(k)!s:.16} there, {spec.get(k)!s:.16} here"
@@ -153,6 +186,12 @@ class ShardStore:
                                 "resume with the same spread, seed, runs, analysis and "
                                 "parameters, or start a new folder")
         completed = {k for k in completed if (path / SHARDS / cls._name(k)).is_file()}
+        for k in sorted(completed):
+            shard = path / SHARDS / cls._name(k)
+            if not zipfile.is_zipfile(shard):
+                raise StudyMismatch(f"{option} {folder}: {SHARDS}/{shard.name} is damaged "
+                                    "(not an .npz archive); delete it and --resume computes "
+                                    "its chunk again")
         return cls(path, dict(spec), chunks, completed)
 
     @staticmethod
@@ -206,8 +245,13 @@ class ShardStore:
         dict of str to ndarray
             The chunk's named results.
         """
-        with np.load(self.folder / SHARDS / self._name(index), allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
+        shard = self.folder / SHARDS / self._name(index)
+        try:
+            with np.load(shard, allow_pickle=False) as z:
+                return {k: z[k] for k in z.files}
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile):
+            raise StudyMismatch(f"{shard}: damaged (not a readable .npz archive); delete it "
+                                "and --resume computes its chunk again") from None
 
     def iter_shards(self) -> Iterator[tuple[tuple[int, int], dict[str, np.ndarray]]]:
         """``((start, stop), arrays)`` of every chunk in run order (all must be complete)."""

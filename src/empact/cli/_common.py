@@ -14,8 +14,12 @@ searched) into one line.  Output files are declared with the `OutputFile` type; 
 command's body runs, one check (`check_outputs`) refuses any of them that exists (a symbolic
 link too, dangling or not) unless ``--force``, has the wrong suffix, is not a regular file,
 cannot be created (no permission, a read-only or full file system), or names the same file as
-another output of the command.  A new command or option gets these checks without a line of
-its own (tests/test_cli.py walks every registered command and option).
+another output of the command.  After the body, one closing line on stderr names every file
+the command wrote (`closing_line`: ``written: sim/run.csv, sim/run.png``; what `empact._io`'s
+atomic writers moved into place meanwhile, `empact._io.recording`), so no command names its
+outputs itself.  A new command or option gets these checks and the closing line without a
+line of its own (tests/test_cli.py and tests/test_speaking.py walk every registered command
+and option).
 """
 from __future__ import annotations
 
@@ -34,7 +38,7 @@ from typing import Any, Callable, Mapping, Sequence
 import click
 import numpy as np
 
-from .._io import NAME_MAX, atomic_write_text, file_kind
+from .._io import NAME_MAX, atomic_write_text, file_kind, recording
 from .._validate import check_choice, check_int, check_number, check_values
 from ..errors import ParameterError
 from ..export import jsonable as to_jsonable
@@ -49,8 +53,8 @@ __all__ = ["sweep_options", "sweep_from_options",
            "output_file", "output_folder", "OPTION_VARIABLE", "UNITS", "JSON_VERSION",
            "OutputFile", "check_outputs", "quiet_option", "Interrupted",
            "EXIT_INTERRUPTED", "parse_list", "formats_option", "parse_choices", "schema_version",
-           "traction_option", "check_path", "compact_json", "closing_line", "guard_params",
-           "shown_path", "MIN_FREE_BYTES", "loss_map_option",
+           "traction_option", "check_path", "compact_json", "closing_line", "written_line",
+           "guard_params", "shown_path", "MIN_FREE_BYTES", "OPERATING_RANGES", "loss_map_option",
            "announce_compilation", "COMPILING"]
 
 #: suffixes of ``--plot`` files (the figure's format)
@@ -61,6 +65,13 @@ OPTION_VARIABLE = {"ratio": "r_g", "slip": "nu", "clamp": "F_s", "speed": "omega
                    "tau": "tau", "load-torque": "T_l"}
 #: the options of the linear slip model's commands (a point given by slip and clamping force)
 LINEAR_OPTIONS = ("ratio", "slip", "clamp", "speed")
+#: the range of each operating variable any command takes (`operating_values`, the grids of
+#: `plants` and `control design`, `efficiency`, `control discretize --at`): beyond every
+#: pushbelt CVT (19 000 rpm, 1 MN of clamping, 10 kN m of torque), so that a value outside is
+#: a typing error, refused before any work; the model's own limits (the variator's ratios,
+#: the traction curve's slip range) are checked besides
+OPERATING_RANGES = {"r_g": (0.0, 10.0), "nu": (-0.5, 0.5), "tau": (-1.0, 1.0),
+                    "F_s": (0.0, 1e6), "omega_p": (0.0, 2000.0), "T_l": (-1e4, 1e4)}
 
 def _one_line(text: str) -> str:
     return " ".join(str(text).split())
@@ -244,25 +255,64 @@ def guard_params(cmd: click.Command) -> click.Command:
     return cmd
 
 
-#: the output options whose files no command names itself (`closing_line` does)
-SILENT_OUTPUTS = ("plot", "json_out")
+#: files of one folder a closing line names one by one; beyond, it counts them by suffix
+MOST_NAMED = 6
 
 
-def closing_line(ctx: click.Context) -> None:
-    """After a command succeeded: one line on stderr naming the files of its `SILENT_OUTPUTS`
-    options (``written: frf.png, frf.json``); the commands name their other outputs (``--out``)
-    themselves.
+def _shown(path: Path) -> str:
+    """`path` as the closing line shows it: relative to the current folder when inside it."""
+    rel = os.path.relpath(path)
+    return path.as_posix() if rel.startswith("..") else Path(rel).as_posix()
+
+
+def written_line(paths: Sequence[os.PathLike[str] | str]) -> str:
+    """The closing line of a command that wrote `paths`: ``written: A, B, ...``, each file
+    relative to the current folder when inside it, in the order written; a folder that holds
+    more than `MOST_NAMED` of them is named once with its files counted by suffix (a file whose
+    suffix is its own in that folder is still named): ``written: report/ (index.html,
+    claims.json, 40 .csv files, 57 .png files)``.
 
     Parameters
     ----------
-    ctx : click.Context
-        The command's context.
+    paths : sequence of path-like
+        The files written (absolute or relative to the current folder).
+
+    Returns
+    -------
+    str
+        The line (empty when `paths` is).
     """
-    files = [str(ctx.params[p.name]) for p in ctx.command.params
-             if isinstance(p.type, OutputFile) and p.name in SILENT_OUTPUTS
-             and ctx.params.get(p.name or "") and os.path.lexists(str(ctx.params[p.name]))]
-    if files:
-        click.echo(f"written: {', '.join(files)}", err=True)
+    groups: dict[Path, list[Path]] = {}
+    for path in dict.fromkeys(Path(p).absolute() for p in paths):
+        groups.setdefault(path.parent, []).append(path)
+    parts: list[str] = []
+    for folder, files in groups.items():
+        if len(files) <= MOST_NAMED:
+            parts.extend(_shown(f) for f in files)
+            continue
+        by_suffix: dict[str, list[Path]] = {}
+        for f in files:
+            by_suffix.setdefault(f.suffix or "(no suffix)", []).append(f)
+        items = [fs[0].name if len(fs) == 1 else f"{len(fs)} {suffix} files"
+                 for suffix, fs in sorted(by_suffix.items(), key=lambda kv: len(kv[1]))]
+        parts.append(f"{_shown(folder).rstrip('/')}/ ({', '.join(items)})")
+    return f"written: {', '.join(parts)}" if parts else ""
+
+
+def closing_line(paths: Sequence[os.PathLike[str] | str]) -> None:
+    """After a command ran (done, or failed after writing: exit 1): one line on stderr naming
+    every file it wrote (`written_line`; the commands record them through `empact._io`'s
+    writers, `empact._io.recording`), nothing when it wrote nothing.  `_checked` prints it for
+    every command, unless ``--quiet``.
+
+    Parameters
+    ----------
+    paths : sequence of path-like
+        The files written.
+    """
+    line = written_line(paths)
+    if line:
+        click.echo(line, err=True)
 
 
 def _checked(cmd: click.Command | None) -> click.Command | None:
@@ -271,7 +321,8 @@ def _checked(cmd: click.Command | None) -> click.Command | None:
     command the groups hand out, so that no command can forget it)."""
     if cmd is not None:
         guard_params(cmd)
-    if cmd is None or cmd.callback is None or getattr(cmd.callback, "_outputs_checked", False):
+    if cmd is None or cmd.callback is None or getattr(cmd.callback, "_outputs_checked", False) \
+            or isinstance(cmd, click.Group):  # (a group's callback only hands over)
         return cmd
     body = cmd.callback
     takes_quiet = "quiet" in inspect.signature(body).parameters
@@ -289,10 +340,16 @@ def _checked(cmd: click.Command | None) -> click.Command | None:
         from .._progress import working
 
         name = ctx.command_path.split(" ", 1)[-1]
-        with working(name, enabled=not quiet):  # until a bar of the command's own starts
-            result = body(*args, **kwargs)
+        with recording() as written:
+            try:
+                with working(name, enabled=not quiet):  # until a bar of the command's own
+                    result = body(*args, **kwargs)
+            except Failed:  # ran, did not succeed: it may have written (with --strict)
+                if not quiet:
+                    closing_line(list(written))
+                raise
         if not quiet:
-            closing_line(ctx)
+            closing_line(list(written))
         return result
 
     run._outputs_checked = True  # type: ignore[attr-defined]
@@ -792,16 +849,17 @@ def operating_values(params: Params, option: str, values: Any, *, trim: bool = F
         return check_values(name, values, lo, hi,
                             note="a fraction: 0.01 is 1 %; the traction curve's valid range")
     if option == "clamp":
-        return check_clamping(name, values) if trim else check_values(name, values, 0.0,
-                                                                      unit="N")
+        v = check_clamping(name, values) if trim else check_values(name, values, 0.0,
+                                                                   unit="N")
+        return check_values(name, v, *OPERATING_RANGES["F_s"], unit="N")
     if option == "speed":
-        return check_values(name, values, 0.0, lo_open=True, unit="rad/s",
-                            note="the slip of eq. 2 is undefined at standstill")
+        return check_values(name, values, *OPERATING_RANGES["omega_p"], lo_open=True,
+                            unit="rad/s", note="the slip of eq. 2 is undefined at standstill")
     if option == "tau":
-        return check_values(name, values, -1.0, 1.0, note="the torque ratio mu / mu_max; 1 "
-                            "is the traction limit, 0.9 an 11 % torque reserve")
+        return check_values(name, values, *OPERATING_RANGES["tau"], note="the torque ratio "
+                            "mu / mu_max; 1 is the traction limit, 0.9 an 11 % torque reserve")
     if option == "load-torque":
-        return check_values(name, values, -1e4, 1e4, unit="N m")
+        return check_values(name, values, *OPERATING_RANGES["T_l"], unit="N m")
     raise KeyError(option)
 
 

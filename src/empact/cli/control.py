@@ -14,6 +14,7 @@ from ..control.designs import CONTROLLER_TYPES
 from ..errors import ParameterError
 from ..params import check_one_slip
 from ._common import (
+    OPERATING_RANGES,
     UNITS,
     ErrorGroup,
     Failed,
@@ -41,9 +42,8 @@ GRID = {"ratio": ("r_g", "-", "geometric ratio r_g"), "slip": ("nu", "-", "slip 
         "load-torque": ("T_l", "N m", "load torque T_l")}
 #: most grid points of one family from the command line
 MAX_FAMILY = 200_000
-#: allowed ranges of the grid options
-_RANGE = {"r_g": (0.0, 10.0), "nu": (-0.5, 0.5), "tau": (-1.0, 1.0), "F_s": (0.0, 1e6),
-          "omega_p": (0.0, 2000.0), "T_l": (-1e4, 1e4)}
+#: allowed ranges of the grid options (every command's)
+_RANGE = OPERATING_RANGES
 
 
 def grid_options(fn):
@@ -166,7 +166,7 @@ def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics,
         return
     click.echo(f"{fam.size} points ({int(fam.ok.sum())} trimmed) on axes "
                f"{', '.join(f'{k} [{len(v)}]' for k, v in fam.axes.items()) or 'none'} in "
-               f"{wall:.2f} s" + (f"; written to {out}" if out else ""))
+               f"{wall:.2f} s")
     for r in data["failures"]:
         click.echo(f"  not trimmed: {r}")
 
@@ -306,8 +306,7 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
     w = ctrl.design["worst"]
     click.echo(f"{method}: {ctrl.n} states; over {fam.size} plants: all stable "
                f"{w['all_stable']}, worst disk margin {w['disk_margin']:.3f} "
-               f"(+-{w['gain_margin_db']:.2f} dB, +-{w['phase_margin_deg']:.1f} deg); "
-               f"written to {out}")
+               f"(+-{w['gain_margin_db']:.2f} dB, +-{w['phase_margin_deg']:.1f} deg)")
 
 
 @control_group.command("check")
@@ -333,9 +332,9 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
 @quiet_option
 def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, traction_table,
               loss_map, params_file, as_json, json_out, force, quiet) -> None:
-    """Closed-loop poles and disk margins of CONTROLLER on the loop that runs (sampled, with
-    the loop's sensors and feedforwards; empact.control.loop) against every plant of a
-    family."""
+    """Closed-loop poles and disk margins of CONTROLLER (a controller file, or shipped:pi,
+    shipped:hinf) on the loop that runs (sampled, with the loop's sensors and feedforwards;
+    empact.control.loop) against every plant of a family."""
     from ..control.controller import load_controller
     from ..control.family import design_family, load_family
     from ..control.loop import family_loops
@@ -434,10 +433,10 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
 def tune_cmd(controller, family_file, loop_scenario, out, parameters, min_dm, max_ms,
              bw_floor, seed, maxiter, strict, traction_table, loss_map, params_file, as_json,
              json_out, force, quiet) -> None:
-    """Tune CONTROLLER's PI structure (gains, integral corners, roll-offs per loop, the
-    schedule's shape kept) to maximise the worst multiloop disk margin over every plant of a
-    family on the loop that runs, with an Ms penalty and a bandwidth floor
-    (empact.control.tune)."""
+    """Tune CONTROLLER's PI structure (a controller file, or shipped:pi; gains, integral
+    corners, roll-offs per loop, the schedule's shape kept) to maximise the worst multiloop
+    disk margin over every plant of a family on the loop that runs, with an Ms penalty and a
+    bandwidth floor (empact.control.tune)."""
     from ..control.controller import load_controller
     from ..control.family import design_family, load_family
     from ..control.tune import TuneOptions, check_pi, parse_parameters, tune_pi
@@ -493,12 +492,12 @@ def tune_cmd(controller, family_file, loop_scenario, out, parameters, min_dm, ma
         bef, aft = result.before, result.after
         click.echo(f"{fam.size} plants, {result.evaluations} evaluations in "
                    f"{result.wall_time_s:.1f} s: worst disk margin {bef['disk_margin']:.3f} -> "
-                   f"{aft['disk_margin']:.3f} (+-{aft['gain_margin_db']:.2f} dB, "
+                   f"{aft['disk_margin']:.3f} [-] (+-{aft['gain_margin_db']:.2f} dB, "
                    f"+-{aft['phase_margin_deg']:.1f} deg); Ms ratio {bef['ms']['ratio']:.2f} -> "
-                   f"{aft['ms']['ratio']:.2f}, slip {bef['ms']['slip']:.2f} -> "
-                   f"{aft['ms']['slip']:.2f}; written to {out}")
-        click.echo("multipliers: " + ", ".join(f"{k} {v:.4g}"
-                                                for k, v in result.multipliers.items()))
+                   f"{aft['ms']['ratio']:.2f} [-], slip {bef['ms']['slip']:.2f} -> "
+                   f"{aft['ms']['slip']:.2f} [-]")
+        click.echo("multipliers [-]: " + ", ".join(f"{k} {v:.4g}"
+                                                    for k, v in result.multipliers.items()))
     if strict and not result.met:
         raise Failed(f"tune: the tuned controller misses the targets (worst disk margin "
                      f"{result.after['disk_margin']:.3f}, required {min_dm:g}; Ms "
@@ -607,7 +606,9 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
 @click.option("--at", "at", default=None, metavar="NAME=VALUE,...",
               help="Fold the schedule's gains at this operating point into B and D and add "
                    "the loop that runs there (loop_plant: servo torques -> errors), e.g. "
-                   "r_g=1,tau=0.9,F_s=10000 (r_g and two of slip/tau, F_s, T_l; SI).")
+                   "r_g=1,tau=0.9,F_s=10000 (r_g, nu or tau, F_s, T_l, omega_p in SI; at "
+                   "most two of nu/tau, F_s, T_l; what is not given comes from the "
+                   "parameter file's [operating], as for `plants`).")
 @loop_option
 @click.option("--out", "out", type=OutputFile(("json", "mat")), required=True,
               help="The discrete controller (.json or .mat; an existing file only with "
@@ -616,7 +617,8 @@ def simulate_cmd(scenario, example, list_ex, controller, strict, out, traction_t
 @force_option
 def discretize_cmd(controller, rate, method, at, loop_scenario, out, params_file,
                    force) -> None:
-    """Write CONTROLLER as a discrete-time state space at its sample rate (x[k+1] = A x[k] +
+    """Write CONTROLLER (a controller file, or shipped:pi, shipped:hinf) as a discrete-time
+    state space at its sample rate (x[k+1] = A x[k] +
     B e[k], du[k] = C x[k] + D e[k]; a schedule's gains act on e as before, or, with --at,
     are folded in at that point, with the loop it closes there)."""
     from ..control.controller import load_controller
@@ -635,12 +637,12 @@ def discretize_cmd(controller, rate, method, at, loop_scenario, out, params_file
             raise InputError("--rate: give the sample rate in Hz (or --at, at the loop's)")
         cd = ctrl.discretize(1.0 / rate, method)
         cd.save(out)
-        click.echo(f"{ctrl.n}-state controller at {rate:g} Hz ({method}) written to {out}")
+        click.echo(f"{ctrl.n}-state controller at {rate:g} Hz ({method})")
         return
     from ..control.loop import controller_at
 
-    point = parse_point(at)
     params = get_params(params_file)
+    point = parse_point(at, params)
     loop = _loop_from(loop_scenario, params)
     if rate is not None and rate != loop.spec.rate:
         raise InputError(f"--rate {rate:g}: with --at the controller runs at the loop's rate "
@@ -652,21 +654,47 @@ def discretize_cmd(controller, rate, method, at, loop_scenario, out, params_file
     cd.save(out)
     click.echo(f"{ctrl.n}-state controller at {loop.spec.rate:g} Hz (tustin) folded at "
                f"{at} (gains {', '.join(f'{g:.6g}' for g in cd.design['schedule_gains'])}), "
-               f"with the loop there ({cd.design['loop_plant']['A'].shape[0]} states), "
-               f"written to {out}")
+               f"with the loop there ({cd.design['loop_plant']['A'].shape[0]} states)")
 
 
-def parse_point(text: str) -> dict[str, float]:
-    """``--at NAME=VALUE,...`` as a mapping (one error line naming what is wrong)."""
+#: the variables of ``--at`` and the operating-point option whose checks they take
+AT_VARIABLES = {"r_g": "ratio", "nu": "slip", "tau": "tau", "F_s": "clamp", "omega_p": "speed",
+                "T_l": "load-torque"}
+
+
+def parse_point(text: str, params: Any = None) -> dict[str, float]:
+    """``--at NAME=VALUE,...`` as a mapping, one error line naming what is wrong: an item
+    that is not NAME=VALUE with a number, a name not of `AT_VARIABLES` or given twice, and
+    (with `params`) a value outside what the option of that variable takes
+    (`operating_values`: the variator's ratios, the traction curve's slips,
+    `OPERATING_RANGES`), more than two of nu (or tau), F_s, T_l, or both nu and tau."""
     point: dict[str, float] = {}
     for item in text.split(","):
         name, eq, value = item.partition("=")
         name = name.strip()
         try:
-            point[name] = float(value)
+            number = float(value)
         except ValueError:
             raise InputError(f"--at {text!r}: {item!r} is not NAME=VALUE with a number "
                              "(e.g. r_g=1,tau=0.9,F_s=10000)") from None
         if not eq or not name:
             raise InputError(f"--at {text!r}: {item!r} is not NAME=VALUE")
+        if name not in AT_VARIABLES:
+            raise InputError(f"--at {text!r}: {name!r} is not an operating variable; give "
+                             f"r_g and two of nu (or tau), F_s, T_l ({', '.join(AT_VARIABLES)})")
+        if name in point:
+            raise InputError(f"--at {text!r}: {name} given twice")
+        point[name] = number
+    if params is not None:
+        for key, v in point.items():
+            try:
+                operating_values(params, AT_VARIABLES[key], v, trim=True)
+            except ParameterError as exc:
+                raise InputError(f"--at {key}={v:g}: "
+                                 f"{str(exc).partition(': ')[2] or exc}") from None
+    if "nu" in point and "tau" in point:
+        raise InputError(f"--at {text!r}: give nu or tau, not both (one slip set-point)")
+    if sum(k in point for k in ("nu", "tau", "F_s", "T_l")) > 2:
+        raise InputError(f"--at {text!r}: give at most two of nu (or tau), F_s, T_l (the trim "
+                         "solves the third)")
     return point

@@ -5,7 +5,14 @@ from __future__ import annotations
 import click
 
 from ..cycles import CYCLES, load_cycle, read_trace
-from ..drive_cycle import DEFAULT_STRATEGIES, REFERENCE, STRATEGIES, TERMS, quasi_static_cycle
+from ..drive_cycle import (
+    DEFAULT_STRATEGIES,
+    REFERENCE,
+    STRATEGIES,
+    TERMS,
+    check_trace,
+    quasi_static_cycle,
+)
 from ..errors import ParameterError
 from ._common import (
     InputError,
@@ -17,6 +24,7 @@ from ._common import (
     output_folder,
     params_option,
     parse_choices,
+    shown_path,
 )
 from .linear import plot_option
 
@@ -51,8 +59,10 @@ def cycle_cmd(cycle, strategies, out, plot, loss_map, params_file, as_json, json
         try:
             trace = read_trace(cycle)
         except ParameterError as exc:
-            raise InputError(f"--cycle {cycle!r}: not a shipped cycle ({', '.join(CYCLES)}), "
-                             f"and as a trace file: {exc}") from None
+            raise InputError(f"--cycle {shown_path(cycle)!r}: not a shipped cycle "
+                             f"({', '.join(CYCLES)}), and as a trace file: "
+                             f"{str(exc).replace(cycle, shown_path(cycle))}") from None
+    check_trace(params, trace)
     dest = output_folder(out, "--out", force=force) if out else None
     res = quasi_static_cycle(params, trace, strategies=chosen)
     doc = res.to_dict()
@@ -71,15 +81,20 @@ def cycle_cmd(cycle, strategies, out, plot, loss_map, params_file, as_json, json
                f"traction at the wheels {doc['wheel_energy_J'] / 1e6:.3f} MJ")
     head = " ".join(f"{k:>8s}" for k in TERMS)
     click.echo(f"{'strategy':16s} {head} {'var.eff':>7s} {'trans.':>7s} {'fuel':>7s} "
-               f"{'l/100km':>7s} {'saving':>7s}")
+               f"{'fuel':>9s} {'saving':>7s}")
     units = " ".join(f"{'[kJ]':>8s}" for _ in TERMS)
-    click.echo(f"{'':16s} {units} {'[%]':>7s} {'[%]':>7s} {'[g]':>7s} {'':>7s} {'[%]':>7s}")
+    click.echo(f"{'':16s} {units} {'[%]':>7s} {'[%]':>7s} {'[g]':>7s} {'[l/100km]':>9s} "
+               f"{'[%]':>7s}")
+    def pct(x: float | None, width: int = 7) -> str:  # (none: nothing transmitted)
+        return f"{'-':>{width}s}" if x is None else f"{100 * x:{width}.2f}"
+
     for s, d in doc["strategies"].items():
         e = " ".join(f"{d['energy_J'][k] / 1e3:8.1f}" for k in TERMS)
-        saving = "" if d["saving"] is None else f"{100 * d['saving']:7.2f}"
-        click.echo(f"{s:16s} {e} {100 * d['variator_efficiency']:7.2f} "
-                   f"{100 * d['transmission_efficiency']:7.2f} {d['fuel_g']:7.1f} "
-                   f"{d['fuel_l_per_100km']:7.2f} {saving:>7s}")
+        per_100 = d["fuel_l_per_100km"]
+        click.echo(f"{s:16s} {e} {pct(d['variator_efficiency'])} "
+                   f"{pct(d['transmission_efficiency'])} {d['fuel_g']:7.1f} "
+                   f"{'-' if per_100 is None else format(per_100, '.2f'):>9s} "
+                   f"{'' if d['saving'] is None else pct(d['saving'])}")
     for s, d in doc["strategies"].items():
         if d["engine_short"]:
             click.echo(f"{s}: the engine cannot follow the trace at {d['engine_short']} "

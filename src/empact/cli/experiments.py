@@ -187,4 +187,3 @@ def rig(excite: str, excitation: str, r_g: float, nu: float, F_s: float, omega_p
     if not rec.complete:
         raise InputError(f"rig simulation incomplete, nothing written: {rec.message}")
     atomic_write_text(out, rec.to_csv())
-    click.echo(out)

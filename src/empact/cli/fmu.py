@@ -30,9 +30,9 @@ def fmu_group() -> None:
 @click.option("--out", "out", type=OutputFile(("fmu",)), required=True,
               help="The FMU file (.fmu; an existing file only with --force).")
 @click.option("--controller", "controller", type=click.Path(dir_okay=False), default=None,
-              help="Controller JSON file (empact control design): the sampled loop law goes "
-                   "inside (inputs r_g_ref, tau_ref and the drive and load inputs; outputs "
-                   "also the servo torques T_mp, T_ms).")
+              help="Controller JSON file (empact control design; or shipped:pi): the sampled "
+                   "loop law goes inside (inputs r_g_ref, tau_ref and the drive and load "
+                   "inputs; outputs also the servo torques T_mp, T_ms).")
 @click.option("--rate", type=float, default=1000.0, show_default=True,
               help="The loop law's sample rate [Hz] (with --controller).")
 @click.option("--duration", type=float, default=60.0, show_default=True,
@@ -83,7 +83,5 @@ def export_cmd(out: str, controller: str | None, rate: float, duration: float, r
                          f"analytic law ({DEFAULT_TRACTION_LAW}) or measured curves (--traction)")
     options = _options(drive, load, damping, kinematics, shift_law, thrust_ratio, creep_map,
                        traction_table, loss_map=loss_map)
-    path = export_fmu(out, params, options=options, point=point, controller=controller,
-                      rate=rate, method=method, rtol=rtol, max_step=max_step,
-                      duration=duration)
-    click.echo(str(path))
+    export_fmu(out, params, options=options, point=point, controller=controller,
+               rate=rate, method=method, rtol=rtol, max_step=max_step, duration=duration)

@@ -66,6 +66,7 @@ def modes(model: str, r_g: float, kinematics: str, params_file: str | None, as_j
     m = lm.modes()
     if as_json or json_out:
         data = {"model": model, "r_g": r_g, "coordinates": m.coordinates, "springs": m.springs,
+                "spring_parameters": m.spring_parameters,
                 "frequencies_hz": m.frequencies_hz, "energy_fraction": m.energy_fraction,
                 "shapes": m.shapes, "normalised_shapes": m.normalised_shapes,
                 "mass_matrix": m.mass_matrix, "stiffness_matrix": m.stiffness_matrix}
@@ -76,6 +77,8 @@ def modes(model: str, r_g: float, kinematics: str, params_file: str | None, as_j
         emit_json(data, "modes", json_out)
         return
     click.echo(f"{lm.name}")
+    click.echo("spring stiffnesses: " + ", ".join(
+        f"{s} = {p}" for s, p in zip(m.springs, m.spring_parameters)))
     click.echo(f"{'mode':>4s} {'f [Hz]':>10s}  signed energy fraction per spring "
                f"({', '.join(m.springs)}): sign of the spring's elongation in the mode, "
                "magnitudes sum to 1")
@@ -220,4 +223,3 @@ def calibrate_cmd(targets: str, params_file: str | None, out: str, tolerance: fl
                      f"(--tolerance {tol:g} %); nothing written")
     header = (f"Calibrated by `empact calibrate {targets}` (max |error| {miss:.3f} %).")
     save_params(res.params, out, header=header)
-    click.echo(out)

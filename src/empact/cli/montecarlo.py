@@ -159,7 +159,7 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
     if as_json or json_out:
         emit_json(summary, "montecarlo", json_out)
     else:
-        _echo_summary(result, summary, analysis, seed, out)
+        _echo_summary(result, summary, analysis, seed)
     if strict and verdicts and verdicts["runs_missing_any"]:
         missed = ", ".join(f"{t} {v['missed']}" for t, v in verdicts["targets"].items()
                            if v["missed"])
@@ -167,9 +167,9 @@ def montecarlo_cmd(spread_file, example_spread, runs, analysis, scenario, exampl
                      f"a scenario target ({missed}; {result.failures} failed to simulate)")
 
 
-def _echo_summary(result, summary, analysis, seed, out) -> None:
+def _echo_summary(result, summary, analysis, seed) -> None:
     click.echo(f"{result.runs} runs of the {analysis} analysis (seed {seed}): "
-               f"{result.failures} failed" + (f"; written to {out}" if out else ""))
+               f"{result.failures} failed")
     for kind, f in summary["failure_reasons"].items():
         click.echo(f"  {f['count']} x {kind}, e.g. {f['example']}")
     v = summary.get("verdicts")

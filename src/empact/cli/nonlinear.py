@@ -119,8 +119,6 @@ def simulate_cmd(scenario: str | None, example: str | None, list_ex: bool, out: 
                    **energy_summary(res, params, sc.options.kinematics),
                    "files": [] if dest is None else [str(dest / f"{sc.name}.csv")]},
                   "simulate", json_out)
-    elif dest is not None:
-        click.echo(str(dest / f"{sc.name}.csv"))
     if not res.complete:
         raise Failed(f"incomplete: {res.message}")
 
@@ -272,7 +270,6 @@ def linearize_cmd(r_g, nu, tau, F_s, T_l, omega_p, fmt, out, all_io, as_json, da
         return
     save_system(sys_, out, fmt=format_of(out, fmt), schema="empact.linearize", units=units,
                 metadata=meta)
-    click.echo(f"written: {out}", err=True)
 
 
 def _plant_summary(sys_: Any, units: dict[str, list[str]], point: dict[str, Any]) -> str:

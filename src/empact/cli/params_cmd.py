@@ -37,6 +37,15 @@ def show(file: str | None, describe: bool) -> None:
 @click.argument("file", type=click.Path(dir_okay=False))
 def validate(file: str) -> None:
     """Check FILE as every command does (values, ranges and the models they define); exit 0
-    and print 'FILE: ok' if it is acceptable, else one line and exit 2."""
-    get_params(file)
-    click.echo(f"{file}: ok")
+    and print 'FILE: ok' if it is acceptable, else one line and exit 2.  A value outside its
+    plausible band (``params show --describe``) is accepted and listed, each by its dotted
+    name with what it is for (``driveline.k_belt`` is not ``actuation.k_belt``)."""
+    params = get_params(file)
+    odd = [p for p in describe_parameters(params)
+           if p.value is not None and p.band[0] == p.band[0]
+           and not p.band[0] <= p.value <= p.band[1]]
+    click.echo(f"{file}: ok" + (f" ({len(odd)} value{'s' * (len(odd) > 1)} outside the "
+                                "plausible band, below)" if odd else ""))
+    for p in odd:
+        click.echo(f"  {p.name} = {p.value:.6g} [{p.unit}]: outside the plausible band "
+                   f"[{p.band[0]:g}, {p.band[1]:g}] [{p.unit}]; {p.doc}")

@@ -50,5 +50,4 @@ def reproduce(out: str, formats: str, sections: str | None, params_file: str | N
                          f"gives the ratio range [{lo:.4g}, {hi:.4g}]; the report needs "
                          f"[{need[0]:g}, {need[1]:g}] (the paper's LOW and OD)")
     todo = None if chosen is None else [s for s in SECTIONS if s.anchor in chosen]
-    path = build_report(params, dest, progress=not quiet, formats=fmts, sections=todo)
-    click.echo(str(path / "index.html"))
+    build_report(params, dest, progress=not quiet, formats=fmts, sections=todo)

@@ -11,7 +11,6 @@ builds the linear model of the same law around the linearised machine.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -126,13 +125,7 @@ def resolve_controller(ref: str) -> Controller:
     ParameterError
         For a missing or bad file, or an unknown shipped name.
     """
-    if ref.startswith("shipped:"):
-        name = ref.split(":", 1)[1]
-        p = Path(str(resources.files("empact.data").joinpath("control", f"{name}.json")))
-        if not p.is_file():
-            raise ParameterError(f"controller {ref!r}: no shipped controller {name!r}")
-        return load_controller(p)
-    return load_controller(ref)
+    return load_controller(ref)  # (which reads ``shipped:NAME`` too)
 
 
 @dataclass(frozen=True, eq=False)

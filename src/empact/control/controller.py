@@ -37,6 +37,7 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -431,14 +432,62 @@ def _schedule(doc: Any, src: Path) -> Schedule:
     return Schedule(axes=axes, gains=gains)
 
 
+#: a controller named by this prefix is a shipped one: ``shipped:pi`` is
+#: ``empact/data/control/pi.json``
+SHIPPED = "shipped:"
+
+
+def shipped_controllers() -> tuple[str, ...]:
+    """The names of the shipped controllers (``pi``, ``hinf``), for ``shipped:NAME``.
+
+    Returns
+    -------
+    tuple of str
+        Sorted names.
+    """
+    folder = resources.files("empact.data").joinpath("control")
+    return tuple(sorted(p.name[:-5] for p in folder.iterdir()
+                        if p.name.endswith(".json")))
+
+
+def controller_path(ref: str | os.PathLike[str]) -> Path:
+    """The file a controller reference names: the path itself, or for ``shipped:NAME`` the
+    shipped file (``empact/data/control/NAME.json``).
+
+    Parameters
+    ----------
+    ref : str or path-like
+        A controller file or ``shipped:NAME`` (one of `shipped_controllers`).
+
+    Returns
+    -------
+    pathlib.Path
+        The file.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown shipped name.
+    """
+    if not str(ref).startswith(SHIPPED):
+        return Path(ref)
+    name = str(ref)[len(SHIPPED):]
+    if name not in shipped_controllers():
+        raise ParameterError(f"controller {str(ref)!r}: no shipped controller {name!r} "
+                             f"(shipped: {', '.join(shipped_controllers())})")
+    return Path(str(resources.files("empact.data").joinpath("control", f"{name}.json")))
+
+
 def load_controller(path: str | os.PathLike[str]) -> Controller:
-    """Read a controller JSON file (`Controller.save`); one-line errors for bad files, naming
-    the key, its value and what is allowed.
+    """Read a controller JSON file (`Controller.save`), or a shipped one (``shipped:pi``);
+    one-line errors for bad files, naming the key, its value and what is allowed.
 
     Parameters
     ----------
     path : str or path-like
-        A JSON file of schema ``empact.controller``.
+        A JSON file of schema ``empact.controller``, or ``shipped:NAME`` (`SHIPPED`, one of
+        `shipped_controllers`): every command and function that reads a controller takes
+        both.
 
     Returns
     -------
@@ -453,7 +502,7 @@ def load_controller(path: str | os.PathLike[str]) -> Controller:
         For a missing file, a file that is not JSON of the schema, or a bad key (names,
         matrix shapes, ``dt``, ``design``, ``schedule``).
     """
-    p = Path(path)
+    p = controller_path(path)
     doc = parse_json(p, "controller")
     if not isinstance(doc, dict) or not isinstance(doc.get("schema"), dict) \
             or doc["schema"].get("name") != SCHEMA["name"]:

@@ -435,6 +435,6 @@ def tune_pi(controller: Controller, family: PlantFamily, loop: LoopConfig, param
 
 def parse_parameters(text: str | Sequence[str]) -> tuple[str, ...]:
     """``"kp_ratio,ki_slip"`` (or a sequence) as a tuple of `TUNABLE` names (checked by
-    `TuneOptions`)."""
+    `TuneOptions`, which refuses an empty item as any name not in `TUNABLE`)."""
     items = text.split(",") if isinstance(text, str) else list(text)
-    return tuple(s.strip() for s in items if s.strip())
+    return tuple(s.strip() for s in items)

@@ -139,6 +139,7 @@ def actuation_model(params: Params, r_g: float, damping: str = "none",
         [0, 0, -s, s, 0, 1],
     ])
     k = np.array([k_src.k_w, k_src.k_c, k_src.k_belt, k_src.k_tp, k_src.k_ts])
+    section = "actuation" if kinematics == "equal-translation" else "paper_sec21"
     level = params.damping.level(damping)
     w_p = params.damping.omega_pulley if omega_pulley is None else check_number(
         "omega_pulley", omega_pulley, 0.0, lo_open=True, unit="rad/s",
@@ -165,4 +166,6 @@ def actuation_model(params: Params, r_g: float, damping: str = "none",
         inputs={"T_mp": eye[0], "T_ms": eye[1]},
         derived={"x_np": rows[3], "x_ns": rows[4]},
         scale=np.array([p.i_w / p.i_e, 2 * p.i_c / p.i_e, 1, 2, -s, -sig * s, s, s]),
+        spring_parameters=tuple(f"{section}.{k}" for k in ("k_w", "k_c", "k_belt", "k_tp",
+                                                            "k_ts")),
     )

@@ -76,6 +76,8 @@ def driveline_model(params: Params, r_g: float, *, belt: bool = True) -> LumpedM
         stiffness=np.array([d.k_tc, d.k_belt if belt else 0.0, d.k_ds]),
         inputs={"T_d": eye[0], "T_l": eye[3]},
         scale=np.array([1, 1, float(r_g), float(r_g)]),
+        spring_parameters=("driveline.k_tc", "driveline.k_belt" if belt else "",
+                           "driveline.k_ds"),
     )
 
 

@@ -68,6 +68,9 @@ class Modes(Result):
         rigid-body modes (Fig. 5)
     n_rigid : number of rigid-body modes
     mass_matrix, stiffness_matrix : M and K
+    spring_parameters : the parameter each spring's stiffness is, by its dotted name
+        (``actuation.k_belt``, ``driveline.k_belt``), in the order of `springs`; ``""`` for a
+        spring removed (stiffness 0); empty when the model names none
     """
 
     model: str
@@ -81,6 +84,7 @@ class Modes(Result):
     n_rigid: int
     mass_matrix: NDArray[np.float64]
     stiffness_matrix: NDArray[np.float64]
+    spring_parameters: tuple[str, ...] = ()
 
     @property
     def frequencies_hz(self) -> NDArray[np.float64]:
@@ -115,6 +119,10 @@ class LumpedModel:
     scale : array, shape (n + n_derived,), optional
         Divisors that refer every coordinate to a common side (gear and screw ratios), used for
         `Modes.normalised_shapes`.
+    spring_parameters : sequence of str, length m, optional
+        The parameter each stiffness is, by its dotted name (``actuation.k_belt``; ``""``
+        for a spring removed); `Modes` carries it, so that a model's output says which of
+        the parameter set's stiffnesses it used.
     """
 
     name: str
@@ -127,6 +135,7 @@ class LumpedModel:
     damping: NDArray[np.float64] | None = None
     derived: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     scale: NDArray[np.float64] | None = None
+    spring_parameters: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         n = len(self.coordinates)
@@ -134,6 +143,9 @@ class LumpedModel:
         if rows.shape != (len(self.springs), n):
             raise ValueError(f"spring_rows has shape {rows.shape}, expected "
                              f"({len(self.springs)}, {n})")
+        if self.spring_parameters and len(self.spring_parameters) != len(self.springs):
+            raise ValueError(f"{len(self.spring_parameters)} spring_parameters for "
+                             f"{len(self.springs)} springs")
         object.__setattr__(self, "spring_rows", rows)
         object.__setattr__(self, "stiffness", np.asarray(self.stiffness, float))
         object.__setattr__(self, "mass", np.asarray(self.mass, float))
@@ -220,7 +232,8 @@ class LumpedModel:
         return Modes(model=self.name, coordinates=tuple(self.coordinates) + tuple(self.derived),
                      springs=tuple(self.springs), omega=omega, shapes=V,
                      derived_shapes=D @ V, normalised_shapes=norm, energy_fraction=frac.T,
-                     n_rigid=int(rigid.sum()), mass_matrix=M, stiffness_matrix=K)
+                     n_rigid=int(rigid.sum()), mass_matrix=M, stiffness_matrix=K,
+                     spring_parameters=tuple(self.spring_parameters))
 
     def frequency_response(self, omega: ArrayLike, inputs: Sequence[str] | None = None,
                            outputs: Sequence[str] | None = None, label: str = "") \

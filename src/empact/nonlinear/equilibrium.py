@@ -528,15 +528,16 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
             fits = good & (np.abs(need) <= mu_pk)
             nu_ = np.where(fits, _bisect_rising(model, r, np.where(fits, need, 0.0), nu_pk),
                            0.0)
-        for k in np.flatnonzero(good & ~(np.abs(need) <= mu_pk)):
+        for k in np.flatnonzero(good & ~(np.abs(need) <= mu_pk) & np.isfinite(R_s)):
             reason[k] = (f"T_l = {Tl[k]:g} N m needs mu = {abs(need[k]):.4g}, above the "
                          f"traction peak {mu_pk[k]:.4g} at F_s = {Fs[k]:g} N (slip would run "
                          "away)")
         good = reason == ""
         mu = model.traction(nu_, r)
         tau_kernel = lambda R_s, F_el: mu / mu_max  # noqa: E731
-    reason[good & ~np.isfinite(R_s)] = "no belt geometry carries the clamping force (belt " \
-        "stretch too large for k_belt)"
+    belt = "actuation" if model.options.kinematics == "equal-translation" else "paper_sec21"
+    reason[(reason == "") & ~np.isfinite(R_s)] = "no belt geometry carries the clamping " \
+        f"force (belt stretch too large for {belt}.k_belt)"
     good = reason == ""
     x, u, F_p_act = _assemble(model, r, w, nu_, Tb, R_p, R_s, phi, e, tau_kernel)
     # the drive and load torques that hold the variator's shafts (its losses included:

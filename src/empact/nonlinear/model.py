@@ -49,7 +49,9 @@ Construction choices (documented, not hidden):
   phi) q6] / tan(beta)``.  The paper's Sec. 2.1 rows (``"paper-sec2.1"``): ``R_s = R_max -
   q6 / tan(beta)``, spring 3 ``[(pi + 2 phi) q5 - (pi - 2 phi) q6] / tan(beta)``, with the
   ``[paper_sec21]`` stiffnesses; a primary-servo rotation then squeezes both sheaves.
-* **Belt.** An elastic element with force ``N = k_belt (e + alpha de/dt)``, ``e = L(R_p, R_s) -
+* **Belt.** An elastic element with force ``N = k_belt (e + alpha de/dt)`` (``k_belt`` is
+  ``actuation.k_belt``, ``paper_sec21.k_belt`` with the Sec. 2.1 kinematics; never
+  ``driveline.k_belt``, which only ``belt="locked"`` uses), ``e = L(R_p, R_s) -
   L_0`` (eq. 6 on the current radii), ``L_0 = L_belt`` (the belt's unstretched length): the
   clamping force comes from stretching it, e.g. ``e = 0.35 mm`` for ``F_s = 10 kN``.  Axial
   sheave forces by virtual work (``dL/dR_p = pi + 2 phi``, ``dL/dR_s = pi - 2 phi``):
