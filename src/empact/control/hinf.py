@@ -1048,9 +1048,17 @@ def _design_hinf_loop(family: PlantFamily, bandwidth_hz, slip: str, nominal, loo
                     max(1, int(max_iterations) // 4),
                     lambda info: info.get("disk_margin", 0.0) >= alpha_min)
         if not np.isfinite(out["value"]):
-            raise ParameterError(f"H-infinity on the loop: no iterate kept every plant's "
-                                 f"disk margin at {alpha_min:g}; lower alpha_min or the "
-                                 "bandwidths")
+            if r == 0:
+                raise ParameterError(f"H-infinity on the loop: no iterate kept every plant's "
+                                     f"disk margin at {alpha_min:g}; lower alpha_min or the "
+                                     "bandwidths")
+            # the added frequencies cost the margin and no iterate regained it: the previous
+            # round's controller stays (its fine-grid figures are recorded)
+            rounds.append({"frequencies": int(problem.omega.size),
+                           "iterations": out["iterations"],
+                           "message": "no iterate kept the margin: the previous round's "
+                                      "controller kept"})
+            break
         theta = out["x"]
         history += out["history"].tolist()
         # the same controller on the grid 16 times as fine: a lightly damped peak between
@@ -1128,7 +1136,8 @@ def _design_hinf_loop(family: PlantFamily, bandwidth_hz, slip: str, nominal, loo
                      f"{PENALTY:g} max(0, (alpha_min + {ALPHA_RESERVE:g}) mu_max - 1)",
         "optimizer": "BFGS with a weak Wolfe line search for nonsmooth functions (Lewis & "
                      "Overton 2013, HIFOO), exact subgradient of the peak; deterministic",
-        "iterations": len(history) - len(rounds), "evaluations": problem.evaluations,
+        "iterations": sum(r["iterations"] for r in rounds),
+        "evaluations": problem.evaluations,
         "message": out["message"], "rounds": rounds, "objective_history": history,
         "gamma_start": at_start["gamma"], "gamma": on_design["gamma"],
         "gamma_terms": on_design["terms"],

@@ -41,8 +41,9 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
     -------
     str
         HTML: a note on the loop, the figures of the family's poles and zeros, the loop shapes, the
-        robustness maps, the closed-loop runs and the shift envelope, the tables of the designs, the
-        targets and the envelope, and the claims.
+        robustness maps, the closed-loop runs and the shift envelope, the tables of the designs
+        (with the H-infinity criterion), the targets with the PI and the H-infinity controller,
+        the targets and the envelope, and the claims.
     """
     fam = res.family
     spec = res.loop.spec

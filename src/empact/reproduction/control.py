@@ -1,9 +1,10 @@
 """Beyond the paper: slip and ratio control on the machine (issue 21).  The design family,
 the shipped controllers' robustness on the loop that runs (sampled, with sensors and
 feedforwards: `empact.control.loop`), every shipped closed-loop scenario on the nonlinear
-machine next to its linear prediction, the feedforward's traction estimate off by 5 %, a
-Monte Carlo study of the parameter spread, the clamping saving against a safety factor of
-1.3, and the shift-rate envelope.  Compute only: `empact.report` renders."""
+machine next to its linear prediction and with the H-infinity controller in the PI's place,
+the feedforward's traction estimate off by 5 %, a Monte Carlo study of the parameter spread,
+the clamping saving against a safety factor of 1.3, and the shift-rate envelope.  Compute
+only: `empact.report` renders."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
@@ -237,7 +238,8 @@ def _prediction(scenario: Scenario, params: Params, run: ClosedLoopResult) -> Pr
 
 def control(params: Params) -> ControlSection:
     """The family, the shipped designs' robustness on the loop, the closed-loop scenarios,
-    their linear predictions and the shift-rate envelope.
+    their linear predictions, the same scenarios with the H-infinity controller in the PI's
+    place, both controllers on the H-infinity criterion and the shift-rate envelope.
 
     Parameters
     ----------
@@ -248,7 +250,8 @@ def control(params: Params) -> ControlSection:
     -------
     ControlSection
         The family, the controllers, the loops, the runs, their targets and predictions, the
-        envelope and the claims.
+        envelope, the claims, the estimate runs' targets, the H-infinity runs' targets and the
+        criterion's norms.
     """
     family = design_family(params)
     ctrls = {k: shipped_controller(k) for k in ("pi", "hinf")}
