@@ -20,8 +20,10 @@ print("family:", family.shape, "plants; inputs", family.plant((0, 0)).inputs)
 # %%
 # One fixed (not scheduled) PI for the whole family: crossovers of 0.1 Hz (ratio) and 0.25 Hz
 # (slip) on the nominal plant, disk margin at least 0.3 everywhere (a design that cannot meet
-# it is refused with one line naming what to relax). The H-infinity design uses the
-# bandwidths of the shipped one (``hinf.json``).
+# it is refused with one line naming what to relax). The H-infinity design here is the
+# full-order one of the continuous nominal plant (no ``loop=``) at 0.1 / 0.05 Hz; the shipped
+# ``hinf.json`` is the multi-model design on the sampled loop (``design_hinf(..., loop=,
+# params=)``, the control chapter).
 designs = {"PI": empact.design_pi(family, bandwidth_hz=(0.1, 0.25), alpha_min=0.3),
            "H-infinity": empact.design_hinf(family, bandwidth_hz=(0.1, 0.05))}
 

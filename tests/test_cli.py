@@ -893,6 +893,8 @@ BAD_INPUT = [
     (["plants", "--scheduler-timeout", "nan"], "--scheduler-timeout = nan"),
     (["control", "design", "--out", "c.json", "--alpha-min", "-1"],
      "--alpha-min = -1: allowed range is [0.05, 1.9]"),
+    (["control", "design", "--method", "hinf", "--out", "c.json", "--alpha-min", "2"],
+     "--alpha-min = 2: allowed range is [0.05, 1.9]"),
     (["control", "design", "--out", "c.json", "--slip", "0.5"], "--slip = 0.5: allowed range"),
     (["control", "design", "--out", "c.json", "--tau", "0.9,2"], "--tau = 2"),
     (["control", "design", "--out", "c.json", "--bandwidth", "nan,1"], "--bandwidth = nan"),

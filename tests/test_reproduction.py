@@ -26,9 +26,6 @@ KNOWN_DEVIATIONS = {
     # issue 21 (beyond the paper): the servo limits stop the shift below 1 /s on the bench
     # (the creep mode at LOW, the clamping for the dynamometer's inertia torque at OD)
     "control.shift-low-od", "control.shift_rate",
-    # the H-infinity alternative is designed on the continuous plant without the
-    # feedforward; on the loop that runs one plant of the family is unstable
-    "control.hinf.family",
     # issue 34 (beyond the paper), WLTC 3b quasi-static: slip control on the hydraulic
     # reference saves 0.6 %, not 04CVT-39's 5 % (the clamping sits at its 3 kN floor most of
     # the cycle, the pump's leakage and friction at that pressure dominate); the reference

@@ -367,10 +367,13 @@ def test_design_hinf_from_the_cli_uses_the_api_default(tmp_path):
                                     "0.8,1,1.25", "--tau", "0.9", "--clamp", "16000", "--out",
                                     str(out), "--quiet"])
     assert res.exit_code == 0, res.output
-    assert load_controller(out).design["bandwidth_hz"] == [0.1, 0.05]
+    design = load_controller(out).design
+    assert design["bandwidth_hz"] == [0.1, 0.2] and design["alpha_min"] == 0.5
+    assert design["worst"]["all_stable"] and design["worst"]["disk_margin"] >= 0.5
     res = CliRunner().invoke(main, ["control", "design", "--method", "hinf", "--alpha-min",
-                                    "0.3", "--out", str(tmp_path / "k2.json")])
-    assert res.exit_code == 2 and "--alpha-min: not an option of --method hinf" in res.output
+                                    "0.01", "--out", str(tmp_path / "k2.json")])
+    assert res.exit_code == 2 and "--alpha-min" in res.output
+    assert not (tmp_path / "k2.json").exists()
 
 
 def test_a_table_where_it_cannot_apply_is_one_line(tmp_path, params):

@@ -211,13 +211,14 @@ loop_option = click.option(
               + "; ".join(f"{t.name}: {t.summary}" for t in CONTROLLER_TYPES.values()) + ".")
 @click.option("--bandwidth", default=None, metavar="RATIO,SLIP",
               help="Loop bandwidths [Hz] (default: the design function's, the shipped "
-                   "design's: design_pi 0.5,1; design_hinf 0.1,0.05).")
+                   "design's: design_pi 0.5,1; design_hinf 0.1,0.2).")
 @click.option("--alpha-min", "alpha_min", type=float, default=None,
-              help="PI: smallest multiloop disk margin at every grid point (default: "
-                   "design_pi's, 0.5, the shipped design's).")
+              help="Smallest multiloop disk margin at every grid point (default: the design "
+                   "function's, 0.5, the shipped designs').")
 @click.option("--schedule/--no-schedule", default=None,
-              help="PI: gain-schedule the proportional gains over the family's axes (r_g, "
-                   "tau, F_s) (default: design_pi's: scheduled, on the loop that runs).")
+              help="Gain-schedule the gains on the errors over the family's axes (r_g, tau, "
+                   "F_s) (default: the design function's: scheduled, on the loop that "
+                   "runs).")
 @click.option("--slip-signal", "slip_signal",
               type=click.Choice(["nu", "nu_r", "ln_nu", "ln_nu_r"]), default="nu",
               show_default=True, help="The measured slip, or its logarithm (ln_: the slip's "

@@ -75,7 +75,9 @@ CONTROLLER_TYPES: dict[str, ControllerType] = {
                          "decentralised PI checked on the loop that runs (gain-scheduled by "
                          "default on the command line)"),
     "hinf": ControllerType("hinf", "empact.control.hinf:design_hinf",
-                           "H-infinity S / KS mixed sensitivity on the continuous plant"),
+                           "multi-model H-infinity (S / KS / T mixed sensitivity) of a "
+                           "structured 8-state MIMO controller over every plant, on the loop "
+                           "that runs (gain-scheduled by default on the command line)"),
 }
 
 

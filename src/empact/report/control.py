@@ -15,7 +15,7 @@ from ..plotting import (
 from ..reproduction import control as rep
 from .context import Context
 
-__all__ = ["control", "studies", "estimate_table"]
+__all__ = ["control", "studies", "estimate_table", "hinf_table"]
 
 
 def _fmt(v) -> str:
@@ -41,8 +41,9 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
     -------
     str
         HTML: a note on the loop, the figures of the family's poles and zeros, the loop shapes, the
-        robustness maps, the closed-loop runs and the shift envelope, the tables of the designs, the
-        targets and the envelope, and the claims.
+        robustness maps, the closed-loop runs and the shift envelope, the tables of the designs
+        (with the H-infinity criterion), the targets with the PI and the H-infinity controller,
+        the targets and the envelope, and the claims.
     """
     fam = res.family
     spec = res.loop.spec
@@ -53,15 +54,19 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
         rho = lm.spectral_radius()
         dm = lm.disk_margins()
         ms = lm.sensitivity_peaks()["ms"].reshape(-1, 2).max(axis=0)
+        norm = res.norms.get(name, {}).get("gamma", "")
         design_rows.append([name, c.n, "yes" if c.schedule is not None else "no",
                             f"{int((rho < 1).sum())} / {rho.size}", float(dm["alpha"].min()),
                             float(dm["input"].min()), float(dm["output"].min()),
-                            float(ms[0]), float(ms[1])])
+                            float(ms[0]), float(ms[1]), norm])
         before = c.design.get("tune", {}).get("before")
         if before:  # the tuner's starting point (empact.control.tune), as recorded
             design_rows.append([f"{name} before tuning", c.n, design_rows[-1][2], "all" if
                                 before["all_stable"] else "not all", before["disk_margin"],
-                                "", "", before["ms"]["ratio"], before["ms"]["slip"]])
+                                "", "", before["ms"]["ratio"], before["ms"]["slip"], ""])
+        if "gamma_start" in c.design:  # the H-infinity search's start, as recorded
+            design_rows.append([f"{name} start (scheduled unit PI)", c.n, design_rows[-1][2],
+                                "", "", "", "", "", "", c.design["gamma_start"]])
     target_rows = []
     for n, checks in res.targets.items():
         run = res.runs[n]
@@ -123,10 +128,16 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
         + ctx.table("control_designs", ["controller", "states", "scheduled", "stable",
                                         "worst disk margin [-]", "at the servos [-]",
                                         "at the errors [-]", "max Ms ratio loop [-]",
-                                        "max Ms slip loop [-]"], design_rows,
+                                        "max Ms slip loop [-]",
+                                        "H-infinity criterion gamma [-]"], design_rows,
                     "The shipped controllers over the design family on the loop that runs "
-                    "(Ms: loop-at-a-time sensitivity peak; a tuned controller's starting "
-                    "point as its design record states it, `empact control tune`)")
+                    "(Ms: loop-at-a-time sensitivity peak; gamma: the worst weighted "
+                    "mixed-sensitivity norm of the H-infinity design, its weights and "
+                    "bandwidths, over every plant, on the same loop and control check's "
+                    "frequency grid, lower is better; a tuned controller's starting point as "
+                    "its design record states it, `empact control tune`, and the H-infinity "
+                    "search's start)")
+        + hinf_table(ctx, res)
         + ctx.figure(plot_closed_loop(steps, title="Load steps of 50 % of the torque "
                                       "capacity at 0.5 s", predictions=preds),
                      "control_load_steps", "Closed loop on the nonlinear machine (solid), "
@@ -153,6 +164,43 @@ def control(ctx: Context, res: rep.ControlSection) -> str:
                                          "F_s at it [kN]", "|T_mp| at it [N m]"], env_rows,
                     "The shift-rate envelope (quasi-static; empact.control.shifting)")
         + ctx.claims(res.claims))
+
+
+def hinf_table(ctx: Context, res: rep.ControlSection) -> str:
+    """The shipped scenarios' targets with the PI (as shipped) and with the H-infinity
+    controller in its place (`empact.reproduction.control.ControlSection.hinf_targets`,
+    issue 33).
+
+    Parameters
+    ----------
+    ctx : Context
+        The report build (the table is also written as CSV).
+    res : ControlSection
+        Its ``targets`` and ``hinf_targets``.
+
+    Returns
+    -------
+    str
+        HTML: one row per scenario and target ("value: met" or "value: MISSED" for each
+        controller); empty without H-infinity runs.
+    """
+    rows = []
+    for n, checks in res.targets.items():
+        for pi, hi in zip(checks, res.hinf_targets.get(n, [])):
+            cells = [n, pi.name, pi.describe().split("(")[1].split(")")[0]]
+            for chk in (pi, hi):
+                value, unit = shown_metric(chk.name, chk.value)
+                cells.append(_fmt(value) + (f" {unit}" if unit else "") +
+                             (": met" if chk.met else ": MISSED"))
+            rows.append(cells)
+    if not rows:
+        return ""
+    return ctx.table("control_hinf_targets", ["scenario", "metric", "target", "PI (shipped)",
+                                              "H-infinity (shipped:hinf)"], rows,
+                     "Every shipped closed-loop scenario against its targets with the PI and "
+                     "with the H-infinity controller in its place (the same loop: "
+                     "feedforwards, decoupler, sensors, servo limits; `empact control "
+                     "simulate --example NAME --controller shipped:hinf`)")
 
 
 def estimate_table(ctx: Context, res: rep.ControlSection) -> str:

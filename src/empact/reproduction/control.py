@@ -1,9 +1,10 @@
 """Beyond the paper: slip and ratio control on the machine (issue 21).  The design family,
 the shipped controllers' robustness on the loop that runs (sampled, with sensors and
 feedforwards: `empact.control.loop`), every shipped closed-loop scenario on the nonlinear
-machine next to its linear prediction, the feedforward's traction estimate off by 5 %, a
-Monte Carlo study of the parameter spread, the clamping saving against a safety factor of
-1.3, and the shift-rate envelope.  Compute only: `empact.report` renders."""
+machine next to its linear prediction and with the H-infinity controller in the PI's place,
+the feedforward's traction estimate off by 5 %, a Monte Carlo study of the parameter spread,
+the clamping saving against a safety factor of 1.3, and the shift-rate envelope.  Compute
+only: `empact.report` renders."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
@@ -24,11 +25,13 @@ from ..control.closed_loop import (
 )
 from ..control.controller import Controller, load_controller
 from ..control.family import DESIGN_GRID, PlantFamily, design_family
+from ..control.hinf import applied_gains, loop_mixed_sensitivity
 from ..control.law import SHIPPED_LOOP, LoopConfig
 from ..control.loop import (
     DiskMarginMap,
     LoopModel,
     LoopPrediction,
+    default_omega,
     disk_margin_map,
     family_loops,
     predict_scenario,
@@ -58,10 +61,11 @@ __all__ = ["DESIGN_GRID", "SHIPPED_DESIGNS", "ControlSection", "StudiesSection",
 #: src/empact/data/control/pi.json --force`` on the design family
 #: (`empact.control.family.design_family`, the command's default grid) and the shipped loop
 #: (`empact.control.law.SHIPPED_LOOP`, with its feedforward gain table), and ``--method hinf
-#: --bandwidth 0.1,0.05`` on issue 21's family (`empact.control.family.ISSUE21_GRID`, on the
-#: continuous plant; checked here on the loop it would run in)
-SHIPPED_DESIGNS = {"pi": {"bandwidth_hz": (0.5, 1.0), "alpha_min": 0.5, "schedule": True},
-                   "hinf": {"bandwidth_hz": (0.1, 0.05)}}
+#: --out src/empact/data/control/hinf.json --force`` on the same family and loop (the
+#: multi-model design on the loop that runs, `empact.control.hinf`, with its defaults: these)
+SHIPPED_DESIGNS: dict[str, dict[str, Any]] = {
+    "pi": {"bandwidth_hz": (0.5, 1.0), "alpha_min": 0.5, "schedule": True},
+    "hinf": {"bandwidth_hz": (0.1, 0.2), "alpha_min": 0.5}}
 
 #: the Monte Carlo study of issue 21: runs of the shipped spread on this scenario
 MC_RUNS = 200
@@ -180,6 +184,13 @@ class ControlSection:
         ``{scenario: {feedforward: [TargetCheck]}}`` (`estimate_targets`): the scenarios
         whose clamping feedforward runs, with it on the driveshaft torque and on the
         engine-torque estimate.
+    hinf_targets : dict of str to list of TargetCheck
+        ``{scenario: [TargetCheck]}`` of every shipped closed-loop scenario run with the
+        H-infinity controller in the PI's place (issue 33: ``--controller shipped:hinf``).
+    norms : dict of str to dict
+        ``{name: loop_mixed_sensitivity(...)}``: each shipped controller on the H-infinity
+        design's criterion (its weights and bandwidths, on the loop that runs, on ``control
+        check``'s frequency grid).
     """
 
     family: PlantFamily
@@ -192,6 +203,8 @@ class ControlSection:
     envelope: ShiftEnvelope
     claims: tuple[Claim, ...]
     estimate: dict[str, dict[str, list[TargetCheck]]] = field(default_factory=dict)
+    hinf_targets: dict[str, list[TargetCheck]] = field(default_factory=dict)
+    norms: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     @property
     def margin_maps(self) -> dict[str, DiskMarginMap]:
@@ -283,7 +296,8 @@ def _prediction(scenario: Scenario, params: Params, run: ClosedLoopResult) -> Pr
 
 def control(params: Params) -> ControlSection:
     """The family, the shipped designs' robustness on the loop, the closed-loop scenarios,
-    their linear predictions and the shift-rate envelope.
+    their linear predictions, the same scenarios with the H-infinity controller in the PI's
+    place, both controllers on the H-infinity criterion and the shift-rate envelope.
 
     Parameters
     ----------
@@ -294,7 +308,8 @@ def control(params: Params) -> ControlSection:
     -------
     ControlSection
         The family, the controllers, the loops, the runs, their targets and predictions, the
-        envelope and the claims.
+        envelope, the claims, the estimate runs' targets, the H-infinity runs' targets and the
+        criterion's norms.
     """
     family = design_family(params)
     ctrls = {k: shipped_controller(k) for k in ("pi", "hinf")}
@@ -304,6 +319,15 @@ def control(params: Params) -> ControlSection:
     scenarios = {n: load_scenario(control_example_path(n)) for n in control_examples()}
     runs = {n: run_closed_loop(sc, params) for n, sc in scenarios.items()}
     targets = {n: check_targets(r.metrics, scenarios[n].targets) for n, r in runs.items()}
+    # the H-infinity controller in the PI's place on the same scenarios (issue 33)
+    hinf_targets = {n: check_targets(run_closed_loop(sc, params, ctrls["hinf"]).metrics,
+                                     sc.targets) for n, sc in scenarios.items()}
+    # both on the H-infinity design's criterion (its record's bandwidths)
+    servo = (params.servo.T_mp_max, params.servo.T_ms_max)
+    bw = ctrls["hinf"].design.get("bandwidth_hz", SHIPPED_DESIGNS["hinf"]["bandwidth_hz"])
+    norms = {k: loop_mixed_sensitivity(lm, applied_gains(ctrls[k], family, loop, params, model),
+                                       bw, servo, default_omega(lm.dt))
+             for k, lm in loops.items()}
     # every scenario's linear prediction (a model linearised at LOW cannot follow a shift to
     # OD: the shifts' are shown for what they are, far off)
     predictions = {n: _prediction(scenarios[n], params, runs[n]) for n in scenarios
@@ -314,8 +338,10 @@ def control(params: Params) -> ControlSection:
                               shift.initial.T_l, float(shift.references["tau"][0, 1]),
                               LoopConfig.for_scenario(shift, params).limits)
     claims = _claims(family, loops, runs, targets, predictions, envelope)
+    claims.insert(2, _hinf_targets_claim(runs, targets, hinf_targets))
     return ControlSection(family, ctrls, loop, loops, runs, targets, predictions, envelope,
-                          tuple(claims), estimate_targets(params, scenarios, targets))
+                          tuple(claims), estimate_targets(params, scenarios, targets),
+                          hinf_targets, norms)
 
 
 def estimate_label(signal: str, error: float) -> str:
@@ -695,6 +721,29 @@ def fair_saving(params: Params, names: tuple[str, ...] = ("slip-load-step-r0.5",
     return rows
 
 
+def _hinf_targets_claim(runs, targets, hinf_targets) -> Claim:
+    """``control.hinf.targets``: the H-infinity controller in the PI's place on every shipped
+    scenario meets each target the PI meets (the verdicts side by side)."""
+    parts, lost = [], []
+    for n, checks in targets.items():
+        if not checks:
+            continue
+        mine = hinf_targets[n]
+        parts.append(f"{n}: {sum(c.met for c in mine)}/{len(mine)} met (PI "
+                     f"{sum(c.met for c in checks)}/{len(checks)})")
+        lost += [f"{n} {c.describe()}" for c, p in zip(mine, checks) if p.met and not c.met]
+    return Claim(
+        key="control.hinf.targets", source=SRC,
+        claim="in the PI's place on every shipped closed-loop scenario (the same loop, "
+              "feedforwards and limits), the H-infinity controller meets each target the PI "
+              "meets",
+        computed="; ".join(parts) + ("; missed where the PI meets: " + "; ".join(lost)
+                                      if lost else ""),
+        shown=not lost, explanation="The H-infinity controller misses a target the PI meets: "
+                                    "see the values.",
+        values={f"{n}.{c.name}": c.value for n, cs in hinf_targets.items() for c in cs})
+
+
 def _claims(family, loops, runs, targets, predictions, envelope) -> list[Claim]:
     claims = []
     axes = ", ".join(f"{k} {v.min():.3g}-{v.max():.3g}" for k, v in family.axes.items())
@@ -705,7 +754,7 @@ def _claims(family, loops, runs, targets, predictions, envelope) -> list[Claim]:
         worst = float(dm["alpha"].min())
         idx = np.unravel_index(int(np.argmin(dm["alpha"])), dm["alpha"].shape)
         at = ", ".join(f"{n} = {v[i]:.3g}" for (n, v), i in zip(family.axes.items(), idx))
-        need = SHIPPED_DESIGNS["pi"]["alpha_min"] if k == "pi" else 0.0
+        need = float(SHIPPED_DESIGNS[k]["alpha_min"])
         claims.append(Claim(
             key=f"control.{k}.family", source=SRC,
             claim=f"the {k} controller stabilises every plant of the design family on the "
@@ -714,10 +763,7 @@ def _claims(family, loops, runs, targets, predictions, envelope) -> list[Claim]:
             computed=f"{int(stable.sum())} of {stable.size} closed loops stable ({axes}); worst "
                      f"disk margin {worst:.3f} (at {at}); largest |z| {rho.max():.6f}",
             shown=bool(stable.all() and worst >= need),
-            explanation=("Designed on the continuous plant without the feedforward (the "
-                         "multivariable alternative; the runs use the PI): the loop with the "
-                         "feedforward is not stable at every plant." if k == "hinf" else
-                         "A plant of the family is not stabilised with the stated margin."),
+            explanation="A plant of the family is not stabilised with the stated margin.",
             values={"stable": int(stable.sum()), "points": int(stable.size),
                     "disk_margin": worst, "spectral_radius": float(rho.max())}))
     for n, checks in targets.items():
