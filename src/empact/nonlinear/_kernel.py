@@ -121,11 +121,13 @@ NY = len(OUTPUTS)
  Y_LSLIP, Y_LCLAMP, Y_LLOAD, Y_LDRAG, Y_PVIN, Y_PVOUT,
  Y_DSERVO, Y_DSPINDLE, Y_DMAT, Y_DSHEAVE) = range(NY)
 #: the vehicle driveline's outputs (zero on the bench), after the others: the car's speed
-#: [m/s], the road load [N] and its power [W], the final drive's loss [W] (`_vehicle_load`)
-VEHICLE_OUTPUTS = ("v", "F_road", "P_road", "P_loss_fd")
+#: [m/s], the road load [N] and its power [W], the final drive's loss [W] (`_vehicle_load`),
+#: the engine's torque referred to the secondary ``T_d omega_d / omega_s`` [N m] (as the
+#: engine's controller reports it: the car's loop law's torque source)
+VEHICLE_OUTPUTS = ("v", "F_road", "P_road", "P_loss_fd", "T_d_sec")
 OUTPUTS = OUTPUTS + VEHICLE_OUTPUTS  # type: ignore[assignment]  # (a longer tuple)
 NY = len(OUTPUTS)
-Y_V, Y_FROAD, Y_PROAD, Y_LFD = range(NY - len(VEHICLE_OUTPUTS), NY)
+Y_V, Y_FROAD, Y_PROAD, Y_LFD, Y_TDSEC = range(NY - len(VEHICLE_OUTPUTS), NY)
 
 #: the variator's losses [W] (outputs): their sum is ``P_var_in - P_var_out`` (`_losses`)
 VARIATOR_LOSSES = ("P_loss_slip", "P_loss_clamp", "P_loss_load", "P_loss_drag")
@@ -652,6 +654,7 @@ def _finish(x, u, p, ix, dx, y, belt, sp, dm, r_g, nu, mu, mu_max, tau, F_b, T_b
              keq, T_b, mu, mu_max, R_p, R_s, phi, T_mp, u[1], T_d, T_l, T_ds)
     _loss_outputs(x, y, -T_on_p, T_b, T_lp, T_ls, T_clamp, T_load, T_dp, T_dss)
     _vehicle_outputs(x, p, y)
+    y[Y_TDSEC] = T_d * x[14] / x[16] if p[P_VEH] != 0.0 else 0.0 * T_d
     return F_s, T_b, T_mp, G, err, T_d, T_l
 
 

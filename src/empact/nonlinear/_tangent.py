@@ -117,6 +117,7 @@ from ._kernel import (
     Y_TB,
     Y_TD,
     Y_TDS,
+    Y_TDSEC,
     Y_THMP,
     Y_THMS,
     Y_TL,
@@ -547,6 +548,8 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
         Yd[Y_TMS, k] = T_ms_t
         Yd[Y_TDS, k] = T_ds_t
         Yd[Y_MUMAX, k] = mu_max_t
+        Yd[Y_TDSEC, k] = ((T_d_t * wd + T_d * wd_t - y[Y_TDSEC] * ws_t) / ws if vehicle
+                          else 0.0)
         Yd[Y_V, k] = p[P_VGEAR] * wl_t if vehicle else 0.0
         Yd[Y_FROAD, k] = F_w * wl_t
         Yd[Y_PROAD, k] = road_w * wl_t * wl + T_road * wl_t

@@ -97,6 +97,14 @@ class ControllerSpec:
         loop's transients [-], in [0, 0.9] (default 0.25: on a 50 % load step at r_g = 0.5
         the loop's clamping overshoots its new steady value by about 20 %, 33.7 kN for 28
         kN at 18 kN; at 0.1 that step macro-slips with the servo at its limit).
+    min_clamping : float
+        The lowest clamping force the secondary servo is commanded to [N] (0: none): its
+        torque held at or beyond the torque that clamps it (the holding torque's share that
+        does not scale with the clamping, at the start, plus the servo torque per newton
+        times it), a limit of the anti-windup like the servo's torque limit.  A car's slip
+        loop needs it where the belt carries almost no torque (coasting: no slip to control,
+        the loop would open the belt) and the safety-factor clamping where the torque
+        crosses zero (issue 34; the quasi-static cycle's 3 kN, `empact.drive_cycle`).
     anti_windup : bool
     sensors, limits : bool
         The parameter set's (and the scenario's) sensors and servo limits; False: ideal.
@@ -121,6 +129,7 @@ class ControllerSpec:
     shift_feedforward: bool = False
     torque_request: str = "off"
     torque_request_margin: float = 0.25
+    min_clamping: float = 0.0
     anti_windup: bool = True
     sensors: bool = True
     limits: bool = True
@@ -154,6 +163,8 @@ class ControllerSpec:
         object.__setattr__(self, "torque_request_margin", check_number(
             "controller.torque_request_margin", self.torque_request_margin, 0.0, 0.9,
             lo_open=False))
+        object.__setattr__(self, "min_clamping", check_number(
+            "controller.min_clamping", self.min_clamping, 0.0, 1e5, lo_open=False, unit="N"))
         if self.torque_request != "off" and not self.limits:
             raise ParameterError(f"controller.torque_request = {self.torque_request!r}: needs "
                                  "the servo limits (controller.limits = true)")

@@ -168,7 +168,8 @@ OUTPUT_UNITS = {"r_g": "-", "nu": "-", "nu_r": "-", "theta_mp": "rad", "theta_ms
                 "R_s": "m", "phi": "rad", "x_p": "m", "x_s": "m", "belt_elongation": "m",
                 "T_mp_act": "N m", "T_d_act": "N m", "T_l_act": "N m", "E": "J", "P_in": "W",
                 "P_diss": "W", "P_creep": "W", "T_ms_act": "N m", "T_ds": "N m", "mu_max": "-",
-                **{name: "W" for name in K.OUTPUTS[K.Y_LSLIP:]}, "v": "m/s", "F_road": "N"}
+                **{name: "W" for name in K.OUTPUTS[K.Y_LSLIP:]}, "v": "m/s", "F_road": "N",
+                "T_d_sec": "N m"}
 #: what each output is (`empact.nonlinear.model` docs, JSON exports)
 OUTPUT_DESCRIPTIONS = {
     "nu": "slip of eq. 2 on the current radii, 1 - omega_s / (r_g omega_p)",
@@ -197,7 +198,9 @@ OUTPUT_DESCRIPTIONS = {
     "F_road": "the road load f0 + f1 v + f2 v^2 + m g sin(grade) (vehicle driveline)",
     "P_road": "the road load's power F_road v (vehicle driveline; part of the load's work)",
     "P_loss_fd": "the final drive's loss (1 - eta_fd) |T_ds| omega_l (vehicle driveline; "
-                 "part of the load's work)"}
+                 "part of the load's work)",
+    "T_d_sec": "the engine's torque referred to the secondary, T_d omega_d / omega_s "
+               "(vehicle driveline: as the engine's controller reports it)"}
 INPUT_UNITS = {"T_mp": "N m", "r_g_ref": "-", "T_ms": "N m", "T_d": "N m",
                "omega_d_ref": "rad/s", "T_l": "N m", "omega_l_ref": "rad/s"}
 
