@@ -66,7 +66,7 @@ from .errors import ParameterError
 from .nonlinear import VARIATOR_LOSSES
 from .nonlinear.equilibrium import traction_peak, trim
 from .nonlinear.model import EmpactModel, nonlinear_model
-from .nonlinear.simulation import simulate
+from .nonlinear.simulation import METHODS, simulate
 from .operating import CruisePoint
 from .params import Params
 
@@ -304,7 +304,8 @@ def dynamic_cycle(params: Params, cycle: Cycle, *,
                   tau: float | None = None, driver: Driver | None = None,
                   output_rate: float = 100.0, rate: float = 1000.0,
                   quasi_static: CycleResult | None = None,
-                  model: EmpactModel | None = None) -> DynamicCycleResult:
+                  model: EmpactModel | None = None,
+                  method: str = "rodas4") -> DynamicCycleResult:
     """The dynamic (forward) drive cycle by strategy (module notes).
 
     Parameters
@@ -330,6 +331,8 @@ def dynamic_cycle(params: Params, cycle: Cycle, *,
         The quasi-static cycle of the same strategies (computed when not given).
     model : EmpactModel, optional
         The car's model (default ``nonlinear_model(params, driveline="vehicle")``).
+    method : str, optional
+        The integrator (`empact.nonlinear.simulation.METHODS`; default ``"rodas4"``).
 
     Returns
     -------
@@ -346,6 +349,7 @@ def dynamic_cycle(params: Params, cycle: Cycle, *,
         raise ParameterError("strategies: give at least one of " + ", ".join(STRATEGIES))
     output_rate = check_number("output_rate", output_rate, 1.0, 1e4, unit="Hz")
     rate = check_number("rate", rate, 10.0, 1e5, unit="Hz")
+    check_choice("method", method, METHODS)
     if tau is None:
         tau = params.operating.tau if params.operating.tau is not None else 0.9
     driver = Driver() if driver is None else driver
@@ -357,7 +361,7 @@ def dynamic_cycle(params: Params, cycle: Cycle, *,
     v_launch = launch_speed(params)
     stretches = driving_stretches(cycle, v_launch)
     runs = {s: _run_strategy(params, cycle, qs, model, s, stretches, float(tau), driver,
-                             output_rate, rate) for s in strategies}
+                             output_rate, rate, method) for s in strategies}
     return DynamicCycleResult(cycle=cycle, strategies=strategies, quasi_static=qs,
                               stretches=tuple((float(cycle.t[a]), float(cycle.t[b]))
                                               for a, b in stretches),
@@ -383,7 +387,8 @@ def _interval_weights(t: NDArray, use: NDArray[np.bool_]) -> NDArray:
 
 def _run_strategy(params: Params, cycle: Cycle, qs: CycleResult, model: EmpactModel,
                   strategy: str, stretches: list[tuple[int, int]], tau: float,
-                  driver: Driver, output_rate: float, rate: float) -> DynamicRun:
+                  driver: Driver, output_rate: float, rate: float,
+                  method: str) -> DynamicRun:
     """One strategy over every dynamic stretch, then the cycle's energies."""
     veh, eng = params.vehicle, params.engine
     gear = veh.r_wheel / veh.i_fd
@@ -410,7 +415,7 @@ def _run_strategy(params: Params, cycle: Cycle, qs: CycleResult, model: EmpactMo
                              np.column_stack([t_k, v_k]))
         t0 = time.perf_counter()
         res = simulate(model, op.x, {}, duration, u0=op.u, controller=law,
-                       sample_rate=output_rate, method="rodas4",
+                       sample_rate=output_rate, method=method,
                        name=f"{cycle.name} {strategy} {cycle.t[a]:g}-{cycle.t[b]:g} s")
         wall += time.perf_counter() - t0
         n_steps += int(res.stats["n_steps"])
