@@ -291,6 +291,14 @@ class CruisePoint(OperatingPoint):
     load at the speed the point drives sets the load torque ``T_l`` (the trim solves it,
     `empact.nonlinear.equilibrium.trim`), so no ``T_l`` is given.
 
+    Attributes
+    ----------
+    r_g : geometric ratio ``R_p / R_s`` [-]
+    omega_p : primary (engine) speed [rad/s], > 0
+    nu, tau : slip [-] or torque ratio [-] (one of them, or neither with `F_s`)
+    F_s : secondary clamping force [N] (or None with a slip)
+    T_l : None (the road load's)
+
     Examples
     --------
     >>> CruisePoint(r_g=2.0, omega_p=200.0, tau=0.5).given
