@@ -1,8 +1,8 @@
 """Benchmark: the quasi-static drive cycle (issue 34, stage 1): `quasi_static_cycle` on WLTC
 3b, NEDC and FTP-75 for each strategy alone and for all five together (CPU time, median of
 REPEATS, the model built once), and the number of trims it made (the trims are vectorised
-over the samples, `trim_grid`; no interpolated map).  The dynamic cycle's 60 s goal (stage 3)
-will be measured against this.
+over the samples, `trim_grid`; no interpolated map).  The dynamic cycle's 60 s goal is
+measured against this in `bench_dynamic_cycle.py`.
 
 Run: ``.venv/bin/python bench/bench_cycle.py``
 """

@@ -135,6 +135,8 @@ SLOW_FIXTURES = {"full_report", "readme_tour", "cluster"}
 SLOW_TESTS = {
     "test_drive_cycle.py": ("test_cli_json_keys_and_bad_input",
                             "test_plot_draws_the_four_panels"),
+    "test_dynamic_cycle.py": ("test_cli_dynamic_json_and_plot",
+                              "test_cycle_monte_carlo_forked_equals_in_process"),
     "test_cli.py": (
         "test_bad_input_one_line_exit_2_nothing_written", "test_cli_plot",
         "test_cli_rootlocus_zeros_frf_map", "test_cli_simulate_linearize_nmp",

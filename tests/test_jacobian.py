@@ -9,7 +9,8 @@ norm up to 2e-13, the entries 4e-12 where terms cancel).  States: seeded random 
 trimmed points over the operating range (ratios 0.45-2.2, primary speeds 150-400 rad/s, slip
 up to past the traction peak), with sheave velocities (shifting: the creep law's rate term
 and its tanh saturation), Coulomb friction, every state layout (`state_layout`: locked belt,
-speed-controlled drive and load, ratio controller) and every shift law and table option.
+speed-controlled drive and load, ratio controller) and every shift law and table option,
+and the vehicle driveline (road load and final drive through standstill).
 """
 import numpy as np
 import pytest
@@ -60,6 +61,9 @@ CASES = {
     "tables": dict(thrust_ratio=KMAP, creep_map=CMAP, ratio_control=True),
     "loss-map": dict(loss_map=LMAP, drive="speed", ratio_control=True),
     "loss-map-locked": dict(loss_map=LMAP, belt="locked"),
+    "vehicle": dict(driveline="vehicle"),
+    "vehicle-locked-ratio": dict(driveline="vehicle", belt="locked", ratio_control=True,
+                                 coulomb_sp=0.1),
 }
 
 
@@ -150,6 +154,18 @@ def test_outside_the_knots_and_saturated(params, name):
         _check(*_pair(m, z, u), (name, "omega_s < 0"))
 
 
+def test_vehicle_load_through_standstill(params):
+    """The vehicle driveline's road load and final drive loss (`_kernel._vehicle_load`)
+    where their smooth signs are not saturated: the load shaft near standstill, forwards and
+    backwards, and the driveshaft torque near zero and negative (the wheels driving)."""
+    m = nonlinear_model(params, **CASES["vehicle"])
+    x, u = _points(m, np.random.default_rng(7), 1)[0]
+    for wl, twist in ((0.2, 0.001), (-0.3, -0.002), (0.05, -0.05), (1.0, 0.3), (30.0, -0.2)):
+        z = x.copy()
+        z[17], z[13] = wl, twist
+        _check(*_pair(m, z, u), ("vehicle", wl, twist))
+
+
 @pytest.mark.parametrize("knot", ["ln_r_low", "ln_r_med", "ln_r_od"])
 def test_on_a_knot_the_branch_of_the_complex_step(params, knot):
     """With the ratio exactly on a knot of the traction coefficients' interpolation, the
@@ -199,7 +215,7 @@ def test_piecewise_helpers_at_their_samples():
                 assert sl == pytest.approx(zl.imag / h, rel=1e-13, abs=1e-300)
 
 
-@pytest.mark.parametrize("name", ["traction", "locked", "all-loops", "shafai"])
+@pytest.mark.parametrize("name", ["traction", "locked", "all-loops", "shafai", "vehicle"])
 def test_integrator_routines_and_batch(params, name):
     """The integrators' routines (`_state_jacobian` on the varying columns and in full,
     `_input_direction`) and the families' `linearize_batch` against their complex-step
@@ -208,7 +224,7 @@ def test_integrator_routines_and_batch(params, name):
     pts = _points(m, np.random.default_rng(2), 4)
     n = m.n
     for x, u in pts:
-        for cols in (K.varying_columns(m.ix), np.arange(n)):
+        for cols in (K.varying_columns(m.ix, m.p), np.arange(n)):
             A0, A1 = np.zeros((n, n)), np.zeros((n, n))
             KT._state_jacobian(x, u, m.p, m.ix, A0, cols)
             K._state_jacobian_cs(x, u, m.p, m.ix, A1, cols)

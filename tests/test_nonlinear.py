@@ -342,7 +342,8 @@ def test_stop_marks_incomplete(params):
 
 @pytest.mark.parametrize("opts", [dict(), dict(belt="locked"), dict(drive="speed",
                                   load="speed", ratio_control=True, coulomb_sp=0.2,
-                                  coulomb_ss=0.1)], ids=["traction", "locked", "controlled"])
+                                  coulomb_ss=0.1), dict(driveline="vehicle")],
+                         ids=["traction", "locked", "controlled", "vehicle"])
 def test_jacobian_columns_outside_varying_columns_are_constant(params, opts):
     """The integrator recomputes only `varying_columns` of df/dx: every other column must be
     the same (to rounding) at any state and input of a run."""
@@ -355,7 +356,7 @@ def test_jacobian_columns_outside_varying_columns_are_constant(params, opts):
         op = trim(m, OperatingPoint(r_g=0.8, omega_p=300.0, **OP))
     A0 = m.jacobian(op.x, op.u)[0]
     rng = np.random.default_rng(4)
-    fixed = np.setdiff1d(np.arange(m.n), K.varying_columns(m.ix))
+    fixed = np.setdiff1d(np.arange(m.n), K.varying_columns(m.ix, m.p))
     for _ in range(5):
         x = op.x * (1 + 0.05 * rng.standard_normal(m.n)) + 1e-4 * rng.standard_normal(m.n)
         x[4:6] = op.x[4:6] * (1 + 0.02 * rng.standard_normal(2))  # keep a belt geometry

@@ -35,6 +35,12 @@ KNOWN_DEVIATIONS = {
     # within the servo's capacity misses 0.6 pp: r_g = 0.5 at 5 kN (0.77 pp), a light-load
     # peak of the loop that neither protection addresses (the servo has room)
     "control.saturation",
+    # issue 34, the car: LOW -> OD reaches 0.87 /s, not 1 /s (the engine's inertia torque at
+    # LOW, the ratio loop lagging at low primary speed), faster than the bench's 0.33-0.43
+    "control.vehicle-upshift", "cycle.car_shift_rate",
+    # issue 34, the dynamic WLTC 3b: the safety-factor clamping (of the engine's torque)
+    # macro-slips briefly at tip-out upshifts, where its speed error is 2.19 km/h
+    "cycle.dynamic_speed", "cycle.dynamic_macro_slip",
 }
 
 
@@ -114,6 +120,14 @@ def test_drive_cycle_claims(params):
     assert not by["cycle.slip_control_saving"].shown
     assert by["cycle.slip_control_saving"].values["saving_hydraulic"] > 0
     assert math.isfinite(by["cycle.slip_control_saving"].values["saving_servo"])
+    # the dynamic runs (issue 34, item 4): the variator's losses agree within 10 % with the
+    # quasi-static cycle's over the same stretches; the slip strategy neither macro-slips
+    # nor lets the belt go slack; the saving keeps its sign
+    assert by["cycle.dynamic_loss_agreement"].shown
+    assert by["cycle.dynamic_macro_slip"].values["slip"] == {"macro_slip": False,
+                                                             "belt_slack": False}
+    assert by["cycle.dynamic_saving"].shown
+    assert sec.dynamic is not None and sec.dynamic.runs["slip"].complete
 
 
 def test_energy_saving_sign_at_a_band_end_is_recomputed(params, claims):

@@ -27,6 +27,7 @@ from empact.control.shifting import ShiftEnvelope
 from empact.control.tune import TuneResult
 from empact.cycles import Cycle
 from empact.drive_cycle import CycleResult, quasi_static_cycle
+from empact.dynamic_cycle import DynamicCycleResult, DynamicRun
 from empact.efficiency import EfficiencyMap
 from empact.experiments.plant_id import PlantIdentification, StepExperiment
 from empact.experiments.rig import RigRecord, RigSettings
@@ -35,6 +36,7 @@ from empact.identification.realization import RealizationResult
 from empact.linear.calibration import CalibrationResult, Target
 from empact.linear.lumped import Modes
 from empact.lti import FrequencyResponse, RootLocus
+from empact.montecarlo.cycle import CycleStudy
 from empact.montecarlo.spread import Distribution, Spread
 from empact.montecarlo.study import MonteCarloResult
 from empact.nonlinear.equilibrium import TrimGrid, TrimResult
@@ -128,8 +130,23 @@ def _tune_result():
                       summary, {"ratio": 0.4, "slip": 0.9}, 2.0, 0.6, 4, 1.0, 0, True, "ok")
 
 
+def _dynamic_cycle():
+    from empact.dynamic_cycle import dynamic_cycle
+    trace = Cycle("d", np.arange(3.0), np.array([5.0, 5.5, 6.0]), ("a", "a", "b"))
+    return dynamic_cycle(default_params(), trace, strategies=("hydraulic-sf1.3", "slip"))
+
+
+def _cycle_study():
+    from empact.montecarlo.cycle import CycleStudy
+    return CycleStudy("c", False, ("vehicle.mass",), _r(2, 1), ("slip",),
+                      {"slip": _r(2)}, {"slip": _r(2)}, {"slip": np.array([False, True])}, 0)
+
+
 BUILDERS = {
     TuneResult: (_tune_result, ("history",)),
+    DynamicCycleResult: (_dynamic_cycle, ("stretches",)),
+    DynamicRun: (lambda: _dynamic_cycle().runs["slip"], ("t", "signals")),
+    CycleStudy: (_cycle_study, ("values", "fuel_g")),
     Cycle: (_cycle, ("t", "v")),
     CycleResult: (lambda: quasi_static_cycle(default_params(), _cycle(),
                                              strategies=("hydraulic-sf1.3", "slip")), ()),
@@ -224,6 +241,7 @@ NOT_RESULTS = {
     "empact.control.controller.Controller": "a controller (its file: to_dict/save)",
     "empact.control.controller.Schedule": "a controller's gain schedule",
     "empact.control.designs.ControllerType": "a registry entry (a design function by name)",
+    "empact.control.driver.Driver": "settings of the driver model (its gains and lag)",
     "empact.control.law.LoopConfig": "settings of the loop law",
     "empact.control.tune.TuneOptions": "settings of the tuner (recorded in its design record)",
     "empact.experiments.rig.RigSettings": "settings of a rig experiment",

@@ -28,8 +28,10 @@ import numpy as np
 from numba.core.registry import CPUDispatcher
 
 from . import _stiff_linear
-from .control import _law_core
+from .control import _driver_core, _law_core
 from .control.closed_loop import build_law, control_example_path, run_closed_loop
+from .cycles import Cycle
+from .dynamic_cycle import dynamic_cycle
 from .nonlinear import _batch as KB
 from .nonlinear import _kernel as K
 from .nonlinear import _tangent as KT
@@ -91,9 +93,11 @@ def drop_stale_cache(folder: Path | None = None) -> int:
     # the law's sample calls the kernel (traction peak, creep law); the compiled closed loop
     # the kernel, the integrator and the law's sample
     law_core = compiled_sources([here / "control" / "_law_core.py"])
+    driver = compiled_sources([here / "control" / "_driver_core.py"])
     loop_sources = compiled_sources([here / "control" / "_loop_core.py"])
     return (_drop_stale(here / "nonlinear" / "__pycache__", "*", nonlinear)
             + _drop_stale(here / "control" / "__pycache__", "_law_core.*", law_core)
+            + _drop_stale(here / "control" / "__pycache__", "_driver_core.*", driver)
             + _drop_stale(here / "control" / "__pycache__", "_loop_core.*", loop_sources))
 
 
@@ -265,6 +269,12 @@ def compile_all() -> float:
     _law_core.safety_torque(law.raw0[3], law.raw0[0], law._c, law._tb, law._wk)
     if law.controller.schedule is not None:
         law.controller.schedule.gains_at([1.0] * len(law.controller.schedule.axes))
+    # the car: the dynamic cycle's compiled loop with the driver
+    # (`empact.control._loop_core.run_samples_driven`) and the driver's sample alone
+    trace = Cycle("compile", np.arange(3.0), np.array([5.0, 5.5, 6.0]), ("all",) * 3)
+    dynamic_cycle(params, trace, strategies=("slip", "sf1.3"))
+    _driver_core.driver_sample(np.zeros(len(_driver_core.CONSTANTS)), np.zeros((1, 2)),
+                               np.zeros(2), np.zeros(K.NY), 0, np.zeros(2))
     return time.perf_counter() - t0
 
 

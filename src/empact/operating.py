@@ -24,7 +24,8 @@ from .errors import ParameterError
 from .variator.geometry import VariatorParams, variator_state
 from .variator.traction import TractionParams, traction_from_params
 
-__all__ = ["OPERATING_VARIABLES", "OperatingPoint", "ResolvedPoint", "check_clamping",
+__all__ = ["OPERATING_VARIABLES", "OperatingPoint", "ResolvedPoint", "CruisePoint",
+           "check_clamping",
            "check_one_slip", "curve_peak"]
 
 optimize = lazy_module("scipy.optimize")
@@ -280,6 +281,42 @@ class ResolvedPoint(OperatingPoint):
         """
         out = self.request.replace(**changes)
         return out.resolve_given()
+
+
+@dataclass(frozen=True)
+class CruisePoint(OperatingPoint):
+    """A car's steady cruise (the vehicle driveline, `empact.nonlinear.model.ModelOptions`
+    ``driveline = "vehicle"``): the ratio ``r_g``, the primary (engine) speed ``omega_p``
+    and exactly one of the slip (``nu`` or ``tau``) and the clamping force ``F_s``; the road
+    load at the speed the point drives sets the load torque ``T_l`` (the trim solves it,
+    `empact.nonlinear.equilibrium.trim`), so no ``T_l`` is given.
+
+    Attributes
+    ----------
+    r_g : geometric ratio ``R_p / R_s`` [-]
+    omega_p : primary (engine) speed [rad/s], > 0
+    nu, tau : slip [-] or torque ratio [-] (one of them, or neither with `F_s`)
+    F_s : secondary clamping force [N] (or None with a slip)
+    T_l : None (the road load's)
+
+    Examples
+    --------
+    >>> CruisePoint(r_g=2.0, omega_p=200.0, tau=0.5).given
+    ('tau',)
+    """
+
+    def __post_init__(self) -> None:
+        if self.omega_p is None:
+            raise ParameterError("cruise point: omega_p (primary speed [rad/s]) is missing")
+        Section.__post_init__(self)
+        check_one_slip(self.nu is not None, self.tau is not None, where="cruise point: ")
+        if self.T_l is not None:
+            raise ParameterError(f"cruise point: T_l = {self.T_l:g} N m given: the road load "
+                                 "sets it (give one of nu, tau, F_s besides r_g and omega_p)")
+        if len(self.given) != 1:
+            shown = ", ".join(f"{k} = {getattr(self, k):g}" for k in self.given) or "none"
+            raise ParameterError(f"cruise point: give exactly one of nu (or tau), F_s besides "
+                                 f"r_g and omega_p; given: {shown}")
 
 
 def check_one_slip(nu: bool, tau: bool, *, names: tuple[str, str] = ("nu", "tau"),

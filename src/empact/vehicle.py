@@ -49,6 +49,11 @@ class VehicleParams(Section):
         Road load coefficients [N], [N s/m], [N s^2/m^2].
     grade : float
         Road grade angle [rad].
+    k_driveline : float
+        Torsional stiffness of the driveline between the final drive and the road, at the
+        wheels [N m/rad]: both half-shafts in parallel with the tyres' compliance in series
+        (the nonlinear vehicle driveline reflects it to the secondary as ``k_driveline /
+        i_fd^2``; the quasi-static cycle does not use it).
     """
 
     _name = "vehicle"
@@ -67,6 +72,9 @@ class VehicleParams(Section):
     f2: float = param("N s^2/m^2", "road load, quadratic term", 0.0, 100.0, lo_open=False,
                       default=0.04 * 3.6 ** 2)
     grade: float = param("rad", "road grade angle", -0.5, 0.5, lo_open=False, default=0.0)
+    k_driveline: float = param("N m/rad", "driveline torsional stiffness at the wheels "
+                               "(half-shafts and tyres; the nonlinear vehicle driveline's)",
+                               100.0, 1e6, default=8000.0)
 
 
 def road_load(vehicle: VehicleParams, v: ArrayLike) -> NDArray[np.float64]:

@@ -504,6 +504,10 @@ UNITS = {
     "engine_J": "J", "fuel_g": "g", "fuel_l_per_100km": "l/100 km",
     "saving": "- (fraction of the reference's fuel)", "variator_efficiency": "-",
     "transmission_efficiency": "-", "engine_short": "- (samples)",
+    "speed_error_max_kmh": "km/h", "belt_slack": "-", "variator_loss_J": "J",
+    "quasi_static_variator_loss_J": "J", "dynamic_J": "J (every term)",
+    "quasi_static_J": "J (every term)", "v_launch_m_s": "m/s", "dynamic_duration_s": "s",
+    "rate_hz": "Hz", "stretches": "s", "n_steps": "-",
 }
 
 

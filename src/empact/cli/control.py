@@ -87,10 +87,13 @@ class LoadMode(click.Choice):
 
 def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_law: str,
                         drive: str = "speed", load: str = "torque", sweep=None,
-                        loop_outputs: bool = True, traction_table=None):
+                        loop_outputs: bool = True, traction_table=None,
+                        driveline: str = "bench", cruise: bool = False):
     """Parse the grid options (each checked under its name) and build the family (with the
     outputs the loop model needs, `empact.control.family.LOOP_FAMILY_OUTPUTS`) on the
-    analytic traction curve or the measured one (`traction_table`, ``--traction``)."""
+    analytic traction curve or the measured one (`traction_table`, ``--traction``); on the
+    car (``--driveline vehicle``: the engine and the road are torques, `drive` and `load`
+    not used; ``--cruise``: the road load sets T_l)."""
     from ..control.family import LOOP_FAMILY_OUTPUTS, plant_family
     from ..variator.geometry import check_ratio
 
@@ -118,10 +121,16 @@ def family_from_options(params, raw: dict, damping: str, kinematics: str, shift_
         raise InputError("give at most two of --slip (or --tau), --clamp, --load-torque (the "
                          "trim solves the third)")
     tables = {} if traction_table is None else {"traction": traction_table}
+    if cruise and driveline != "vehicle":
+        raise InputError("--cruise: the road load needs --driveline vehicle")
+    if cruise and ("T_l" in values or sum(k in values for k in ("nu", "tau", "F_s")) > 1):
+        raise InputError("--cruise: give at most one of --slip (or --tau), --clamp and no "
+                         "--load-torque (the road load sets it)")
+    car = ({"driveline": "vehicle", "drive": "torque", "load": "torque", "cruise": cruise}
+           if driveline == "vehicle" else {"drive": drive, "load": load})
     return plant_family(params, damping=damping, kinematics=kinematics, shift_law=shift_law,
-                        drive=drive, load=load, sweep=sweep,
-                        outputs=LOOP_FAMILY_OUTPUTS if loop_outputs else None, **tables,
-                        **values)
+                        sweep=sweep, outputs=LOOP_FAMILY_OUTPUTS if loop_outputs else None,
+                        **car, **tables, **values)
 
 
 def _summary(fam) -> dict:
@@ -131,8 +140,19 @@ def _summary(fam) -> dict:
             "failures": sorted({str(r) for r in fam.reason.ravel() if r})}
 
 
+driveline_option = click.option(
+    "--driveline", type=click.Choice(["bench", "vehicle"]), default="bench",
+    show_default=True, help="The machine on the test bench, or in the car ([engine] inertia "
+    "torque-controlled, the [vehicle] reflected with its road load; --drive and --load do not "
+    "apply: both are torques).")
+
+
 @click.command("plants")
 @grid_options
+@driveline_option
+@click.option("--cruise", is_flag=True, help="With --driveline vehicle: the car at steady "
+              "cruise on a level road, the road load sets the load torque (give one of "
+              "--slip, --tau, --clamp; default: the [operating] slip).")
 @click.option("--out", "out", type=OutputFile(("npz", "json", "mat")), default=None,
               help="Write the family (.npz, which `empact control check` reads; .json or "
                    ".mat); an existing file only with --force.")
@@ -143,12 +163,19 @@ def _summary(fam) -> dict:
 @force_option
 @quiet_option
 def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics, shift_law,
-               drive, load_mode, traction_table, out, scheduler, workers, scheduler_timeout,
-               loss_map, params_file, as_json, json_out, force, quiet) -> None:
+               drive, load_mode, traction_table, driveline, cruise, out, scheduler, workers,
+               scheduler_timeout, loss_map, params_file, as_json, json_out, force,
+               quiet) -> None:
     """Trim and exactly linearise the machine over a grid of operating points (a plant
     family: T_mp, T_ms and the load -> r_g, nu, nu_r), for control design and LPV models."""
     from ..control.family import save_family
 
+    ctx = click.get_current_context()
+    for opt, name in (("drive", "--drive"), ("load_mode", "--load")):
+        if driveline == "vehicle" and ctx.get_parameter_source(opt) is \
+                click.core.ParameterSource.COMMANDLINE:
+            raise InputError(f"{name}: not with --driveline vehicle (the engine and the road "
+                             "are torques)")
     sweep = sweep_from_options(scheduler, workers, scheduler_timeout, progress=not quiet)
     params = get_params(params_file, loss_map)
     t0 = time.perf_counter()
@@ -156,7 +183,8 @@ def plants_cmd(ratio, slip, tau, clamp, speed, load_torque, damping, kinematics,
                                        "clamp": clamp, "speed": speed,
                                        "load-torque": load_torque}, damping, kinematics,
                               shift_law, drive, load_mode, sweep,
-                              traction_table=traction_table)
+                              traction_table=traction_table, driveline=driveline,
+                              cruise=cruise)
     wall = time.perf_counter() - t0
     if out:
         save_family(fam, out)
@@ -316,6 +344,7 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
               help="Plant family (.npz from `empact plants`; default: the design family "
                    "on the parameter set).")
 @loop_option
+@driveline_option
 @click.option("--min-disk-margin", "min_dm", type=float, default=None,
               help="With --strict: the smallest multiloop disk margin allowed (default: the "
                    "controller's own design margin, its design record's alpha_min, else its "
@@ -331,8 +360,8 @@ def design_cmd(method, bandwidth, alpha_min, schedule, slip_signal, nominal, loo
 @json_options
 @force_option
 @quiet_option
-def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, traction_table,
-              loss_map, params_file, as_json, json_out, force, quiet) -> None:
+def check_cmd(controller, family_file, loop_scenario, driveline, min_dm, strict, mu,
+              traction_table, loss_map, params_file, as_json, json_out, force, quiet) -> None:
     """Closed-loop poles and disk margins of CONTROLLER (a controller file, or shipped:pi,
     shipped:hinf) on the loop that runs (sampled, with the loop's sensors and feedforwards;
     empact.control.loop) against every plant of a family."""
@@ -350,7 +379,11 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
     params = get_params(params_file, loss_map)
     loop = _loop_from(loop_scenario, params)
     tables = {} if traction_table is None else {"traction": traction_table}
-    fam = load_family(family_file) if family_file else design_family(params, **tables)
+    if family_file and driveline != "bench":
+        raise InputError("--driveline: give it with the design family, not with --family (a "
+                         "family file records its own model options)")
+    car = {"driveline": "vehicle"} if driveline == "vehicle" else {}
+    fam = load_family(family_file) if family_file else design_family(params, **tables, **car)
     for name in ctrl.measured:
         base = name[3:] if name.startswith("ln_") else name
         if base not in fam.outputs:
@@ -405,6 +438,7 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
               help="Plant family (.npz from `empact plants`; default: the design family "
                    "on the parameter set, as `control check`).")
 @loop_option
+@driveline_option
 @click.option("--out", "out", type=OutputFile(("json", "mat")), required=True,
               help="The tuned controller (.json or .mat; an existing file only with --force).")
 @click.option("--parameters", "parameters", default=None, metavar="NAME,...",
@@ -431,9 +465,9 @@ def check_cmd(controller, family_file, loop_scenario, min_dm, strict, mu, tracti
 @json_options
 @force_option
 @quiet_option
-def tune_cmd(controller, family_file, loop_scenario, out, parameters, min_dm, max_ms,
-             bw_floor, seed, maxiter, strict, traction_table, loss_map, params_file, as_json,
-             json_out, force, quiet) -> None:
+def tune_cmd(controller, family_file, loop_scenario, driveline, out, parameters, min_dm,
+             max_ms, bw_floor, seed, maxiter, strict, traction_table, loss_map, params_file,
+             as_json, json_out, force, quiet) -> None:
     """Tune CONTROLLER's PI structure (a controller file, or shipped:pi; gains, integral
     corners, roll-offs per loop, the schedule's shape kept) to maximise the worst multiloop
     disk margin over every plant of a family on the loop that runs, with an Ms penalty and a
@@ -477,7 +511,11 @@ def tune_cmd(controller, family_file, loop_scenario, out, parameters, min_dm, ma
     params = get_params(params_file, loss_map)
     loop = _loop_from(loop_scenario, params)
     tables = {} if traction_table is None else {"traction": traction_table}
-    fam = load_family(family_file) if family_file else design_family(params, **tables)
+    if family_file and driveline != "bench":
+        raise InputError("--driveline: give it with the design family, not with --family (a "
+                         "family file records its own model options)")
+    car = {"driveline": "vehicle"} if driveline == "vehicle" else {}
+    fam = load_family(family_file) if family_file else design_family(params, **tables, **car)
     for name in ctrl.measured:
         base = name[3:] if name.startswith("ln_") else name
         if base not in fam.outputs:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import click
 
+from .._validate import check_number
 from ..cycles import CYCLES, load_cycle, read_trace
 from ..drive_cycle import (
     DEFAULT_STRATEGIES,
@@ -39,19 +40,38 @@ from .linear import plot_option
 @click.option("--out", "out", default=None, type=click.Path(file_okay=False),
               help="Output folder for cycle.json and samples.csv; new or empty unless "
                    "--force.")
+@click.option("--dynamic", is_flag=True,
+              help="Also run the cycle forward on the nonlinear vehicle driveline with the "
+                   "loop law and a driver (empact.dynamic_cycle; minutes: about a minute "
+                   "per strategy on WLTC 3b), the quasi-static model below the launch "
+                   "speed and at rest.")
+@click.option("--rate", "rate", type=float, default=1000.0, show_default=True,
+              help="With --dynamic: the loop law's and the driver's rate [Hz].")
+@click.option("--output-rate", "output_rate", type=float, default=100.0, show_default=True,
+              help="With --dynamic: output samples per second [Hz] (the energies' "
+                   "quadrature).")
 @plot_option
 @loss_map_option
 @params_option
 @json_options
 @force_option
-def cycle_cmd(cycle, strategies, out, plot, loss_map, params_file, as_json, json_out,
-              force) -> None:
+def cycle_cmd(cycle, strategies, out, dynamic, rate, output_rate, plot, loss_map, params_file,
+              as_json, json_out, force) -> None:
     """A drive cycle, quasi-static (backward): the variator trimmed at every sample of the
     trace on the operating line, its losses and actuation, the engine's fuel, by strategy
-    (energies [J], fuel [g] and [l/100 km], saving against hydraulic-sf1.3)."""
+    (energies [J], fuel [g] and [l/100 km], saving against hydraulic-sf1.3); with
+    --dynamic, forward on the nonlinear car with the loop law and a driver (speed error,
+    macro slip, belt slack)."""
     from .._io import atomic_folder
 
     chosen = parse_choices("--strategies", strategies, tuple(STRATEGIES))
+    if not dynamic:
+        for name, src in (("--rate", "rate"), ("--output-rate", "output_rate")):
+            if click.get_current_context().get_parameter_source(src) is \
+                    click.core.ParameterSource.COMMANDLINE:
+                raise InputError(f"{name}: only with --dynamic")
+    check_number("--rate", rate, 100.0, 1e4, unit="Hz")
+    check_number("--output-rate", output_rate, 1.0, 1e3, unit="Hz")
     params = get_params(params_file, loss_map)
     if cycle in CYCLES:
         trace = load_cycle(cycle)
@@ -65,6 +85,9 @@ def cycle_cmd(cycle, strategies, out, plot, loss_map, params_file, as_json, json
     check_trace(params, trace)
     dest = output_folder(out, "--out", force=force) if out else None
     res = quasi_static_cycle(params, trace, strategies=chosen)
+    if dynamic:
+        _dynamic(params, trace, res, chosen, rate, output_rate, plot, dest, as_json, json_out)
+        return
     doc = res.to_dict()
     if plot:
         from ..plotting import plot_drive_cycle
@@ -101,6 +124,49 @@ def cycle_cmd(cycle, strategies, out, plot, loss_map, params_file, as_json, json
                        "samples (beyond full load or its highest speed; computed as asked)")
     if REFERENCE not in doc["strategies"]:
         click.echo(f"(no saving: {REFERENCE}, the reference, was not run)")
+
+
+def _dynamic(params, trace, qs, chosen, rate, output_rate, plot, dest, as_json,
+             json_out) -> None:
+    """``empact cycle --dynamic``: the dynamic cycle on the quasi-static one `qs`."""
+    from .._io import atomic_folder
+    from ..dynamic_cycle import dynamic_cycle
+
+    res = dynamic_cycle(params, trace, strategies=chosen, quasi_static=qs, rate=rate,
+                        output_rate=output_rate)
+    doc = res.to_dict()
+    if plot:
+        from ..plotting import plot_dynamic_cycle
+
+        plot_dynamic_cycle(res).save(plot)
+    if dest is not None:
+        with atomic_folder(dest) as tmp:
+            emit_json(doc, "cycle", str(tmp / "cycle.json"))
+            (tmp / "samples.csv").write_text(_samples_csv(qs))
+    if as_json or json_out:
+        emit_json(doc, "cycle", json_out)
+        return
+    click.echo(f"{doc['cycle']}: {doc['distance_m'] / 1e3:.3f} km in {doc['duration_s']:g} s, "
+               f"traction at the wheels {doc['wheel_energy_J'] / 1e6:.3f} MJ; dynamic "
+               f"{doc['dynamic_duration_s']:g} s at and above {3.6 * doc['v_launch_m_s']:.1f} "
+               f"km/h (law at {rate:g} Hz), the quasi-static model below")
+    head = " ".join(f"{k:>8s}" for k in TERMS + ("brakes",))
+    click.echo(f"{'strategy':16s} {head} {'fuel':>7s} {'l/100km':>7s} {'saving':>7s} "
+               f"{'dv max':>7s} {'macro':>6s} {'slack':>6s} {'var.loss dyn/qs':>16s}")
+    units = " ".join(f"{'[kJ]':>8s}" for _ in TERMS + ("brakes",))
+    click.echo(f"{'':16s} {units} {'[g]':>7s} {'':>7s} {'[%]':>7s} {'[km/h]':>7s} "
+               f"{'':>6s} {'':>6s} {'[kJ]':>16s}")
+    for s, d in doc["strategies"].items():
+        e = " ".join(f"{d['energy_J'][k] / 1e3:8.1f}" for k in TERMS + ("brakes",))
+        saving = "" if d["saving"] is None else f"{100 * d['saving']:7.2f}"
+        var = f"{d['variator_loss_J'] / 1e3:.1f}/{d['quasi_static_variator_loss_J'] / 1e3:.1f}"
+        click.echo(f"{s:16s} {e} {d['fuel_g']:7.1f} {d['fuel_l_per_100km']:7.2f} "
+                   f"{saving:>7s} {d['speed_error_max_kmh']:7.2f} {str(d['macro_slip']):>6s} "
+                   f"{str(d['belt_slack']):>6s} {var:>16s}")
+    for s, d in doc["strategies"].items():
+        if not d["complete"]:
+            bad = [m for m in d["messages"] if not m.startswith("completed")]
+            click.echo(f"{s}: a stretch stopped early: {bad[0]}")
 
 
 def _samples_csv(res) -> str:

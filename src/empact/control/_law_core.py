@@ -61,7 +61,7 @@ class LawConstants(NamedTuple):
     safety_factor: float  #: [-]
     mu_design: float  #: the safety-factor clamping's traction; NaN: the peak at the ratio
     shift_ff: bool  #: the shift feedforward
-    J_s: float  #: secondary inertia [kg m^2]
+    J_s: float  #: secondary inertia [kg m^2] (the bench's; 0 in the car, whose wheels hold it)
     alpha_ff: float  #: the feedforward filter's pole [-]
     tpf: float  #: secondary servo torque per N of clamping force [N m / N]
     ff_gain: float  #: [-]
@@ -103,6 +103,14 @@ class LawConstants(NamedTuple):
     guard_margin: float  #: the slip's share above its set-point where it acts [-]
     guard_gain: float  #: its clamping per share of slip beyond the margin [-]
     guard_decay: float  #: its release per sample, ``exp(-dt / guard_release)`` [-]
+    # the clamping floor (issue 34; `floor` False: none)
+    sf_engine: bool  #: the safety-factor clamping's torque is the engine's (raw[6], in the
+    #: car) instead of the driveshaft's
+    J_e: float  #: the car's engine and primary inertia [kg m^2]: the clamping feedforward and
+    #: the safety-factor clamping add its torque of an upshift at the reference's rate (0 on
+    #: the bench, whose drive holds the primary's speed)
+    floor: bool  #: hold the secondary servo at or beyond the torque of `min_clamping`
+    T_floor: float  #: that torque [N m] (its sign the clamping's: `tpf`'s)
 
 
 class LawTables(NamedTuple):
@@ -463,12 +471,18 @@ def pre(law, s, out, raw, k, ideal):
     if c.safety:
         e1 = 0.0  # the slip loop is replaced by the open-loop clamping strategy
         f = 0.0
-        u1 = safety_torque(T_b, r_m, c, tb, wk)
+        T_sf = m[6] if c.sf_engine else T_b  # the car: the engine's torque at the secondary
+        if c.J_e != 0.0 and rdot > 0.0:  # in the car, upshifting: the engine's inertia
+            T_sf = T_sf + c.J_e * w_p * rdot / (r_m * r_m)
+        u1 = safety_torque(T_sf, r_m, c, tb, wk)
         if wk.radius[1] != wk.radius[1]:
             return 1, e0, e1, c.bias0, u1
     elif c.feedforward:
         if c.shift_ff:  # the secondary pulley's acceleration torque
             T_b = T_b + c.J_s * w_p * rdot
+        if c.J_e != 0.0 and rdot > 0.0:  # in the car, upshifting: the engine's
+            # deceleration torque (its speed follows the ratio); never less clamping
+            T_b = T_b + c.J_e * w_p * rdot / (r_m * r_m)
         a = c.alpha_ff
         R_s = _radius(r_m, c.L_belt, c.a, wk.radius)
         if R_s != R_s:
@@ -598,11 +612,31 @@ def sample(law, z, z_next, raw, k, ideal):
             for i in range(nc):
                 z_next[n + i] = z_next[n + i] + (L[i, 0] * d0 + L[i, 1] * d1)
         u0, u1 = s0, s1
+    if c.floor and not ideal:
+        u1 = clamp_floor(c, tb, z_next, u1)
     wk.u[0] = u0
     wk.u[1] = u1
     if c.request:
         torque_request(c, tb, wk, k)
     return 0
+
+
+@njit(cache=True)
+def clamp_floor(c, tb, z_next, u1):
+    """The clamping floor (`ControllerSpec.min_clamping`): the secondary servo torque `u1`
+    [N m] held at or beyond ``T_floor`` in the clamping's sense (the sign of ``tpf``), the
+    difference fed back to the controller's state as the servo limits' (observer-form
+    anti-windup, `sample`; none where the safety-factor clamping replaces the controller's
+    torque); returns the torque."""
+    s1 = u1
+    if c.tpf * (u1 - c.T_floor) < 0.0:
+        s1 = c.T_floor
+        if c.anti_windup and not c.safety:
+            n = c.n_pre
+            L = tb.L
+            for i in range(z_next.shape[0] - n):
+                z_next[n + i] = z_next[n + i] + L[i, 1] * (s1 - u1)
+    return s1
 
 
 @njit(cache=True)

@@ -21,9 +21,10 @@ from numba import njit
 
 from ..nonlinear._kernel import _eval
 from ..nonlinear._rodas import _run
+from ._driver_core import driver_sample
 from ._law_core import sample
 
-__all__ = ["run_samples"]
+__all__ = ["run_samples", "run_samples_driven"]
 
 
 @njit(cache=True)
@@ -61,6 +62,47 @@ def run_samples(k0, k1, law, z, z_next, k_law, s, t, h, filled, n_steps, n_rej):
             tA, tC, tc, td, tH, gam, q, x, t, s.t_grid[k + 1], h, s.samples, s.p, s.ix,
             s.sig_t, s.sig_v, s.sig_n, s.brk, s.rtol, s.atol, 1e-14, s.hmax, s.omega_min,
             s.max_steps - n_steps, s.X, s.Y, s.cols, s.J, k == 0, s.Q)
+        n_steps += ns
+        n_rej += nr
+        if status != 0:
+            break
+    return status, t, h, filled, n_steps, n_rej, k, done, 0
+
+
+@njit(cache=True)
+def run_samples_driven(k0, k1, law, z, z_next, k_law, drv_c, drv_tab, drv_z, s, t, h,
+                       filled, n_steps, n_rej):
+    """`run_samples` with the car's driver (`_driver_core.driver_sample`, constants
+    `drv_c`, table `drv_tab`, state `drv_z`) commanding the engine's torque and the brakes
+    (``law.wk.u[2]``, ``law.wk.u[3]``: the law's commands are ``T_mp, T_ms, T_d, T_l``) at
+    each sample after the law's own: the same order and routines otherwise."""
+    tA, tC, tc, td, tH, gam, q = s.tableau
+    x, u, y, meas = s.x, s.u, s.y, s.meas
+    status = 0
+    k = k0
+    done = 0
+    for k in range(k0, k1):
+        for i in range(s.free_idx.shape[0]):
+            u[s.free_idx[i]] = s.U_free[k, i]
+        _eval(x, u, s.p, s.ix, s.dx, y)
+        if k == 0:
+            s.Y[0, :] = y
+        for i in range(s.out_idx.shape[0]):
+            meas[i] = y[s.out_idx[i]]
+        if sample(law, z, z_next, meas, k_law + done, False):
+            return status, t, h, filled, n_steps, n_rej, k, done, 1
+        z, z_next = z_next, z
+        done += 1
+        driver_sample(drv_c, drv_tab, drv_z, y, k_law + done - 1, law.wk.u[2:])
+        for i in range(s.cmd_idx.shape[0]):
+            cmd = law.wk.u[i]
+            s.commands[k, i] = cmd
+            u[s.cmd_idx[i]] = cmd
+            s.sig_v[s.cmd_idx[i], 0] = cmd
+        status, t, h, filled, ns, nr = _run(
+            tA, tC, tc, td, tH, gam, q, x, t, s.t_grid[k + 1], h, s.samples, s.p, s.ix,
+            s.sig_t, s.sig_v, s.sig_n, s.brk, s.rtol, s.atol, 1e-14, s.hmax, s.omega_min,
+            s.max_steps - n_steps, s.X, s.Y, s.cols, s.J, k == 0)
         n_steps += ns
         n_rej += nr
         if status != 0:

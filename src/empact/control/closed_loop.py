@@ -214,7 +214,8 @@ def build_law(scenario: Scenario, params: Params, controller: Controller | None 
     ctrl = resolve_controller(scenario.controller.file) if controller is None else controller
     if model is None or op is None:
         model, op = scenario_model(scenario, params)
-    point = {"r_g": op.r_g, "nu": op.nu, "omega_p": op.omega_p, "T_l": op.T_l, "F_s": op.F_s}
+    point = {"r_g": op.r_g, "nu": op.nu, "omega_p": op.omega_p, "T_l": op.T_l, "F_s": op.F_s,
+             "T_d": op.T_d}
     # the model the controller knows (its trim is the machine's: `op`)
     knows = model if nominal is None else nonlinear_model(nominal, scenario_options(scenario))
     cfg = LoopConfig.for_scenario(scenario, params if nominal is None else nominal)

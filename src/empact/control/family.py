@@ -50,7 +50,7 @@ from .._validate import check_choice, check_values
 from ..errors import ParameterError
 from ..export import jsonable, read_npz, write_arrays
 from ..lti import channel_zeros
-from ..nonlinear.equilibrium import trim_grid
+from ..nonlinear.equilibrium import trim_cruise, trim_grid
 from ..nonlinear.linearization import (
     BENCH_OPTIONS,
     PLANT_INPUTS,
@@ -58,6 +58,7 @@ from ..nonlinear.linearization import (
     Plant,
     disturbance_input,
     linearize_many,
+    plant_options,
 )
 from ..nonlinear.model import INPUT_UNITS, OUTPUT_UNITS, STATE_UNITS, EmpactModel, nonlinear_model
 from ..params import OperatingPoint, Params, check_one_slip
@@ -341,7 +342,8 @@ def _axis(name: str, value) -> NDArray[np.float64]:
 def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega_p=None,
                  T_l=None, base: OperatingPoint | None = None,
                  model: EmpactModel | None = None, sweep: SweepOptions | None = None,
-                 outputs: Sequence[str] | None = None, **options) -> PlantFamily:
+                 outputs: Sequence[str] | None = None, cruise: bool = False,
+                 **options) -> PlantFamily:
     """Trim and exactly linearise the machine on a grid of operating points.
 
     Parameters
@@ -360,9 +362,15 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
     outputs : sequence of str, optional
         The model outputs kept (default ``r_g, nu, nu_r``; `empact.control.loop` adds what
         the loop law measures).
+    cruise : bool
+        The car at steady cruise on a level road (the vehicle driveline,
+        `empact.nonlinear.equilibrium.trim_cruise`): the road load sets ``T_l``, so give one
+        of the slip and ``F_s`` (or let the base point's slip stand); default False: two of
+        them, the load beyond the road's held by the input ``T_l`` (a grade, the brakes).
     **options
-        `empact.nonlinear.model.ModelOptions` fields (default `BENCH_OPTIONS`, the test bench:
-        the same defaults as `empact.nonlinear.linearization.plant`).
+        `empact.nonlinear.model.ModelOptions` fields (default `BENCH_OPTIONS`, the test bench,
+        or with ``driveline = "vehicle"`` the car's: the same defaults as
+        `empact.nonlinear.linearization.plant`, `plant_options`).
 
     Returns
     -------
@@ -382,7 +390,7 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
     ('r_g', 'nu', 'nu_r')
     """
     if model is None:
-        model = nonlinear_model(params, **{**BENCH_OPTIONS, **options})
+        model = nonlinear_model(params, **plant_options(options))
     elif options:
         raise ValueError("give either model or options, not both")
     if "T_mp" not in model.inputs:
@@ -392,6 +400,8 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
     base = params.operating if base is None else base
     pair = [k for k in ("nu", "tau", "F_s", "T_l") if given[k] is not None]
     check_one_slip("nu" in pair, "tau" in pair)
+    if cruise:
+        return _cruise_family(params, model, given, pair, base, sweep, outputs)
     if len(pair) > 2:
         raise ParameterError("give at most two of nu (or tau), F_s, T_l (the trim solves the "
                              "third)")
@@ -407,6 +417,33 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
     for name in ("r_g", "omega_p") + point.given:
         v = given[name] if given[name] is not None else getattr(point, name)
         values[name] = _axis(name, v)
+    return _family(model, point.given, values, sweep, outputs)
+
+
+def _cruise_family(params: Params, model: EmpactModel, given: dict[str, Any],
+                   pair: list[str], base: OperatingPoint, sweep: SweepOptions | None,
+                   outputs: Sequence[str] | None) -> PlantFamily:
+    """`plant_family` at the car's steady cruise (``cruise``): one of the slip and ``F_s``
+    (given, else the base point's slip), the road load's ``T_l``."""
+    if not model.vehicle:
+        raise ParameterError("cruise: the road load needs the vehicle driveline "
+                             "(driveline = 'vehicle')")
+    if "T_l" in pair or len(pair) > 1:
+        raise ParameterError("cruise: give one of nu (or tau), F_s; the road load sets T_l")
+    if not pair:
+        slip = [k for k in ("nu", "tau") if getattr(base, k) is not None]
+        if not slip:
+            raise ParameterError("cruise: give nu, tau or F_s (the base point has no slip)")
+        pair = slip
+    values = {name: _axis(name, given[name] if given[name] is not None
+                          else getattr(base, name)) for name in ("r_g", "omega_p", pair[0])}
+    return _family(model, ("cruise", pair[0]), values, sweep, outputs)
+
+
+def _family(model: EmpactModel, pair: tuple[str, ...], values: dict[str, NDArray],
+            sweep: SweepOptions | None, outputs: Sequence[str] | None) -> PlantFamily:
+    """Trim and linearise the grid of `values` (the axes: arrays of more than one value)
+    with the trim's `pair` (``("cruise", name)``: `trim_cruise` given `name`)."""
     axes = {n: values[n] for n in VARIABLES if n in values and values[n].size > 1}
     fixed = {n: float(values[n][0]) for n in values if values[n].size == 1}
     shape = tuple(len(v) for v in axes.values())
@@ -415,7 +452,7 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
         raise ParameterError(f"{n_pts} grid points; at most {MAX_POINTS}")
     mesh = dict(zip(axes, np.meshgrid(*axes.values(), indexing="ij"))) if axes else {}
     flat = {n: (mesh[n].ravel() if n in mesh else np.full(n_pts, fixed[n])) for n in values}
-    tasks = [(model, point.given, {k: v[s] for k, v in flat.items()})
+    tasks = [(model, pair, {k: v[s] for k, v in flat.items()})
              for s in plan_chunks(n_pts, SECONDS_PER_POINT, sweep)]
     parts = run_chunks(_linearise_points, tasks, sweep, desc="plant family")
     res = {k: np.concatenate([part[k] for part in parts]) for k in parts[0]}
@@ -440,7 +477,7 @@ def plant_family(params: Params, *, r_g=None, nu=None, tau=None, F_s=None, omega
 
 #: the model options a family records (and a design rebuilds its model from); the tabulated
 #: laws only when given
-_FAMILY_OPTIONS = ("drive", "load", "damping", "kinematics", "shift_law")
+_FAMILY_OPTIONS = ("driveline", "drive", "load", "damping", "kinematics", "shift_law")
 _TABLE_OPTIONS = ("thrust_ratio", "creep_map", "traction", "loss_map")
 
 
@@ -485,7 +522,10 @@ def _linearise_points(task) -> dict[str, Any]:
     (per-point convergence in `trim_grid`; one compiled loop here), so chunking does not
     change a bit."""
     model, pair, flat = task
-    tg = trim_grid(model, flat["r_g"], flat["omega_p"], **{k: flat[k] for k in pair})
+    if pair[0] == "cruise":
+        tg = trim_cruise(model, flat["r_g"], flat["omega_p"], **{pair[1]: flat[pair[1]]})
+    else:
+        tg = trim_grid(model, flat["r_g"], flat["omega_p"], **{k: flat[k] for k in pair})
     N, n, ny = tg.r_g.size, model.n, len(model.outputs)
     A = np.full((N, n, n), np.nan)
     B = np.full((N, n, 4), np.nan)

@@ -30,7 +30,8 @@ At each sample ``k`` (period ``dt = 1 / rate``) the law
    "safety-factor"``, the open-loop clamping of a production CVT (the slip loop off):
    ``F_s = SF T_l cos(beta) / (2 mu_design R_s)``, ``mu_design`` the smallest traction peak
    over the ratio range (``mu_design = "ratio-blind"``) or the peak at the measured ratio
-   (``"ratio-aware"``);
+   (``"ratio-aware"``), ``T_l`` the driveshaft torque on the bench and in the car the
+   engine's torque at the secondary as its controller reports it (`CAR_SOURCE`);
 5. with ``decoupling``, makes the primary servo torque follow the feedforward's clamping:
    ``T_mp += d LP(T_ms,ff - T_ms,ff*)`` with ``d = T_mp* / T_ms*`` the ratio of the holding
    torques at the reference ratio (`empact.nonlinear.equilibrium.trim_grid`) and ``LP`` a
@@ -155,6 +156,9 @@ SHIPPED_LOOP = {"feedforward": True, "feedforward_gain": 0.9,
 
 #: what the law reads from the machine, in this order (model outputs)
 RAW_SIGNALS = ("r_g", "omega_p", "omega_s", "T_ds", "omega_mp", "omega_ms", "T_l_act")
+#: the torque source's signal (`RAW_SIGNALS`' last) in the car: the engine's torque referred
+#: to the secondary as its controller reports it (the bench's is the load motor's, T_l_act)
+CAR_SOURCE = "T_d_sec"
 #: what the driveshaft-torque observer (``feedforward_signal = "T_ds_est"``) reads after
 #: `RAW_SIGNALS`: the wheel (load) speed, which a car's wheel-speed sensors give
 OBSERVER_SIGNAL = "omega_l"
@@ -363,7 +367,12 @@ class LoopLaw:
         self._cosb = float(np.cos(v.beta))
         self._tpf = a.i_e * a.s * model.constants.sheave_sense / a.i_c  # T_ms per N of F_s
         self._r_ref0 = float(model.options.reference_ratio or point["r_g"])
-        self.point = {k: float(point[k]) for k in ("r_g", "nu", "omega_p", "T_l", "F_s")}
+        self.point = {k: float(point[k]) for k in ("r_g", "nu", "omega_p", "T_l", "F_s",
+                                                   "T_d") if k in point}
+        if model.vehicle and "T_d" not in self.point and spec.feedforward \
+                and spec.feedforward_signal != "T_ds":
+            raise ParameterError(f"feedforward_signal = {spec.feedforward_signal!r} in the car "
+                                 "reads the engine's torque: the starting point needs T_d")
         self.u0 = np.asarray(u0, float)[:2].copy()
         # references on the sample grid
         references = dict(references or {})
@@ -426,8 +435,9 @@ class LoopLaw:
         self._pack()
         if spec.clamping == "safety-factor":
             # the pre-processing's secondary servo torque at rest (the decoupler's zero)
-            self._T_ms_start = float(core.safety_torque(self._ff_torque0(), self.raw0[0],
-                                                        self._c, self._tb, self._wk))
+            self._T_ms_start = float(core.safety_torque(
+                self.raw0[6] if self.model.vehicle else self._ff_torque0(), self.raw0[0],
+                self._c, self._tb, self._wk))
             self._c = self._c._replace(T_ms_start=self._T_ms_start)
         self._law = core.law(self._c, self._tb, self._wk)
         self._at: tuple[tuple[float, ...], Any] | None = None  # `_law_at`'s last row
@@ -454,7 +464,10 @@ class LoopLaw:
             F_s0=self.point["F_s"], bias0=self._bias[0], bias1=self._bias[1],
             safety=spec.clamping == "safety-factor", safety_factor=spec.safety_factor,
             mu_design=np.nan if self._mu_design is None else self._mu_design,
-            shift_ff=spec.shift_feedforward, J_s=p.driveline.J_s, alpha_ff=self._alpha_ff,
+            shift_ff=spec.shift_feedforward,
+            J_s=0.0 if self.model.vehicle else p.driveline.J_s, J_e=self._J_e(),
+            sf_engine=self.model.vehicle,
+            alpha_ff=self._alpha_ff,
             tpf=self._tpf, ff_gain=spec.feedforward_gain, ff_den=2 * spec.traction_error,
             cosb=self._cosb, L_belt=self._L, a=self._a, alpha_dec=self._alpha_dec,
             T_ms_start=self._T_ms_start, shift_gain=-(a.i_e * a.s / a.i_w),
@@ -471,7 +484,8 @@ class LoopLaw:
             ahead=self._ahead, F_max=self._F_max,
             ahead_h0=spec.reserve_ahead_headroom, guard=self._guard,
             guard_margin=spec.slip_guard_margin, guard_gain=spec.slip_guard_gain,
-            guard_decay=float(np.exp(-self.dt / spec.slip_guard_release)))
+            guard_decay=float(np.exp(-self.dt / spec.slip_guard_release)),
+            floor=spec.min_clamping > 0.0, T_floor=self._clamping_torque(spec.min_clamping))
         # the shift feedforward's geometry at the reference ratio where it moves
         geo = [np.full(self.n_k, np.nan) for _ in range(4)]
         ks = np.flatnonzero(refs.rdot != 0.0) if spec.shift_feedforward else np.zeros(0, int)
@@ -524,7 +538,8 @@ class LoopLaw:
         the report builds one scenario's law for its run, the ideal run, the linear model
         and the feedforward's estimates: the same references each time)."""
         h = hashlib.sha256()
-        for part in (self.model.p.tobytes(), repr(self.model.options).encode(),
+        for part in (type(self).__qualname__.encode(), self.model.p.tobytes(),
+                     repr(self.model.options).encode(),
                      repr(self.model.params).encode(), repr(sorted(self.point.items())).encode(),
                      repr((self.n_k, self.dt, self.slip_signal, self.config.spec.decoupling,
                            self.config.spec.reserve_ahead,
@@ -640,7 +655,9 @@ class LoopLaw:
         """
         w_p = point["omega_p"]
         w_s = point["r_g"] * w_p * (1 - point["nu"])
-        raw = [point["r_g"], w_p, w_s, point["T_l"], 0.0, 0.0, point["T_l"]]
+        source = point["T_d"] * w_p / w_s if self.model.vehicle and "T_d" in point \
+            else point["T_l"]
+        raw = [point["r_g"], w_p, w_s, point["T_l"], 0.0, 0.0, source]
         if self._observer:
             raw.append(w_s)  # the wheel speed at rest: the output speed (no final drive)
         return np.array(raw)
@@ -665,9 +682,11 @@ class LoopLaw:
 
     @property
     def measured(self) -> tuple[str, ...]:
-        """What the simulator hands the law at each sample (`RAW_SIGNALS`, then
-        `OBSERVER_SIGNAL` for the driveshaft-torque observer)."""
-        return RAW_SIGNALS + ((OBSERVER_SIGNAL,) if self._observer else ())
+        """What the simulator hands the law at each sample (`RAW_SIGNALS`, in the car with
+        the engine's torque `CAR_SOURCE` as the torque source's, then `OBSERVER_SIGNAL` for
+        the driveshaft-torque observer)."""
+        raw = RAW_SIGNALS if not self.model.vehicle else RAW_SIGNALS[:-1] + (CAR_SOURCE,)
+        return raw + ((OBSERVER_SIGNAL,) if self._observer else ())
 
     # -- the law ---------------------------------------------------------------------------
     def _R_s(self, r_g: float) -> float:
@@ -748,6 +767,24 @@ class LoopLaw:
         the slip-runaway guard's clamping share [-] (NaN where neither runs, or not
         reached), shape (n_k, 2); shape (1, 2) of NaN without either."""
         return self._wk.setpoint.copy()
+
+    def _J_e(self) -> float:
+        """The inertia on the primary's side in the car [kg m^2]: the engine's and the
+        primary pulley's, whose deceleration in an upshift the belt carries (``(J_e + J_p)
+        omega_p dr/dt / r_g^2`` at the secondary: the ratio sets the engine's speed, the
+        wheels the secondary's), which the clamping feedforward and the safety-factor
+        clamping add at the reference's rate; 0 on the bench (the drive holds the primary's
+        speed)."""
+        if not self.model.vehicle:
+            return 0.0
+        c = self.model.constants
+        return float(c.J_d + c.J_p)
+
+    def _clamping_torque(self, F: float) -> float:
+        """The secondary servo torque [N m] that clamps `F` [N]: the holding torque's share
+        that does not scale with the clamping (at the start) plus ``tpf F`` (the clamping
+        floor's, `ControllerSpec.min_clamping`)."""
+        return float(self.u0[1] - self._tpf * self.point["F_s"] + self._tpf * F)
 
     @property
     def servo_capacity(self) -> float:

@@ -731,6 +731,10 @@ def family_loops(family: PlantFamily, controller: Controller, config: LoopConfig
         raise ParameterError("the family has points that did not trim")
     if model is None:
         model = nonlinear_model(params, **family.options)
+    if model.vehicle and config.spec.feedforward and config.spec.feedforward_signal != "T_ds":
+        raise ParameterError(f"feedforward_signal = {config.spec.feedforward_signal!r}: the "
+                             "loop's linear model of the car covers the feedforward of T_ds "
+                             "(not of the engine's torque)")
     cfg = config.ideal()
     dt = cfg.dt
     ii = [family.inputs.index(n) for n in LoopLaw.commands]

@@ -46,7 +46,6 @@ from scipy.special import ndtr, ndtri
 
 from .._validate import check_number, fmt
 from ..errors import ParameterError
-from ..operating import OperatingPoint
 from ..params import Params, read_toml
 from ..variator.geometry import check_ratio
 from ..variator.traction import traction_from_params
@@ -110,12 +109,12 @@ def apply_scenario(scenario: Any, values: Mapping[str, float], params: Params) -
                                      "other variables)")
             init[field_] = float(x)
     try:
-        initial = OperatingPoint(**init)
+        initial = type(scenario.initial)(**init)
     except ParameterError as exc:
         raise ParameterError(f"scenario.initial: {exc}") from None
     if "scenario.initial.r_g" in values:
         check_ratio(initial.r_g, params.variator, "scenario.initial.r_g")
-    if "scenario.initial.F_s" in values and not initial.F_s > 0:  # type: ignore[operator]
+    if "scenario.initial.F_s" in values and not initial.F_s > 0:
         raise ParameterError(f"scenario.initial.F_s = {fmt(initial.F_s)}: a clamping force "
                              "is > 0 [N]")
     return replace(scenario, initial=initial, load_step=load_step)

@@ -87,6 +87,13 @@ class KernelConstants(NamedTuple):
     loss_c_q: float
     loss_T_smooth: float
     loss_table: float
+    vehicle: float
+    vehicle_gear: float
+    road_f0: float
+    road_f1: float
+    road_f2: float
+    road_grade_force: float
+    eta_fd: float
     #: the traction laws' part by name (generated from their registry: the law's index
     #: ``traction_law``, the knots' ``ln_r_*``, the coefficients ``<c>_low`` ...)
     traction: dict[str, float]

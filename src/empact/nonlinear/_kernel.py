@@ -60,6 +60,14 @@ from ._constants import KernelConstants
  P_LF, P_LT, P_LV, P_LQ, P_LTS,
  P_LTAB) = range(69)
 
+#: the vehicle driveline's parameters (`ModelOptions.driveline` ``"vehicle"``; all zero on
+#: the bench): the flag, the wheel radius over the final drive ``r_w / i_fd`` [m/rad] (the
+#: car's speed per rad/s of the load shaft, which turns at the secondary's speed), the road
+#: load's ``f0`` [N], ``f1`` [N s/m], ``f2`` [N s^2/m^2] and grade force ``m g sin(grade)``
+#: [N], and the final drive's efficiency [-] (`_vehicle_load`)
+VEHICLE_PARAMETER_NAMES = ("vehicle", "vehicle_gear", "road_f0", "road_f1", "road_f2",
+                           "road_grade_force", "eta_fd")
+
 #: names of the parameter vector's entries, in the order of the ``P_*`` indices, then the
 #: traction laws' part generated from their registry (`empact.variator._laws`): the law's
 #: index ``traction_law`` (at `P_TRACTION`), the knots' log-ratios and every law's
@@ -78,11 +86,13 @@ PARAMETER_NAMES = (
     "traction_table",
     "loss_lambda_F", "loss_k_T", "loss_c_v", "loss_c_q", "loss_T_smooth",
     "loss_table",
-    ) + traction_parameter_names()
+    ) + VEHICLE_PARAMETER_NAMES + traction_parameter_names()
 NP = len(PARAMETER_NAMES)
 #: the traction law's index in ``p``; its parameters follow (`traction_parameter_names`)
 P_TRACTION = PARAMETER_NAMES.index("traction_law")
 P_LLOW, P_LMED, P_LOD = (PARAMETER_NAMES.index(f"ln_r_{k}") for k in TRACTION_KNOTS)
+P_VEH, P_VGEAR, P_VF0, P_VF1, P_VF2, P_VFG, P_VETA = (PARAMETER_NAMES.index(k)
+                                                    for k in VEHICLE_PARAMETER_NAMES)
 
 #: the kernel's parameters read back by name (`constants`; typed in `_constants`)
 assert KernelConstants._fields == PARAMETER_NAMES[:P_TRACTION] + ("traction",)
@@ -116,6 +126,14 @@ NY = len(OUTPUTS)
  Y_LSLIP, Y_LCLAMP, Y_LLOAD, Y_LDRAG, Y_PVIN, Y_PVOUT,
  Y_DSERVO, Y_DSPINDLE, Y_DMAT, Y_DSHEAVE,
  Y_LMAP) = range(NY)
+#: the vehicle driveline's outputs (zero on the bench), after the others: the car's speed
+#: [m/s], the road load [N] and its power [W], the final drive's loss [W] (`_vehicle_load`),
+#: the engine's torque referred to the secondary ``T_d omega_d / omega_s`` [N m] (as the
+#: engine's controller reports it: the car's loop law's torque source)
+VEHICLE_OUTPUTS = ("v", "F_road", "P_road", "P_loss_fd", "T_d_sec")
+OUTPUTS = OUTPUTS + VEHICLE_OUTPUTS  # type: ignore[assignment]  # (a longer tuple)
+NY = len(OUTPUTS)
+Y_V, Y_FROAD, Y_PROAD, Y_LFD, Y_TDSEC = range(NY - len(VEHICLE_OUTPUTS), NY)
 
 #: the variator's losses [W] (outputs): their sum is ``P_var_in - P_var_out`` (`_losses`);
 #: ``P_loss_map`` is a measured loss map's (zero without one, and then the analytic clamping,
@@ -484,7 +502,46 @@ def _drive_load(x, u, p, ix, dx):
         dx[ix[2]] = -p[P_LKI] * (u[3] - x[17])
     else:
         T_l = u[3]
+        if p[P_VEH] != 0.0:  # the car: the road load and the final drive's loss besides
+            T_road, T_fd, _, _ = _vehicle_load(x, p)
+            T_l = T_l + T_road + T_fd
     return T_d, T_l
+
+
+@njit(cache=True, inline="always")
+def _vehicle_load(x, p):
+    """``(T_road, T_fd, F_road, v)``: the vehicle driveline's load on the load shaft (the
+    car reflected to the secondary's speed, ``omega_l = v i_fd / r_w``): the road load
+    ``F_road = f0 sg + f1 v + f2 v^2 sg + m g sin(grade)`` [N] at the car's speed ``v =
+    (r_w / i_fd) omega_l`` as the torque ``T_road = (r_w / i_fd) F_road``, and the final
+    drive's loss ``T_fd = (1 - eta_fd) |T_ds| sg`` on the driveshaft torque ``T_ds``
+    (``sg = tanh(omega_l / coulomb_omega)``, the kernel's smooth sign; ``|T| ~ T tanh(T /
+    T_smooth)`` as the variator's load loss): so the wheels get ``eta_fd T_ds`` while the
+    engine drives them (``1 / (2 - eta_fd)`` of the power back while they drive the engine).
+    The rolling and aerodynamic terms oppose the motion, smoothly through standstill."""
+    wl = x[17]
+    v = p[P_VGEAR] * wl
+    sg = _tanh(wl / p[P_WC])
+    F_road = p[P_VF0] * sg + p[P_VF1] * v + p[P_VF2] * v * v * sg + p[P_VFG]
+    T_ds = p[P_KDS] * x[13]
+    T_fd = (1.0 - p[P_VETA]) * T_ds * _tanh(T_ds / p[P_LTS]) * sg
+    return p[P_VGEAR] * F_road, T_fd, F_road, v
+
+
+@njit(cache=True, inline="always")
+def _vehicle_outputs(x, p, y):
+    """The vehicle driveline's outputs into `y` (`VEHICLE_OUTPUTS`; zeros on the bench)."""
+    if p[P_VEH] != 0.0:
+        T_road, T_fd, F_road, v = _vehicle_load(x, p)
+        y[Y_V] = v
+        y[Y_FROAD] = F_road
+        y[Y_PROAD] = T_road * x[17]
+        y[Y_LFD] = T_fd * x[17]
+    else:
+        y[Y_V] = 0.0
+        y[Y_FROAD] = 0.0
+        y[Y_PROAD] = 0.0
+        y[Y_LFD] = 0.0
 
 
 @njit(cache=True, inline="always")
@@ -624,6 +681,8 @@ def _finish(x, u, p, ix, dx, y, belt, sp, dm, r_g, nu, mu, mu_max, tau, F_b, T_b
     _outputs(x, p, ix, y, sp, dm, e, edot, P_slip, lam, rdot, dr5, r_g, nu, F_p, F_s, tau, kap,
              keq, T_b, mu, mu_max, R_p, R_s, phi, T_mp, u[1], T_d, T_l, T_ds)
     _loss_outputs(x, y, -T_on_p, T_b, T_lp, T_ls, T_clamp, T_load, T_dp, T_dss, T_map)
+    _vehicle_outputs(x, p, y)
+    y[Y_TDSEC] = T_d * x[14] / x[16] if p[P_VEH] != 0.0 else 0.0 * T_d
     return F_s, T_b, T_mp, G, err, T_d, T_l
 
 
@@ -772,9 +831,14 @@ def stop_status(y, p, omega_min):
 VARYING_BASE_COLUMNS = (4, 5, 8, 9, 10, 11, 15, 16)
 
 
-def varying_columns(ix: np.ndarray) -> np.ndarray:
-    """The columns of df/dx that change during a run of a model with optional states `ix`:
-    `VARYING_BASE_COLUMNS` and, with the locked belt, its stretch (its force acts at the
+def varying_columns(ix: np.ndarray, p: np.ndarray | None = None) -> np.ndarray:
+    """The columns of df/dx that change during a run of a model with optional states `ix`
+    (and parameter vector `p`): `VARYING_BASE_COLUMNS`, with the vehicle driveline the
+    driveshaft twist and the load speed (the final drive's loss and the road load are
+    nonlinear in them), and, with the locked belt, its stretch (its force acts at the
     current radius).  `tests/test_nonlinear.py` checks every other column is constant."""
-    cols = list(VARYING_BASE_COLUMNS) + ([int(ix[0])] if ix[0] >= 0 else [])
+    cols = list(VARYING_BASE_COLUMNS)
+    if p is not None and p[P_VEH] != 0.0:
+        cols = sorted(cols + [13, 17])
+    cols += [int(ix[0])] if ix[0] >= 0 else []
     return np.array(cols, dtype=np.int64)

@@ -72,6 +72,12 @@ from ._kernel import (
     P_TB,
     P_TCSP,
     P_TCSS,
+    P_VEH,
+    P_VETA,
+    P_VF0,
+    P_VF1,
+    P_VF2,
+    P_VGEAR,
     P_W0,
     P_WC,
     P_XSAT,
@@ -84,12 +90,14 @@ from ._kernel import (
     Y_FCR,
     Y_FP,
     Y_FPA,
+    Y_FROAD,
     Y_FS,
     Y_FSA,
     Y_KAP,
     Y_KEQ,
     Y_LCLAMP,
     Y_LDRAG,
+    Y_LFD,
     Y_LLOAD,
     Y_LMAP,
     Y_LSLIP,
@@ -101,6 +109,7 @@ from ._kernel import (
     Y_PDISS,
     Y_PHI,
     Y_PIN,
+    Y_PROAD,
     Y_PVIN,
     Y_PVOUT,
     Y_RDOT,
@@ -111,11 +120,13 @@ from ._kernel import (
     Y_TB,
     Y_TD,
     Y_TDS,
+    Y_TDSEC,
     Y_THMP,
     Y_THMS,
     Y_TL,
     Y_TMP,
     Y_TMS,
+    Y_V,
     Y_WD,
     Y_WL,
     Y_WMP,
@@ -131,6 +142,7 @@ from ._kernel import (
     _springs,
     _tanh,
     _torque_ratio,
+    _vehicle_load,
     creep_coefficient_d,
     log_kappa_eq_d,
     mu_max_d,
@@ -256,6 +268,23 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
         _, lm_b, lm_lr, lm_w, lm_F, lm_sg = table_loss_d(T_pb, lr, wp, F_s, sg_p, p,
                                                          int(p[P_LTAB]))
     c0g = -s * i_e / (i_w * tb)
+    # the vehicle driveline's load (`_kernel._vehicle_load`) and its slopes in omega_l and
+    # the driveshaft torque (zeros on the bench)
+    vehicle = p[P_VEH] != 0.0
+    T_road = T_fd = F_road = v_car = 0.0
+    road_w = F_w = fd_T = fd_w = 0.0
+    if vehicle:
+        T_road, T_fd, F_road, v_car = _vehicle_load(x, p)
+        gear = p[P_VGEAR]
+        sg_l = _tanh(wl / wc)
+        sgl_w = (1.0 - sg_l * sg_l) / wc
+        F_w = (p[P_VF0] * sgl_w + p[P_VF1] * gear
+               + p[P_VF2] * (2.0 * v_car * gear * sg_l + v_car * v_car * sgl_w))
+        road_w = gear * F_w
+        T_ds0 = p[P_KDS] * tw_ds
+        th_fd = _tanh(T_ds0 / lts)
+        fd_T = (1.0 - p[P_VETA]) * (th_fd + T_ds0 * (1.0 - th_fd * th_fd) / lts) * sg_l
+        fd_w = (1.0 - p[P_VETA]) * T_ds0 * th_fd * sgl_w
     cmp_ = p[P_CMP]
     cms = p[P_CMS]
     csp = p[P_CSP]
@@ -420,6 +449,8 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
             Fd[ix[2], k] = -p[P_LKI] * (u3_t - wl_t)
         else:
             T_l_t = u3_t
+            if vehicle:
+                T_l_t = T_l_t + (road_w + fd_w) * wl_t + fd_T * p[P_KDS] * tw_ds_t
 
         Fd[0, k] = w1_t
         Fd[1, k] = w2_t
@@ -534,6 +565,12 @@ def _eval_tangent(x, u, p, ix, Sx, Su, dx, y, Fd, Yd):
         Yd[Y_TMS, k] = T_ms_t
         Yd[Y_TDS, k] = T_ds_t
         Yd[Y_MUMAX, k] = mu_max_t
+        Yd[Y_TDSEC, k] = ((T_d_t * wd + T_d * wd_t - y[Y_TDSEC] * ws_t) / ws if vehicle
+                          else 0.0)
+        Yd[Y_V, k] = p[P_VGEAR] * wl_t if vehicle else 0.0
+        Yd[Y_FROAD, k] = F_w * wl_t
+        Yd[Y_PROAD, k] = road_w * wl_t * wl + T_road * wl_t
+        Yd[Y_LFD, k] = (fd_w * wl_t + fd_T * p[P_KDS] * tw_ds_t) * wl + T_fd * wl_t
 
 
 @njit(cache=True)

@@ -130,6 +130,14 @@ class ControllerSpec:
         [-], in (0, 20].
     slip_guard_release : float
         [s], in (0, 60].
+    min_clamping : float
+        The lowest clamping force the secondary servo is commanded to [N] (0: none): its
+        torque held at or beyond the torque that clamps it (the holding torque's share that
+        does not scale with the clamping, at the start, plus the servo torque per newton
+        times it), a limit of the anti-windup like the servo's torque limit.  A car's slip
+        loop needs it where the belt carries almost no torque (coasting: no slip to control,
+        the loop would open the belt) and the safety-factor clamping where the torque
+        crosses zero (issue 34; the quasi-static cycle's 3 kN, `empact.drive_cycle`).
     anti_windup : bool
     sensors, limits : bool
         The parameter set's (and the scenario's) sensors and servo limits; False: ideal.
@@ -161,6 +169,7 @@ class ControllerSpec:
     slip_guard_margin: float = 0.3
     slip_guard_gain: float = 2.0
     slip_guard_release: float = 1.0
+    min_clamping: float = 0.0
     anti_windup: bool = True
     sensors: bool = True
     limits: bool = True
@@ -205,6 +214,8 @@ class ControllerSpec:
         if self.slip_guard and not self.feedforward:
             raise ParameterError("controller.slip_guard = true: needs the clamping "
                                  "feedforward (controller.feedforward = true)")
+        object.__setattr__(self, "min_clamping", check_number(
+            "controller.min_clamping", self.min_clamping, 0.0, 1e5, lo_open=False, unit="N"))
         if self.torque_request != "off" and not self.limits:
             raise ParameterError(f"controller.torque_request = {self.torque_request!r}: needs "
                                  "the servo limits (controller.limits = true)")

@@ -27,13 +27,16 @@ from numpy.typing import ArrayLike, NDArray
 from .._deprecate import warn_renamed
 from .._results import Result
 from ..errors import ParameterError, TrimError
+from ..operating import CruisePoint
 from ..params import OperatingPoint, ResolvedPoint, check_clamping, check_one_slip
 from ..variator import _laws
 from ..variator.geometry import check_ratio, radii, ratio_range, stretched_radii
+from ..vehicle import road_load
 from . import _batch as KB
 from .model import EmpactModel
 
-__all__ = ["TrimError", "TrimResult", "TrimGrid", "trim", "trim_grid", "traction_peak",
+__all__ = ["TrimError", "TrimResult", "TrimGrid", "trim", "trim_grid", "trim_cruise",
+           "traction_peak",
            "smallest_slip_reserve", "slip_at_torque_ratio", "RESIDUAL_TOL"]
 
 RESIDUAL_TOL = 1e-8
@@ -285,7 +288,13 @@ def trim(model: EmpactModel, op: OperatingPoint | float, omega_p: float | None =
     >>> bool(op.residual < 1e-8), round(op.T_b, 6)
     (True, 50.0)
     """
-    if not isinstance(op, OperatingPoint):
+    if isinstance(op, CruisePoint):
+        if omega_p is not None or nu is not None or F_s is not None or T_l is not None:
+            raise ParameterError("trim: give a CruisePoint alone")
+        if not model.vehicle:
+            raise ParameterError("trim: a CruisePoint needs the vehicle driveline (model "
+                                 "option driveline = 'vehicle'): the road load sets T_l")
+    elif not isinstance(op, OperatingPoint):
         warn_renamed("trim(model, r_g, omega_p, nu=, F_s=, T_l=)", "trim(model, op) with an "
                      "OperatingPoint")
         if omega_p is None:
@@ -303,7 +312,11 @@ def trim(model: EmpactModel, op: OperatingPoint | float, omega_p: float | None =
         check_clamping("F_s", op.F_s)
     request = "trim request (" + ", ".join(f"{k} = {v:g}" for k, v in op.to_dict().items()) \
         + ")"
-    grid = trim_grid(model, op.r_g, op.omega_p, nu=op.nu, F_s=op.F_s, T_l=op.T_l, tau=op.tau)
+    if isinstance(op, CruisePoint):
+        grid = trim_cruise(model, op.r_g, op.omega_p, nu=op.nu, F_s=op.F_s, tau=op.tau)
+    else:
+        grid = trim_grid(model, op.r_g, op.omega_p, nu=op.nu, F_s=op.F_s, T_l=op.T_l,
+                         tau=op.tau)
     if not grid.ok[0]:
         raise TrimError(f"{request}: {grid.reason[0]}")
     assert grid.y is not None and grid.residual is not None  # trim_grid fills both
@@ -558,6 +571,10 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
               + y[:, model.output_index("P_loss_map")]) / w
         T_d = np.where(good, r * Tb + lp + _drag(c, w), r * Tb)
         _driveline(model, x, u, T_d, Tl, w, omega_s)
+        if model.vehicle:  # the load torque beyond the road load and the final drive's
+            # loss (which the kernel adds, `_kernel._vehicle_load`): T_l_act = T_l
+            _, y[g] = model.evaluate_many(x[g], u[g])
+            u[g, 3] -= y[g, model.output_index("T_l_act")] - u[g, 3]
         dx, y[g] = model.evaluate_many(x[g], u[g])
         residual[g] = _residual(model, dx, y[g], F_p_act[g], u[g])
     for k in np.flatnonzero(good & ~(residual < RESIDUAL_TOL)):
@@ -569,6 +586,62 @@ def trim_grid(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None, T_l=None,
     tau_out = y[:, model.output_index("tau")]
     return TrimGrid(model=model, x=x, u=u, r_g=r, omega_p=w, nu=nu_, F_s=Fs, T_l=Tl, ok=good,
                     reason=tuple(reason.tolist()), residual=residual, tau=tau_out, y=y)
+
+
+def trim_cruise(model: EmpactModel, r_g, omega_p, *, nu=None, F_s=None,
+                tau=None) -> TrimGrid:
+    """The car's steady cruise at many points (the vehicle driveline; 1-D arrays,
+    broadcast): `trim_grid` at the load torque the road load and the final drive's loss ask
+    at the speed the point drives, no brake (the input ``T_l``, the load torque beyond them,
+    zero to rounding: below 1e-12 of the load torque).
+
+    The load torque ``T_l`` solves ``T_l = T_road(omega_s) + T_fd(T_l, omega_s)`` (the
+    kernel's `_kernel._vehicle_load`, read from the model's outputs, so the law is written
+    once) with the secondary speed ``omega_s = (1 - nu) r_g omega_p`` of the trim at that
+    load: a fixed point that contracts by the final drive's loss slope (``1 - eta_fd``) and
+    the slip's change with the load, iterated to 1e-13 of the load torque.
+
+    Parameters
+    ----------
+    model : EmpactModel
+        A model of the vehicle driveline (``driveline = "vehicle"``).
+    r_g, omega_p : array_like, shape (N,)
+        Ratios [-] and primary (engine) speeds [rad/s].
+    nu, F_s, tau : array_like, shape (N,), optional
+        Exactly one: the slip [-], the clamping force [N] or the torque ratio [-].
+
+    Returns
+    -------
+    TrimGrid
+        As `trim_grid`'s, ``T_l`` the road's load torque [N m].
+
+    Raises
+    ------
+    TrimError
+        For a bench model, or not exactly one of `nu` (or `tau`) and `F_s`.
+    """
+    if not model.vehicle:
+        raise TrimError("trim_cruise: the road load needs the vehicle driveline (model "
+                        "option driveline = 'vehicle')")
+    check_one_slip(nu is not None, tau is not None, where="trim_cruise: ", error=TrimError)
+    if (nu is not None or tau is not None) == (F_s is not None):
+        raise TrimError("trim_cruise: give exactly one of nu (or tau), F_s (the road load "
+                        "sets T_l)")
+    one = {k: v for k, v in (("nu", nu), ("tau", tau), ("F_s", F_s)) if v is not None}
+    arrays = [np.atleast_1d(np.asarray(v, float)) for v in (r_g, omega_p, *one.values())]
+    r, w, *rest = np.broadcast_arrays(*arrays)
+    one = dict(zip(one, rest))
+    c = model.constants
+    v0 = c.vehicle_gear * r * w  # the start: the road load without slip, through eta_fd
+    T = c.vehicle_gear * road_load(model.params.vehicle, v0) / c.eta_fd
+    g = trim_grid(model, r, w, T_l=T, **one)
+    for _ in range(60):
+        brake = np.where(g.ok, g.u[:, 3], 0.0)
+        T = T - brake  # the road's torque at this state: T_l less the brake that held it
+        g = trim_grid(model, r, w, T_l=T, **one)
+        if np.all(~g.ok | (np.abs(g.u[:, 3]) <= 1e-13 * (np.abs(T) + 1.0))):
+            break
+    return g
 
 
 def _servo_statics(model: EmpactModel, F_p_act, F_s_act, q5, q6):
@@ -597,8 +670,8 @@ def _drag(c, omega):
 def _driveline(model: EmpactModel, x, u, T_d, T_l, w, omega_s) -> None:
     """Set the driveline's twists, torques and speed-loop integrals of the points `x`, `u` (in
     place) to the drive torque `T_d` and the load torque `T_l` [N m] at the speeds `w`,
-    `omega_s` [rad/s]."""
-    d, si = model.params.driveline, model.state_index
+    `omega_s` [rad/s] (the kernel's driveline: the bench's or the car's)."""
+    d, si = model.constants, model.state_index
     x[:, si("twist_tc")] = T_d / d.k_tc
     x[:, si("twist_ds")] = T_l / d.k_ds
     u[:, 2], u[:, 3] = T_d, T_l
@@ -614,7 +687,8 @@ def _assemble(model: EmpactModel, r, w, nu, Tl, R_p, R_s, phi, e, tau_of):
     kernel computes), the driveline turns at the slip's speeds with its twists carrying the
     belt torque `Tl` (without the variator's losses: `trim_grid` then sets the driveline's
     torques, `_driveline`).  Returns ``(x, u, F_p_act)``."""
-    v, d, c = model.params.variator, model.params.driveline, model.constants
+    v, c = model.params.variator, model.constants
+    d = c  # the kernel's driveline (the bench's or the car's)
     tb = c.tan_beta
     N_b = c.k_belt * e
     F_p = N_b * (np.pi + 2 * phi) / tb
@@ -639,7 +713,7 @@ def _assemble(model: EmpactModel, r, w, nu, Tl, R_p, R_s, phi, e, tau_of):
     u = np.column_stack([T_mp, T_ms, T_d, Tl])
     states = model.states
     if "s_b" in states:
-        x[:, si("s_b")] = Tl / (R_s * d.k_belt)
+        x[:, si("s_b")] = Tl / (R_s * c.k_belt_driveline)
     if "z_d" in states:
         x[:, si("z_d")], u[:, 2] = T_d, w
     if "z_l" in states:
@@ -652,7 +726,7 @@ def _assemble(model: EmpactModel, r, w, nu, Tl, R_p, R_s, phi, e, tau_of):
 def _residual(model: EmpactModel, dx, y, F_p_act, u) -> NDArray[np.float64]:
     """Largest ``|dx_i/dt|`` of each point normalised by the size of the forces on each body
     (positions and twist rates: absolute, they are exactly zero at a trim)."""
-    a, d = model.params.actuation, model.params.driveline
+    a, d = model.params.actuation, model.constants
     F = np.abs(F_p_act) + np.abs(y[:, model.output_index("F_s")]) + 1.0
     torque_act = a.s * F
     torque_dl = np.abs(y[:, model.output_index("T_d_act")]) + np.abs(u[:, 3]) + 1.0

@@ -31,9 +31,11 @@ from ..lti import index, statespace
 from ..params import OperatingPoint, Params
 from .equilibrium import TrimResult, trim
 from .model import EmpactModel, nonlinear_model
+from .options import VEHICLE_OPTIONS
 
 __all__ = ["linearize", "linearized_plant", "linearize_many", "plant", "Plant",
-           "PLANT_INPUTS", "PLANT_OUTPUTS", "BENCH_OPTIONS", "disturbance_input"]
+           "PLANT_INPUTS", "PLANT_OUTPUTS", "BENCH_OPTIONS", "disturbance_input",
+           "plant_options"]
 
 #: the plant's control inputs (servo torques) and outputs (ratio and the two slip signals:
 #: eq. 2 on the current radii, and at the operating ratio)
@@ -43,6 +45,25 @@ PLANT_OUTPUTS = ("r_g", "nu", "nu_r")
 #: model options of a plant by default: the test bench of the paper's Secs. 3 and 4
 #: (speed-controlled drive motor, torque-controlled load motor)
 BENCH_OPTIONS: dict[str, Any] = {"drive": "speed", "load": "torque"}
+
+
+def plant_options(options: dict[str, Any]) -> dict[str, Any]:
+    """The model options of a plant: `options` over the test bench's (`BENCH_OPTIONS`), or
+    over the car's (`empact.nonlinear.options.VEHICLE_OPTIONS`: the engine and the road as
+    torques) when they name ``driveline = "vehicle"``.
+
+    Parameters
+    ----------
+    options : dict
+        `empact.nonlinear.model.ModelOptions` fields given.
+
+    Returns
+    -------
+    dict
+        The fields the plant's model is built with.
+    """
+    base = VEHICLE_OPTIONS if options.get("driveline") == "vehicle" else BENCH_OPTIONS
+    return {**base, **options}
 
 
 def disturbance_input(model: EmpactModel) -> str:
@@ -290,7 +311,7 @@ def plant(params: Params, op: OperatingPoint | None = None, *,
     (('T_mp', 'T_ms', 'T_l'), ('r_g', 'nu', 'nu_r'))
     """
     if model is None:
-        model = nonlinear_model(params, **{**BENCH_OPTIONS, **options})
+        model = nonlinear_model(params, **plant_options(options))
     elif options:
         raise ValueError("give either model or options, not both")
     if "T_mp" not in model.inputs:

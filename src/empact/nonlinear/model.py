@@ -86,6 +86,13 @@ Construction choices (documented, not hidden):
   the primary at the input torque it carries, in place of those three.  The outputs
   ``P_loss_slip``, ``P_loss_clamp``, ``P_loss_load``, ``P_loss_drag``, ``P_loss_map``
   (`VARIATOR_LOSSES`) sum to ``P_var_in - P_var_out``, the powers at the variator's shafts.
+* **Driveline** (`ModelOptions.driveline`).  The test bench of the diagram above, or the car
+  (``"vehicle"``): the drive is the engine's inertia (``[engine] J_e``, torque ``T_d``), the
+  load the car reflected to the secondary's speed (``m (1 + e_rot) r_w^2 / i_fd^2``, the
+  driveshaft ``[vehicle] k_driveline / i_fd^2``) with the road load and the final drive's
+  loss as a load torque of the state (`empact.nonlinear._kernel._vehicle_load`), ``T_l`` the
+  brakes' torque beyond it; outputs ``v``, ``F_road``, ``P_road``, ``P_loss_fd`` (zero on the
+  bench).
 * **Energy.** ``E`` is the stored (kinetic and elastic) energy, ``P_in`` the power of the
   servos, the drive and the load, ``P_diss`` the dissipated power, the sum of
   `DISSIPATION_TERMS` (the variator's losses, ``P_creep``, ``P_diss_servo``,
@@ -136,6 +143,7 @@ from ..variator.traction import (
     traction_from_params,
     traction_parameters,
 )
+from ..vehicle import G
 from . import _batch as KB
 from . import _kernel as K
 from . import _tangent as KT
@@ -166,7 +174,8 @@ OUTPUT_UNITS = {"r_g": "-", "nu": "-", "nu_r": "-", "theta_mp": "rad", "theta_ms
                 "R_s": "m", "phi": "rad", "x_p": "m", "x_s": "m", "belt_elongation": "m",
                 "T_mp_act": "N m", "T_d_act": "N m", "T_l_act": "N m", "E": "J", "P_in": "W",
                 "P_diss": "W", "P_creep": "W", "T_ms_act": "N m", "T_ds": "N m", "mu_max": "-",
-                **{name: "W" for name in K.OUTPUTS[K.Y_LSLIP:]}}
+                **{name: "W" for name in K.OUTPUTS[K.Y_LSLIP:]}, "v": "m/s", "F_road": "N",
+                "T_d_sec": "N m"}
 #: what each output is (`empact.nonlinear.model` docs, JSON exports)
 OUTPUT_DESCRIPTIONS = {
     "nu": "slip of eq. 2 on the current radii, 1 - omega_s / (r_g omega_p)",
@@ -192,7 +201,14 @@ OUTPUT_DESCRIPTIONS = {
     "P_diss_servo": "viscous friction of the servos (part of P_diss)",
     "P_diss_spindle": "viscous and Coulomb friction of the spindles (part of P_diss)",
     "P_diss_material": "proportional (material) damping of the springs and the belt (part "
-    "of P_diss)", "P_diss_sheave": "Shafai's sheave damping (part of P_diss)"}
+    "of P_diss)", "P_diss_sheave": "Shafai's sheave damping (part of P_diss)",
+    "v": "the car's speed (vehicle driveline; 0 on the bench)",
+    "F_road": "the road load f0 + f1 v + f2 v^2 + m g sin(grade) (vehicle driveline)",
+    "P_road": "the road load's power F_road v (vehicle driveline; part of the load's work)",
+    "P_loss_fd": "the final drive's loss (1 - eta_fd) |T_ds| omega_l (vehicle driveline; "
+                 "part of the load's work)",
+    "T_d_sec": "the engine's torque referred to the secondary, T_d omega_d / omega_s "
+               "(vehicle driveline: as the engine's controller reports it)"}
 INPUT_UNITS = {"T_mp": "N m", "r_g_ref": "-", "T_ms": "N m", "T_d": "N m",
                "omega_d_ref": "rad/s", "T_l": "N m", "omega_l_ref": "rad/s"}
 
@@ -276,6 +292,12 @@ class EmpactModel:
         """The compiled kernel's parameters by name (a named tuple: ``k_belt``, ``tan_beta``,
         ``sheave_sense``, ``R_s0``, ...; `empact.nonlinear._kernel.PARAMETER_NAMES`)."""
         return K.constants(self.p)
+
+    @property
+    def vehicle(self) -> bool:
+        """True on the car's driveline (`ModelOptions.driveline` ``"vehicle"``): the engine
+        drives, the road loads (`empact.nonlinear._kernel._vehicle_load`)."""
+        return self.options.driveline == "vehicle"
 
     @property
     def creep(self) -> bool:
@@ -633,6 +655,7 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
         loss_lambda_F=params.losses.lambda_F, loss_k_T=params.losses.k_T,
         loss_c_v=params.losses.c_v, loss_c_q=params.losses.c_q,
         loss_T_smooth=params.losses.T_smooth)
+    values.update(_vehicle_values(params, o))
     for loop, J, f in (("drive", d.J_d, o.drive_bandwidth_hz),
                        ("load", d.J_l, o.load_bandwidth_hz)):
         w = 2 * np.pi * f
@@ -644,6 +667,23 @@ def _parameter_vector(params: Params, o: ModelOptions) -> NDArray[np.float64]:
     else:  # PI on the creep law's ratio rate per N m: crossover w (servo damping kept)
         values.update(ratio_kp=w, ratio_kd=2 * 0.7 * w * J, ratio_ki=w * w / 4)
     return K.pack_parameters(values, thrust_table, creep_table, traction_table, loss_table)
+
+
+def _vehicle_values(params: Params, o: ModelOptions) -> dict[str, float]:
+    """The kernel's driveline values of the car (`ModelOptions.driveline` ``"vehicle"``):
+    the engine's inertia as the drive's, the car reflected to the load shaft (which turns at
+    the secondary's speed: ``omega_l = v i_fd / r_w``) as the load's inertia ``m (1 + e_rot)
+    r_w^2 / i_fd^2`` and the driveline's stiffness ``k_driveline / i_fd^2``, and the road
+    load's and final drive's values (`empact.nonlinear._kernel.VEHICLE_PARAMETER_NAMES`);
+    on the bench the flag and those values are zero (the bench's inertias stand)."""
+    if o.driveline != "vehicle":
+        return dict.fromkeys(K.VEHICLE_PARAMETER_NAMES, 0.0)
+    veh = params.vehicle
+    gear = veh.r_wheel / veh.i_fd
+    return dict(J_d=params.engine.J_e, J_l=veh.mass * (1 + veh.e_rot) * gear ** 2,
+                k_ds=veh.k_driveline / veh.i_fd ** 2, vehicle=1.0, vehicle_gear=gear,
+                road_f0=veh.f0, road_f1=veh.f1, road_f2=veh.f2,
+                road_grade_force=veh.mass * G * np.sin(veh.grade), eta_fd=veh.eta_fd)
 
 
 def _index(names: tuple[str, ...], name: str, what: str) -> int:

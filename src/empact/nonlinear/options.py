@@ -23,10 +23,12 @@ from ..variator.traction import (
     load_traction,
 )
 
-__all__ = ["KINEMATICS", "ModelOptions"]
+__all__ = ["KINEMATICS", "DRIVELINES", "ModelOptions", "VEHICLE_OPTIONS"]
 
 #: sheave kinematics: the machine, and the paper's Sec. 2.1 rows as published
 KINEMATICS = ("equal-translation", "paper-sec2.1")
+#: the machine's surroundings: the test bench or the car (`ModelOptions.driveline`)
+DRIVELINES = ("bench", "vehicle")
 
 
 @dataclass(frozen=True)
@@ -40,6 +42,16 @@ class ModelOptions:
     belt : {"traction", "locked"}
         Traction with slip (eqs. 1-2), or the belt as the elastic chain element of the
         driveline model (no slip; the linear model's limit).
+    driveline : {"bench", "vehicle"}
+        The machine's surroundings: the paper's test bench (``"bench"``: a drive motor and a
+        load motor, ``[driveline]``), or the car (``"vehicle"``: the engine's inertia
+        ``[engine] J_e`` as the drive, torque-controlled (input ``T_d``, the engine's brake
+        torque); the vehicle reflected to the secondary's speed as the load: inertia ``m (1 +
+        e_rot) r_w^2 / i_fd^2``, the driveline's stiffness ``[vehicle] k_driveline / i_fd^2``,
+        the road load and the final drive's loss as a load torque that depends on the state
+        (`empact.nonlinear._kernel._vehicle_load`), and the input ``T_l`` the load torque
+        beyond them (the friction brakes); needs ``drive = load = "torque"``).  The locked
+        torque converter and the pulleys are the bench's (``[driveline] J_p, J_s, k_tc``).
     drive, load : {"torque", "speed"}
         Drive / load motor torque-controlled (input ``T_d`` / ``T_l``) or speed-controlled by a
         PI loop (input ``omega_d_ref`` / ``omega_l_ref`` [rad/s]).
@@ -101,6 +113,7 @@ class ModelOptions:
 
     damping: Literal["none", "moderate", "large"] = "moderate"
     belt: Literal["traction", "locked"] = "traction"
+    driveline: Literal["bench", "vehicle"] = "bench"
     drive: Literal["torque", "speed"] = "torque"
     load: Literal["torque", "speed"] = "torque"
     ratio_control: bool = False
@@ -155,6 +168,11 @@ class ModelOptions:
         check_choice("belt", self.belt, ("traction", "locked"))
         check_choice("drive", self.drive, ("torque", "speed"))
         check_choice("load", self.load, ("torque", "speed"))
+        check_choice("driveline", self.driveline, DRIVELINES)
+        if self.driveline == "vehicle" and (self.drive, self.load) != ("torque", "torque"):
+            raise ParameterError(f"driveline = 'vehicle' with drive = {self.drive!r}, load = "
+                                 f"{self.load!r}: the car's engine and road are torques "
+                                 "(drive = 'torque', load = 'torque')")
         check_bool("ratio_control", self.ratio_control)
         for name, unit in (("coulomb_sp", "N m"), ("coulomb_ss", "N m")):
             object.__setattr__(self, name, check_number(name, getattr(self, name), 0.0,
@@ -191,6 +209,9 @@ class ModelOptions:
             values["loss_map"] = load_loss_map(values["loss_map"])
         return cls(**values)
 
+
+#: the options of the car (`ModelOptions.driveline`): the engine and the road as torques
+VEHICLE_OPTIONS = {"driveline": "vehicle", "drive": "torque", "load": "torque"}
 
 #: option names kept for one release (a DeprecationWarning names the new one)
 _DEPRECATED_OPTIONS = ("drive_bandwidth", "load_bandwidth", "ratio_bandwidth")

@@ -18,7 +18,8 @@ and, optionally, a controller and its references::
     ratio_control = true
 
     [initial]                 # an OperatingPoint: r_g, omega_p and two of nu (or tau), F_s, T_l
-    r_g = 0.43
+    r_g = 0.43                # (with driveline = "vehicle", T_l = "road" and one of nu (or
+                              # tau), F_s: the car's steady cruise, empact.operating.CruisePoint)
     omega_p = 300.0
     F_s = 15000.0
     T_l = 30.0
@@ -113,7 +114,7 @@ from .._deprecate import REMOVAL, warn_renamed
 from .._validate import check_choice, check_int, check_number, check_values
 from ..errors import ParameterError
 from ..hardware import SensorParams, ServoLimits
-from ..operating import curve_peak
+from ..operating import CruisePoint, curve_peak
 from ..params import OPERATING_VARIABLES, OperatingPoint, Params, check_clamping, read_toml
 from ..variator.geometry import check_ratio
 from ..variator.traction import traction_from_params
@@ -377,13 +378,20 @@ def model_options(table: Mapping[str, Any], src: str,
         raise ParameterError(f"{src}: [model] {exc}") from None
 
 
-def _initial(table: Mapping[str, Any], src: str) -> OperatingPoint:
+def _initial(table: Mapping[str, Any], src: str, options: ModelOptions) -> OperatingPoint:
+    """The ``[initial]`` point: an `OperatingPoint`, or with ``T_l = "road"`` (the vehicle
+    driveline only) the car's steady cruise (`CruisePoint`: the road load sets T_l)."""
     for key in ("r_g", "omega_p"):
         if key not in table:
             raise ParameterError(f"{src}: missing initial.{key}")
-    values = {k: check_number(f"initial.{k}", v, where=src) for k, v in table.items()}
+    cruise = table.get("T_l") == "road"
+    if cruise and options.driveline != "vehicle":
+        raise ParameterError(f"{src}: initial.T_l = 'road' needs [model] driveline = "
+                             "'vehicle' (the bench has no road load)")
+    values = {k: check_number(f"initial.{k}", v, where=src) for k, v in table.items()
+              if not (cruise and k == "T_l")}
     try:
-        return OperatingPoint(**values)
+        return CruisePoint(**values) if cruise else OperatingPoint(**values)
     except ParameterError as exc:
         raise ParameterError(f"{src}: [initial] {exc}") from None
 
@@ -492,7 +500,7 @@ def scenario_from_dict(data: Mapping[str, Any], src: str = "scenario",
     rate = check_number("scenario.sample_rate", head.get("sample_rate", 1000.0), 0.0, 1e6,
                         lo_open=True, unit="Hz", where=src)
     options = model_options(data.get("model", {}), src)
-    initial = _initial(data.get("initial", {}), src)
+    initial = _initial(data.get("initial", {}), src, options)
     model_inputs = input_names(options)
     controller = _controller(data["controller"], src) if "controller" in data else None
     driven = ("T_mp", "T_ms", "F_s_ref") if controller else ()

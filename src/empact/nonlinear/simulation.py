@@ -462,7 +462,7 @@ class Stepper:
         self.n_rejected = 0
         self.message = ""
         self._rel, self._atol = state_tolerances(model, rtol)
-        self._cols = K.varying_columns(model.ix)
+        self._cols = K.varying_columns(model.ix, model.p)
         self.J = np.zeros((model.n, model.n))
         self._full = True
         self._sig_t = np.zeros((4, 2))
@@ -652,7 +652,7 @@ def simulate(model: EmpactModel, x0: NDArray, signals: Mapping[str, NDArray],
     y = np.empty(len(model.outputs))
     dx = np.empty(model.n)
     rel, atol = state_tolerances(model, rtol)
-    cols = K.varying_columns(model.ix)
+    cols = K.varying_columns(model.ix, model.p)
     J = np.empty((model.n, model.n))
     Q = np.zeros(len(K.ENERGY_RATES))  # the energy rates' integrals (`energy_balance`)
     t, h = 0.0, min(1e-5, max_step)

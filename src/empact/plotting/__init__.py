@@ -48,6 +48,7 @@ _CATALOGUE = {
     "plot_shift_envelope": "control",
     "plot_traction_reserve": "variator", "plot_ratio_stability": "variator",
     "plot_efficiency_map": "efficiency", "plot_drive_cycle": "drive_cycle",
+    "plot_dynamic_cycle": "drive_cycle",
 }
 
 __all__ = list(_CATALOGUE)

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ..drive_cycle import MIN_CLAMPING, TERMS
-from ..plotting import plot_drive_cycle
+from ..plotting import plot_drive_cycle, plot_dynamic_cycle
 from ..reproduction import drive_cycle as rep
 from .context import Context
 
@@ -54,4 +54,41 @@ def drive_cycle(ctx: Context, res: rep.DriveCycleSection) -> str:
         + ctx.table("drive_cycle_pump", ["line pressure [bar]", "SAE 04CVT-49 [kW]",
                                          "computed [kW]"], res.pump_rows,
                     "The hydraulic reference's pump at 2000 rpm against SAE 04CVT-49")
+        + _dynamic(ctx, res)
         + ctx.claims(res.claims))
+
+
+def _dynamic(ctx: Context, res: rep.DriveCycleSection) -> str:
+    """The dynamic run's text, figure and table, and the car's shifts."""
+    dyn = res.dynamic
+    if dyn is None:
+        return ""
+    d = dyn.to_dict()
+    return (
+        "<p>Dynamic (forward, <code>empact cycle --dynamic</code>): the nonlinear vehicle "
+        f"driveline with the loop law and a driver at {dyn.rate_hz:g} Hz, compiled into one "
+        "sample loop; the driver a PI on the car's speed with the trace's acceleration and "
+        "road load fed forward, the engine at most at full load through a 0.1 s lag, the "
+        "brakes where the demand is negative; the references (the quasi-static operating "
+        "line's ratio, the slip set-point) prepared from the trace in advance. Launch and "
+        f"standstill: {d['launch_model']} ({d['dynamic_duration_s']:.0f} of "
+        f"{d['duration_s']:g} s dynamic). The reference and the slip strategy run "
+        f"({', '.join(dyn.strategies)}: the saving's two ends; each about a minute of CPU "
+        "on a quiet machine, the section's cost).</p>"
+        + ctx.figure(plot_dynamic_cycle(dyn), "drive_cycle_dynamic",
+                     "WLTC 3b, dynamic: the trace and the car's speed, ratio, slip, clamping "
+                     "force and cumulative losses (grey: the dynamic stretches)")
+        + ctx.table("drive_cycle_dynamic",
+                    ["strategy", *(f"{k} [kJ]" for k in TERMS + ("brakes",)), "fuel [g]",
+                     "fuel [l/100 km]", "saving [%]", "saving, quasi-static [%]",
+                     "speed error max [km/h]", "macro slip", "belt slack",
+                     "variator losses, dynamic [kJ]", "quasi-static [kJ]",
+                     "difference [%]"], res.dynamic_rows,
+                    "WLTC 3b, dynamic: energy by term, fuel, savings, the run's checks, "
+                    "and the variator's losses over the dynamic stretches beside the "
+                    "quasi-static cycle's")
+        + ctx.table("drive_cycle_shifts",
+                    ["scenario", "ratio rate [1/s]", "ratio", "peak slip [%]",
+                     "macro slip", "peak T_mp / T_ms [N m]"], res.shift_rows,
+                    "The car's shifts (the shipped vehicle-* examples: steady cruise, then "
+                    "the shift; the bench's shift-low-od is in the control section)"))

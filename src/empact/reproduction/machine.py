@@ -229,10 +229,12 @@ def _efficiency(params: Params) -> tuple[list[list[float]], list[list[float]]]:
 
 
 def _set_points(params: Params) -> list[tuple[str, OperatingPoint]]:
-    """The operating points the package ships: each closed-loop scenario's start and the
-    [operating] point at r_g = 0.5, 1, 2."""
-    points = [(name, load_scenario(control_example_path(name)).initial)
-              for name in control_examples()]
+    """The operating points the package ships: each closed-loop scenario's start on the test
+    bench (the car's, ``vehicle-*``, are the drive-cycle section's) and the [operating] point
+    at r_g = 0.5, 1, 2."""
+    scenarios = {name: load_scenario(control_example_path(name)) for name in control_examples()}
+    points = [(name, sc.initial) for name, sc in scenarios.items()
+              if sc.options.driveline == "bench"]
     points += [(f"[operating] at r_g = {r:g}", params.operating.replace(r_g=r))
                for r in (0.5, 1.0, 2.0)]
     return points
