@@ -102,7 +102,7 @@ def run_samples_driven(k0, k1, law, z, z_next, k_law, drv_c, drv_tab, drv_z, s, 
         status, t, h, filled, ns, nr = _run(
             tA, tC, tc, td, tH, gam, q, x, t, s.t_grid[k + 1], h, s.samples, s.p, s.ix,
             s.sig_t, s.sig_v, s.sig_n, s.brk, s.rtol, s.atol, 1e-14, s.hmax, s.omega_min,
-            s.max_steps - n_steps, s.X, s.Y, s.cols, s.J, k == 0)
+            s.max_steps - n_steps, s.X, s.Y, s.cols, s.J, k == 0, s.Q)
         n_steps += ns
         n_rej += nr
         if status != 0:
