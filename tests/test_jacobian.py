@@ -285,10 +285,11 @@ def test_the_cache_depends_on_the_compiled_modules_and_what_they_import():
               for p in compiled_sources([root / "nonlinear" / "_rodas.py"])}
     assert {"nonlinear/_rodas.py", "nonlinear/_rosenbrock.py", "nonlinear/_kernel.py",
             "nonlinear/_tangent.py", "nonlinear/_constants.py", "variator/_laws.py",
-            "variator/_compiled.py", "variator/_traction_table.py"} <= kernel
+            "variator/_compiled.py", "variator/_traction_table.py",
+            "variator/_loss_table.py"} <= kernel
     assert not kernel & {"nonlinear/equilibrium.py", "nonlinear/simulation.py",
                          "nonlinear/model.py", "nonlinear/__init__.py", "variator/__init__.py"}
     loop = {p.relative_to(root).as_posix()
             for p in compiled_sources([root / "control" / "_loop_core.py"])}
-    assert kernel | {"control/_law_core.py", "control/_loop_core.py",
+    assert kernel | {"control/_law_core.py", "control/_loop_core.py", "control/_driver_core.py",
                      "nonlinear/_batch.py"} == loop

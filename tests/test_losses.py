@@ -37,11 +37,15 @@ def test_variator_losses_constant():
                                "P_loss_map")
     assert K.VARIATOR_LOSSES is VARIATOR_LOSSES
     # appended: the other outputs keep their places; the loss parameters follow the
-    # traction table's offset, and the traction laws' registry part comes last
+    # traction table's offset, then the vehicle driveline's (issue 34), and the traction
+    # laws' registry part comes last; the vehicle's outputs after the losses'
     assert K.OUTPUTS[:38][-1] == "mu_max" and K.PARAMETER_NAMES[K.P_MTAB] == "traction_table"
     assert K.PARAMETER_NAMES[K.P_MTAB + 1:K.P_TRACTION] == (
-        "loss_lambda_F", "loss_k_T", "loss_c_v", "loss_c_q", "loss_T_smooth", "loss_table")
-    assert K.PARAMETER_NAMES[K.P_LTAB] == "loss_table" and K.OUTPUTS[-1] == "P_loss_map"
+        "loss_lambda_F", "loss_k_T", "loss_c_v", "loss_c_q", "loss_T_smooth", "loss_table"
+    ) + K.VEHICLE_PARAMETER_NAMES
+    assert K.PARAMETER_NAMES[K.P_LTAB] == "loss_table"
+    assert K.OUTPUTS[K.Y_LMAP] == "P_loss_map"
+    assert K.OUTPUTS[-len(K.VEHICLE_OUTPUTS):] == K.VEHICLE_OUTPUTS
     assert K.PARAMETER_NAMES[K.P_TRACTION] == "traction_law"
     for name in VARIATOR_LOSSES + ("P_var_in", "P_var_out"):
         assert name in K.OUTPUTS
