@@ -273,8 +273,9 @@ def compile_all() -> float:
     # (`empact.control._loop_core.run_samples_driven`) and the driver's sample alone
     trace = Cycle("compile", np.arange(3.0), np.array([5.0, 5.5, 6.0]), ("all",) * 3)
     dynamic_cycle(params, trace, strategies=("slip", "sf1.3"))
-    _driver_core.driver_sample(np.zeros(len(_driver_core.CONSTANTS)), np.zeros((1, 2)),
-                               np.zeros(2), np.zeros(K.NY), 0, np.zeros(2))
+    # (at a ratio of 1 and unit constants: its arithmetic divides by both)
+    _driver_core.driver_sample(np.ones(len(_driver_core.CONSTANTS)), np.zeros((1, 2)),
+                               np.zeros(2), np.ones(K.NY), 0, np.zeros(2))
     return time.perf_counter() - t0
 
 
