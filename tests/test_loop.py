@@ -764,3 +764,49 @@ def test_unique_rows_is_numpys_unique_of_the_rows():
         np.testing.assert_array_equal(got, want)
         np.testing.assert_array_equal(got_inv, want_inv.ravel())
         np.testing.assert_array_equal(got[got_inv], np.column_stack([a, b]))
+
+
+@pytest.mark.parametrize("signal", ["T_e_est", "T_ds_est"])
+def test_linear_prediction_covers_the_torque_estimates(params, signal):
+    """Issue 33 item 4 on the loop model: the clamping feedforward on the engine-torque
+    estimate (its delay line) or on the driveshaft-torque observer (its state and the wheel
+    speed it reads) is linearised with the rest of the law, so the linear prediction of a
+    load step of 0.5 % of the torque capacity agrees with the nonlinear run (ideal sensors):
+    the slip's and the clamping force's excursions within 3 % of the nonlinear excursion at
+    r_g = 0.5, 1, 2 (measured at most 1.3 %; at a 2 % step 5.4 % for the estimate, whose 20
+    ms delay makes a slip spike six times the measured torque's: the error falls with the
+    step's size, so it is the machine's curvature, not a missing path)."""
+    for r in ("0.5", "1", "2"):
+        sc = load_scenario(control_example_path(f"slip-small-step-r{r}"))
+        sc = replace(sc, load_step=0.005,
+                     controller=replace(sc.controller, feedforward_signal=signal))
+        res = run_closed_loop(sc, params, ideal=True).result
+        pred = predict_scenario(sc, params)
+        for name in ("nu", "F_s"):
+            yn = res.output(name) - res.output(name)[0]
+            yl = np.interp(res.t, pred.t, pred.output(name)) - pred.output(name)[0]
+            assert np.abs(yn - yl).max() <= 0.03 * np.abs(yn).max(), (r, name)
+
+
+def test_family_loops_of_the_car_read_the_engine_torque(params):
+    """The car's family loop with the engine-torque estimate (the dynamic cycle's slip loop)
+    reads the engine's torque at the secondary (`CAR_SOURCE`) where the bench reads the load
+    motor's, at the family's own trim (`_engine_torques`: the engine torque that balances
+    each point, which drives: positive); the loop is stable at both points (the design
+    family's check, 105 points: every one stable, worst disk margin 0.658)."""
+    from empact.control import loop as L
+    from empact.control.family import LOOP_FAMILY_OUTPUTS, plant_family
+    from empact.control.law import CAR_SOURCE
+    from empact.nonlinear.model import nonlinear_model
+
+    spec = dict(SHIPPED_LOOP, feedforward_signal="T_e_est")
+    spec.pop("feedforward_gain_table", None)
+    cfg = LoopConfig.of(params, **spec)
+    car = nonlinear_model(params, driveline="vehicle")
+    assert L._measured(car, cfg)[6] == CAR_SOURCE
+    fam = plant_family(params, r_g=[0.6, 1.6], tau=[0.9], F_s=[10000.0],
+                       outputs=LOOP_FAMILY_OUTPUTS, driveline="vehicle")
+    T_d = L._engine_torques(fam, car)
+    assert np.all(T_d > 0)
+    lm = L.family_loops(fam, shipped_controller("pi"), cfg, params)
+    assert lm.spectral_radius().max() < 1

@@ -41,6 +41,11 @@ KNOWN_DEVIATIONS = {
     # issue 34, the dynamic WLTC 3b: the safety-factor clamping (of the engine's torque)
     # macro-slips briefly at tip-out upshifts, where its speed error is 2.19 km/h
     "cycle.dynamic_speed", "cycle.dynamic_macro_slip",
+    # issue 33 item 4: the PI designed and tuned on the measured driveshaft torque's loop,
+    # on the estimates' loops over the design family: the engine-torque estimate's stable at
+    # every plant with a worst disk margin of 0.31 (light-load overdrive, 3 kN), the
+    # observer's unstable at 3 plants (overdrive, 8 kN, where the feedforward gain steps up)
+    "control.pi.estimate_family",
 }
 
 
@@ -177,3 +182,18 @@ def test_fair_saving_claim(claims):
     open_10 = [x for k, x in v.items() if "@-0.1@open loop" in k]
     assert len(slip) == 9 and not any(slip)
     assert len(open_10) == 3 and all(open_10)
+
+
+def test_estimate_family_claim_records_both_loops(claims):
+    """Issue 33 item 4: `control.pi.estimate_family` checks the shipped PI on the loop with
+    the feedforward on the engine-torque estimate and on the driveshaft-torque observer
+    over the 105-point design family (the loop model covers both since this round);
+    measured: the estimate's 105 stable, worst disk margin 0.307, the observer's 102 (its
+    worst margin 0); the claim is not shown while either is short of the design's 0.5."""
+    c = next(c for c in claims if c["key"] == "control.pi.estimate_family")
+    v = c["values"]
+    for sig in ("T_e_est", "T_ds_est"):
+        assert v[f"{sig}.points"] == 105
+    ok = all(v[f"{s}.stable"] == 105 and v[f"{s}.disk_margin"] >= 0.5
+             for s in ("T_e_est", "T_ds_est"))
+    assert c["shown"] == ok

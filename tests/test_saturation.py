@@ -53,8 +53,8 @@ def test_the_engine_torque_estimate_is_late_and_off(params):
     exactly 20 samples later, by ``(1 - alpha) (ff(T_0 + 1.15 dT) - ff(T_0))`` with ``T_0``
     the estimate at rest (the feedforward's law: the gain table schedules on the whole
     estimated torque, so the step is not ``ff(1.15 dT)``; to 1e-9 relative, rounding), and
-    not before.  The linear loop model refuses it (it covers
-    the sensors' feedforward only)."""
+    not before.  The linear loop model covers it: the delay line's first entry takes the
+    torque source's signal (1 to 1e-9) and the feedforward's filter does not (0)."""
     sc = _scenario(feedforward_signal="T_e_est", sensors={"engine_torque_error": 0.15})
     law = build_law(sc, params, ideal=True)
     assert law.measured == RAW_SIGNALS and law.n_pre == 7 * law._n_buf + 2 + 21
@@ -78,8 +78,10 @@ def test_the_engine_torque_estimate_is_late_and_off(params):
     want = (1 - law._alpha_ff) * (law._ff_force(T0 + 1.15 * dT, r, mu)
                                   - law._ff_force(T0, r, mu))
     np.testing.assert_allclose(s[nb] - s0[nb], want, rtol=1e-9, atol=0)
-    with pytest.raises(ParameterError, match="engine-torque estimate"):
-        linear_preprocess(law)
+    lp = linear_preprocess(law)
+    j = RAW_SIGNALS.index("T_l_act")
+    assert lp["Sy"][nb + 2, j] == pytest.approx(1.0, rel=1e-9)
+    assert lp["Sy"][nb, j] == 0.0
 
 
 def test_the_driveshaft_torque_observer_integrates_the_twist_rate(params):

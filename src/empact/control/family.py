@@ -94,10 +94,11 @@ ISSUE21_GRID: dict[str, Any] = {"r_g": np.geomspace(0.5, 2.0, 7),
                                 "F_s": np.array([8e3, 16e3, 32e3])}
 
 #: the outputs a family needs for the loop model (`empact.control.loop.family_loops`): the
-#: plant's, what the loop law measures (`empact.control.law.RAW_SIGNALS`) and what the loop
-#: model predicts (`empact.control.loop.PERFORMANCE`)
+#: plant's, what the loop law measures (`empact.control.law.RAW_SIGNALS`; the observer's
+#: wheel speed and the car's engine torque at the secondary besides) and what the loop model
+#: predicts (`empact.control.loop.PERFORMANCE`)
 LOOP_FAMILY_OUTPUTS = ("r_g", "nu", "nu_r", "omega_p", "omega_s", "T_ds", "omega_mp",
-                       "omega_ms", "T_l_act", "F_s", "tau")
+                       "omega_ms", "T_l_act", "F_s", "tau", "omega_l", "T_d_sec")
 
 
 @dataclass(frozen=True, eq=False)

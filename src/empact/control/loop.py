@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from .._lazy import lazy_module
 from .._results import Result, TableResult
 from ..errors import ParameterError
+from ..nonlinear.equilibrium import trim_grid
 from ..nonlinear.linearization import linearized_plant
 from ..nonlinear.model import EmpactModel, nonlinear_model
 from ..nonlinear.scenario import Scenario
@@ -36,7 +37,7 @@ from ..params import Params
 from .closed_loop import build_law
 from .controller import Controller
 from .family import LOOP_FAMILY_OUTPUTS, PlantFamily, plant_family
-from .law import RAW_SIGNALS, LoopConfig, LoopLaw, reference_table
+from .law import CAR_SOURCE, OBSERVER_SIGNAL, RAW_SIGNALS, LoopConfig, LoopLaw, reference_table
 from .robustness import disk_margin
 
 linalg = lazy_module("scipy.linalg")
@@ -54,6 +55,25 @@ PERFORMANCE = ("r_g", "nu", "nu_r", "F_s", "T_ds", "tau")
 
 #: central-difference steps of the pre-processing's linearisation, per raw signal (SI)
 _H_RAW = np.array([1e-6, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4])
+#: the same by signal name (`LoopLaw.measured`: the car's torque source and the observer's
+#: wheel speed besides `RAW_SIGNALS`)
+_H_SIGNAL = {**dict(zip(RAW_SIGNALS, _H_RAW)), CAR_SOURCE: 1e-4, OBSERVER_SIGNAL: 1e-4}
+
+
+def _state_steps(law: LoopLaw) -> NDArray[np.float64]:
+    """The central-difference steps of the pre-processing's state (SI), in its layout
+    (`empact.control._law_core.pre`): the raw signals' buffers (signal-major, ``n_buf``
+    each), the clamping feedforward's filter [N] and the decoupler's [N m], the torque
+    estimate's delay line [N m] (``n_est``), the observer's torque [N m], the slip-runaway
+    guard's share [-]."""
+    c = law._c
+    n_sig = len(RAW_SIGNALS)
+    n_tail = law.n_pre - 2 - n_sig * c.n_buf
+    n_est, n_obs = int(c.n_est), int(bool(c.obs))
+    n_guard = n_tail - n_est - n_obs
+    assert n_guard in (0, 1), (n_tail, n_est, n_obs)
+    return np.concatenate([np.repeat(_H_RAW, c.n_buf), [1e-3, 1e-6], np.full(n_est, 1e-4),
+                           np.full(n_obs, 1e-4), np.full(n_guard, 1e-6)])
 _H_REF = np.array([1e-6, 1e-8, 1e-7, 1e-6])
 
 
@@ -91,8 +111,10 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
     """The law's pre-processing (`LoopLaw.preprocess`, ideal sensors) linearised at its
     starting point by central differences: ``s' = Sz s + Sy y + Sr r``, ``e = Ez s + Ey y +
     Er r``, ``u_ff = Fz s + Fy y + Fr r`` in deviations of the state ``s``, the raw
-    measurements ``y`` (`RAW_SIGNALS`) and the references ``r`` (``r_g, slip, mu,
-    dr_g/dt``).
+    measurements ``y`` (`LoopLaw.measured`: `RAW_SIGNALS`, in the car with the engine's
+    torque as the torque source's, then the observer's wheel speed) and the references
+    ``r`` (``r_g, slip, mu, dr_g/dt``).  Every feedforward signal is covered: the measured
+    driveshaft torque, the torque source's estimate through its delay line, the observer.
 
     Parameters
     ----------
@@ -103,23 +125,18 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
     Returns
     -------
     dict str -> ndarray
-        ``Sz``, ``Sy``, ``Sr`` shapes (n_pre, n_pre), (n_pre, 7), (n_pre, 4); ``Ez``,
-        ``Ey``, ``Er`` and ``Fz``, ``Fy``, ``Fr`` shapes (2, n_pre), (2, 7), (2, 4): the
+        ``Sz``, ``Sy``, ``Sr`` shapes (n_pre, n_pre), (n_pre, n_y), (n_pre, 4); ``Ez``,
+        ``Ey``, ``Er`` and ``Fz``, ``Fy``, ``Fr`` shapes (2, n_pre), (2, n_y), (2, 4)
+        (``n_y = len(law.measured)``): the
         next pre-processing state, the controller's two errors (ratio, slip) and the two
         feedforward servo torques ``(T_mp, T_ms)`` [N m] per unit deviation (SI units of
         each signal); ``n_pre`` is ``law.n_pre``.
     """
-    if law.config.spec.feedforward and law.config.spec.feedforward_signal in ("T_e_est",
-                                                                              "T_ds_est"):
-        raise ParameterError(f"feedforward_signal = {law.config.spec.feedforward_signal!r}: "
-                             "the loop's linear model covers the feedforward of T_ds or "
-                             "T_l_act (not the engine-torque estimate's delay)")
     s0 = law.z0[:law.n_pre]
     y0 = law.raw0
     r0 = np.array([law.refs.r_g[0], law.refs.slip[0], law.refs.mu[0], 0.0])
-    n_buf = (law.n_pre - 2) // len(RAW_SIGNALS)
-    n_more = law.n_pre - 2 - n_buf * len(RAW_SIGNALS)  # the slip-runaway guard's state
-    h_s = np.concatenate([np.repeat(_H_RAW, n_buf), [1e-3, 1e-6], np.full(n_more, 1e-6)])
+    h_s = _state_steps(law)
+    h_y = np.array([_H_SIGNAL[n] for n in law.measured])
 
     def f(s, y, r):
         s1, e, u, _ = law.preprocess(s, y, 0, r, ideal=True)
@@ -127,7 +144,7 @@ def linear_preprocess(law: LoopLaw) -> dict[str, NDArray[np.float64]]:
 
     out: dict[str, NDArray[np.float64]] = {}
     eps = np.finfo(float).eps
-    for which, x0, h in (("z", s0, h_s), ("y", y0, _H_RAW), ("r", r0, _H_REF)):
+    for which, x0, h in (("z", s0, h_s), ("y", y0, h_y), ("r", r0, _H_REF)):
         vals: list[tuple[list, list]] = [([], []) for _ in range(3)]  # S, E, F: +h, -h
         for i in range(len(x0)):
             xp, xm = x0.copy(), x0.copy()
@@ -632,11 +649,11 @@ def loop_model(scenario: Scenario, params: Params,
     ideal = LoopLaw(law.controller, model, law.point, law.u0, law.config.ideal(),
                     scenario.references, scenario.duration)
     dist = tuple(n for n in model.inputs if n not in LoopLaw.commands)
-    outs = RAW_SIGNALS + PERFORMANCE
+    outs = ideal.measured + PERFORMANCE
     pl = linearized_plant(op, LoopLaw.commands + dist, outs)  # (no python-control object)
     A, B, C, D = (np.asarray(M) for M in (pl.A, pl.B, pl.C, pl.D))
     Phi, Gam = zoh(A, B, ideal.dt)
-    nr = len(RAW_SIGNALS)
+    nr = len(ideal.measured)
     _check_no_feedthrough(D[:nr, :2])
     mats = _assemble(Phi, Gam[:, :2], Gam[:, 2:], C[:nr], D[:nr, 2:], C[nr:], D[nr:, :2],
                      D[nr:, 2:], linear_preprocess(ideal))
@@ -690,6 +707,26 @@ def predict_scenario(scenario: Scenario, params: Params,
                           signals={n: y[:, i] for i, n in enumerate(lm.outputs)})
 
 
+def _measured(model: EmpactModel, config: LoopConfig) -> tuple[str, ...]:
+    """The signals the law of `config` reads on `model` (`LoopLaw.measured`)."""
+    spec = config.spec
+    raw = RAW_SIGNALS if not model.vehicle else RAW_SIGNALS[:-1] + (CAR_SOURCE,)
+    observer = spec.feedforward and spec.feedforward_signal == "T_ds_est"
+    return raw + ((OBSERVER_SIGNAL,) if observer else ())
+
+
+def _engine_torques(family: PlantFamily, model: EmpactModel) -> NDArray[np.float64]:
+    """The engine's torque [N m] at every point of a car's family (shape ``family.shape``):
+    the family's own trim (`trim_grid` at its slips and clamping forces) again, whose input
+    ``T_d`` the law's torque source reads at rest (a family records the operating variables,
+    not the inputs)."""
+    op = family.operating
+    g = trim_grid(model, op["r_g"].ravel(), op["omega_p"].ravel(), nu=op["nu"].ravel(),
+                  F_s=op["F_s"].ravel())
+    T_d = np.where(g.ok, g.u[:, model.input_index("T_d")], np.nan)
+    return T_d.reshape(family.shape)
+
+
 def family_loops(family: PlantFamily, controller: Controller, config: LoopConfig,
                  params: Params, model: EmpactModel | None = None) -> LoopModel:
     """The loop model at every point of `family` (which must hold the `RAW_SIGNALS` and
@@ -722,25 +759,22 @@ def family_loops(family: PlantFamily, controller: Controller, config: LoopConfig
         When the family lacks outputs the loop needs, has points that did not trim, or the
         measurements depend directly on the servo torques.
     """
-    missing = [n for n in RAW_SIGNALS + PERFORMANCE if n not in family.outputs]
+    if model is None:
+        model = nonlinear_model(params, **family.options)
+    signals = _measured(model, config)
+    missing = [n for n in signals + PERFORMANCE if n not in family.outputs]
     if missing:
         raise ParameterError(f"the family lacks the outputs {', '.join(missing)} the loop "
                              "needs: build it with plant_family(..., outputs="
                              "LOOP_FAMILY_OUTPUTS)")
     if not np.all(family.ok):
         raise ParameterError("the family has points that did not trim")
-    if model is None:
-        model = nonlinear_model(params, **family.options)
-    if model.vehicle and config.spec.feedforward and config.spec.feedforward_signal != "T_ds":
-        raise ParameterError(f"feedforward_signal = {config.spec.feedforward_signal!r}: the "
-                             "loop's linear model of the car covers the feedforward of T_ds "
-                             "(not of the engine's torque)")
     cfg = config.ideal()
     dt = cfg.dt
     ii = [family.inputs.index(n) for n in LoopLaw.commands]
     dist = tuple(n for n in family.inputs if n not in LoopLaw.commands)
     jj = [family.inputs.index(n) for n in dist]
-    ro = [family.outputs.index(n) for n in RAW_SIGNALS]
+    ro = [family.outputs.index(n) for n in signals]
     po = [family.outputs.index(n) for n in PERFORMANCE]
     Phi, Gam = zoh(family.A, family.B[..., ii + jj], dt)
     shape = family.shape
@@ -749,9 +783,12 @@ def family_loops(family: PlantFamily, controller: Controller, config: LoopConfig
     pre: dict[str, NDArray] = {}
     ctrl = None
     mask = None
+    T_d = _engine_torques(family, model) if model.vehicle else None
     for idx in np.ndindex(*shape):
         point = {k: float(family.operating[k][idx]) for k in ("r_g", "nu", "omega_p", "T_l",
                                                             "F_s")}
+        if T_d is not None:
+            point["T_d"] = float(T_d[idx])
         law = LoopLaw(controller, model, point, np.zeros(2), cfg)
         p = linear_preprocess(law)
         for k, v in p.items():

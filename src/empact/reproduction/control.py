@@ -340,6 +340,12 @@ def control(params: Params) -> ControlSection:
                               LoopConfig.for_scenario(shift, params).limits)
     claims = _claims(family, loops, runs, targets, predictions, envelope)
     claims.insert(2, _hinf_targets_claim(runs, targets, hinf_targets))
+    # the PI's loop without a torque sensor (issue 33 item 4): the feedforward on each
+    # estimate, the rest of the shipped loop unchanged
+    estimate_loops = {sig: family_loops(family, ctrls["pi"], LoopConfig.of(
+        params, **{**SHIPPED_LOOP, "feedforward_signal": sig}), params, model)
+        for sig in ESTIMATE_SIGNALS}
+    claims.insert(3, _estimate_family_claim(family, estimate_loops))
     return ControlSection(family, ctrls, loop, loops, runs, targets, predictions, envelope,
                           tuple(claims), estimate_targets(params, scenarios, targets),
                           hinf_targets, norms)
@@ -744,6 +750,41 @@ def _hinf_targets_claim(runs, targets, hinf_targets) -> Claim:
         shown=not lost, explanation="The H-infinity controller misses a target the PI meets: "
                                     "see the values.",
         values={f"{n}.{c.name}": c.value for n, cs in hinf_targets.items() for c in cs})
+
+
+def _worst_loop(family, lm) -> dict[str, Any]:
+    """A family's loop at a glance: stable points, worst multiloop disk margin and where,
+    largest |z|."""
+    rho = lm.spectral_radius()
+    alpha = lm.disk_margins()["alpha"]
+    idx = np.unravel_index(int(np.argmin(alpha)), alpha.shape)
+    return {"stable": int((rho < 1).sum()), "points": int(rho.size),
+            "disk_margin": float(alpha.min()), "spectral_radius": float(rho.max()),
+            "at": ", ".join(f"{n} = {v[i]:.3g}" for (n, v), i in zip(family.axes.items(),
+                                                                     idx))}
+
+
+def _estimate_family_claim(family, estimate_loops) -> Claim:
+    """``control.pi.estimate_family``: the shipped PI on the loop without a torque sensor
+    (the clamping feedforward on the engine-torque estimate, or the driveshaft-torque
+    observer) stabilises every plant of the design family with its design margin."""
+    need = float(SHIPPED_DESIGNS["pi"]["alpha_min"])
+    w = {sig: _worst_loop(family, lm) for sig, lm in estimate_loops.items()}
+    return Claim(
+        key="control.pi.estimate_family", source=SRC,
+        claim="without a driveshaft-torque sensor (the clamping feedforward on the "
+              "engine-torque estimate, or on the driveshaft-torque observer), the pi "
+              "controller stabilises every plant of the design family on the loop that runs "
+              f"with a multiloop disk margin of at least {need:g}",
+        computed="; ".join(f"{sig}: {v['stable']} of {v['points']} closed loops stable, worst "
+                           f"disk margin {v['disk_margin']:.3f} (at {v['at']}), largest |z| "
+                           f"{v['spectral_radius']:.6f}" for sig, v in w.items()),
+        shown=all(v["stable"] == v["points"] and v["disk_margin"] >= need
+                  for v in w.values()),
+        explanation="The PI was designed and tuned on the loop with the measured driveshaft "
+                    "torque: on the estimate's loop a plant is not stabilised with the "
+                    "stated margin (see the values).",
+        values={f"{sig}.{k}": x for sig, d in w.items() for k, x in d.items() if k != "at"})
 
 
 def _claims(family, loops, runs, targets, predictions, envelope) -> list[Claim]:
