@@ -179,9 +179,11 @@ def test_no_type_checking_imports():
 def test_the_kernel_stays_inside_nonlinear():
     """Only `empact.nonlinear` imports the compiled kernel and its integrators, the loop
     law's compiled sample (`empact.control._law_core`: the kernel's traction peak and creep
-    law) and the compiled closed loop (`empact.control._loop_core`: the law's sample and the
-    integrator in one loop; the model must not import the control layer), which nothing
-    but the loop law imports; and the compile step (`empact._compile`, which calls every
+    law), the car driver's compiled sample (`empact.control._driver_core`: the kernel's
+    output indices) and the compiled closed loop (`empact.control._loop_core`: the law's
+    sample, the driver's and the integrator in one loop; the model must not import the
+    control layer), which nothing but the loop law and the driven law
+    (`empact.control.driver`) import; and the compile step (`empact._compile`, which calls every
     compiled entry point once, with the integrators' test problem `empact._stiff_linear`)."""
     graph = _graph()
     compiled = {"empact.nonlinear._kernel", "empact.nonlinear._tangent",
@@ -189,7 +191,7 @@ def test_the_kernel_stays_inside_nonlinear():
                 "empact.nonlinear._rodas"}
     users = sorted(k for k, deps in graph.items()
                    if deps & compiled and not k.startswith("empact.nonlinear"))
-    assert users == ["empact._compile", "empact._stiff_linear", "empact.control._law_core",
-                     "empact.control._loop_core"]
+    assert users == ["empact._compile", "empact._stiff_linear", "empact.control._driver_core",
+                     "empact.control._law_core", "empact.control._loop_core"]
     assert sorted(k for k, deps in graph.items() if "empact.control._loop_core" in deps) == \
-        ["empact.control.law"]
+        ["empact.control.driver", "empact.control.law"]

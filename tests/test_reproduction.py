@@ -46,6 +46,11 @@ KNOWN_DEVIATIONS = {
     # every plant with a worst disk margin of 0.31 (light-load overdrive, 3 kN), the
     # observer's unstable at 3 plants (overdrive, 8 kN, where the feedforward gain steps up)
     "control.pi.estimate_family",
+    # issue 33 item 6 with issue 34's car: the H-infinity controller, designed on the bench's
+    # family, macro-slips in the car's two shifts (vehicle-upshift, vehicle-kickdown) where
+    # the PI does not; on the car's design family with the upshift's loop 104 of 105 loops
+    # are stable (the PI: 105, worst disk margin 0.524); every bench scenario's targets met
+    "control.hinf.targets",
 }
 
 

@@ -369,14 +369,18 @@ def test_montecarlo_cli_local_cluster_equals_serial(tmp_path):
                                             "local", "--workers", "2"],
                        capture_output=True, text=True, timeout=150)
     assert b.returncode == 0, b.stderr
-    # nothing on stderr but the progress bar (which shows once the sweep has run a second),
+    # nothing on stderr but the progress bar (which shows once the sweep has run a second)
+    # and the closing line,
     # after at most the command's work indicator while the local cluster starts (it ends
     # when the bar begins): no warnings or logs from the cluster's workers
     lines = b.stderr.splitlines()
     working = [ln for ln in lines if WORKING.match(ln)]  # one a 10 s while it starts
     assert all(ln.startswith("montecarlo: ") for ln in working), b.stderr
     lines = [ln for ln in lines if not WORKING.match(ln)]
-    assert all(re.match(r"^monte carlo \(slip\): +\d+%\|", ln) for ln in lines), b.stderr
+    # then the closing line naming what was written (issue 35), last
+    assert lines and lines[-1].startswith("written: ") and "runs.csv" in lines[-1], b.stderr
+    assert all(re.match(r"^monte carlo \(slip\): +\d+%\|", ln) for ln in lines[:-1]), \
+        b.stderr
     for name in ("runs.csv", "runs.json", "summary.json"):
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
     summary = json.loads((tmp_path / "a" / "summary.json").read_text())

@@ -198,7 +198,8 @@ def test_the_analytic_law_is_untouched(params):
     assert m.p[K.P_MTAB] == 0.0 and m.p.size == K.NP
     assert K.PARAMETER_NAMES[K.P_MTAB] == "traction_table"
     assert K.PARAMETER_NAMES[K.P_MTAB + 1:K.P_TRACTION] == (
-        "loss_lambda_F", "loss_k_T", "loss_c_v", "loss_c_q", "loss_T_smooth", "loss_table")
+        "loss_lambda_F", "loss_k_T", "loss_c_v", "loss_c_q", "loss_T_smooth", "loss_table"
+    ) + K.VEHICLE_PARAMETER_NAMES
     t = _model(MEASURED)
     assert t.p[K.P_MTAB] == K.NP and t.p.size == K.NP + MEASURED.encode().size
 

@@ -24,6 +24,8 @@ import sys
 import time
 from pathlib import Path
 
+import llvmlite
+import numba
 import numpy as np
 from numba.core.registry import CPUDispatcher
 
@@ -317,9 +319,6 @@ def sources_digest() -> str:
     str
         The SHA-256 hex digest.
     """
-    import llvmlite
-    import numba
-
     root = Path(__file__).resolve().parent
     h = hashlib.sha256(" ".join([sys.version, platform.machine(), numba.__version__,
                                  llvmlite.__version__, np.__version__]).encode())
@@ -338,8 +337,6 @@ def record_path() -> Path:
     Path
         The record's file (it may not exist).
     """
-    import numba
-
     folder = getattr(numba.config, "CACHE_DIR", "")
     return (Path(folder) if folder else Path(__file__).resolve().parent / "__pycache__") \
         / "empact-compile-all.json"

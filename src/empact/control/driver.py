@@ -33,14 +33,13 @@ from numpy.typing import NDArray
 
 from .._validate import check_number
 from ..errors import ParameterError
-from ..nonlinear import _kernel as K
 from ..nonlinear.equilibrium import (
     slip_at_torque_ratio,
     smallest_slip_reserve,
     traction_peak,
     trim_grid,
 )
-from ..nonlinear.model import EmpactModel
+from ..nonlinear.model import OUTPUTS, EmpactModel
 from ..nonlinear.simulation import SampledLoop
 from ..variator.geometry import ratio_range
 from . import _driver_core as DC
@@ -266,11 +265,13 @@ class DrivenLaw(LoopLaw):
         """
         k = self._k
         super().step(t, measured)
-        y = np.zeros(K.NY)
-        y[K.Y_RG], y[K.Y_V], y[K.Y_WD] = measured[0], measured[-2], measured[-1]
+        y = np.zeros(len(OUTPUTS))
+        y[_Y_DRIVER] = measured[0], measured[-2], measured[-1]
         DC.driver_sample(self._drv_c, self._drv_tab, self._drv_z, y, k, self._drv_out)
         self._wk.u[2:] = self._drv_out
         return self._wk.u.copy()
 
 
+#: the model outputs the driver's sample reads (ratio, car speed, engine speed)
+_Y_DRIVER = [OUTPUTS.index(n) for n in ("r_g", "v", "omega_d")]
 _run_driven: Any = _loop_core.run_samples_driven

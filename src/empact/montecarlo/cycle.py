@@ -21,6 +21,7 @@ from .._results import TableResult
 from .._validate import check_int
 from ..cycles import Cycle
 from ..drive_cycle import DEFAULT_STRATEGIES, REFERENCE, quasi_static_cycle
+from ..dynamic_cycle import dynamic_cycle
 from ..errors import ParameterError
 from ..params import Params
 from ..sweep import SweepOptions, plan_chunks, run_chunks
@@ -87,8 +88,6 @@ def _runs_chunk(task: tuple) -> dict[str, Any]:
     for i, row in enumerate(rows):
         p = params.from_dotted(dict(zip(names, map(float, row))))
         if dynamic:
-            from ..dynamic_cycle import dynamic_cycle
-
             res = dynamic_cycle(p, cycle, strategies=strategies)
             for s in strategies:
                 fuel[s][i] = res.runs[s].fuel_g

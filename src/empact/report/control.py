@@ -199,8 +199,8 @@ def hinf_table(ctx: Context, res: rep.ControlSection) -> str:
                                               "H-infinity (shipped:hinf)"], rows,
                      "Every shipped closed-loop scenario against its targets with the PI and "
                      "with the H-infinity controller in its place (the same loop: "
-                     "feedforwards, decoupler, sensors, servo limits; `empact control "
-                     "simulate --example NAME --controller shipped:hinf`)")
+                     "feedforwards, decoupler, sensors, servo limits; "
+                     "`empact control simulate --example NAME --controller shipped:hinf`)")
 
 
 def estimate_table(ctx: Context, res: rep.ControlSection) -> str:

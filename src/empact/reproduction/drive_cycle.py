@@ -22,9 +22,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..actuation_energy import hydraulic_power
+from ..control.closed_loop import control_example_path, run_closed_loop
 from ..cycles import load_cycle
 from ..drive_cycle import MIN_CLAMPING, STRATEGIES, TERMS, CycleResult, quasi_static_cycle
 from ..dynamic_cycle import DynamicCycleResult, dynamic_cycle
+from ..nonlinear.scenario import load_scenario
 from ..params import Params
 from .claims import Claim
 
@@ -279,9 +281,6 @@ def _dynamic(dyn: DynamicCycleResult, qs: dict) -> tuple[list[list[object]], tup
 
 def _shifts(params: Params) -> tuple[list[list[object]], tuple[Claim, ...]]:
     """The car's shifts (the shipped ``vehicle-*`` examples) and the shift-rate claim."""
-    from ..control.closed_loop import control_example_path, run_closed_loop
-    from ..nonlinear.scenario import load_scenario
-
     rows: list[list[object]] = []
     metrics = {}
     for name in ("vehicle-upshift", "vehicle-kickdown"):
