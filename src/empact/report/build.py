@@ -20,7 +20,8 @@ from .sections import SECTIONS
 __all__ = ["build_report", "STYLE_CSS", "IMAGE_CHECK"]
 
 STYLE_CSS = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222;
-line-height:1.4}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;
+line-height:1.4}table{border-collapse:collapse;margin:1em 0;display:block;max-width:100%;
+overflow-x:auto}td,th{border:1px solid #bbb;
 padding:3px 8px;text-align:right}caption{text-align:left;font-weight:bold;margin-bottom:4px}
 img{max-width:100%}figcaption{font-size:90%;color:#444}.ok{color:#060}.bad{color:#a00}
 nav ol{columns:2}.summary td{text-align:left}.summary td.v{white-space:nowrap}
