@@ -796,14 +796,14 @@ def test_family_loops_of_the_car_read_the_engine_torque(params):
     family's check, 105 points: every one stable, worst disk margin 0.658)."""
     from empact.control import loop as L
     from empact.control.family import LOOP_FAMILY_OUTPUTS, plant_family
-    from empact.control.law import CAR_SOURCE
+    from empact.control.law import CAR_SOURCE, measured_signals
     from empact.nonlinear.model import nonlinear_model
 
     spec = dict(SHIPPED_LOOP, feedforward_signal="T_e_est")
     spec.pop("feedforward_gain_table", None)
     cfg = LoopConfig.of(params, **spec)
     car = nonlinear_model(params, driveline="vehicle")
-    assert L._measured(car, cfg)[6] == CAR_SOURCE
+    assert measured_signals(car.vehicle, cfg.spec)[6] == CAR_SOURCE
     fam = plant_family(params, r_g=[0.6, 1.6], tau=[0.9], F_s=[10000.0],
                        outputs=LOOP_FAMILY_OUTPUTS, driveline="vehicle")
     T_d = L._engine_torques(fam, car)

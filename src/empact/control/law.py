@@ -105,7 +105,8 @@ from .controller import Controller
 
 linalg = lazy_module("scipy.linalg")
 
-__all__ = ["LoopConfig", "LoopLaw", "RAW_SIGNALS", "SHIPPED_LOOP", "reference_table"]
+__all__ = ["LoopConfig", "LoopLaw", "RAW_SIGNALS", "SHIPPED_LOOP", "measured_signals",
+           "reference_table"]
 
 _pre: Any = core.pre  # (numba's Dispatcher is typed without a call signature)
 _run_samples: Any = _loop_core.run_samples
@@ -163,6 +164,32 @@ CAR_SOURCE = "T_d_sec"
 #: `RAW_SIGNALS`: the wheel (load) speed, which a car's wheel-speed sensors give
 OBSERVER_SIGNAL = "omega_l"
 _SPEEDS = (1, 2)  # RAW_SIGNALS indices counted by encoders
+
+
+def _reads_observer(spec: ControllerSpec) -> bool:
+    """Whether a law of `spec` runs the driveshaft-torque observer (its feedforward's signal)."""
+    return spec.feedforward and spec.feedforward_signal == "T_ds_est"
+
+
+def measured_signals(vehicle: bool, spec: ControllerSpec) -> tuple[str, ...]:
+    """The signals a law of `spec` reads at each sample (`LoopLaw.measured`): `RAW_SIGNALS`,
+    in the car (`vehicle`) with the engine's torque `CAR_SOURCE` as the torque source's,
+    then `OBSERVER_SIGNAL` where the law runs the driveshaft-torque observer.
+
+    Parameters
+    ----------
+    vehicle : bool
+        The machine is in the car (``driveline = "vehicle"``).
+    spec : ControllerSpec
+        The loop's ``[controller]`` keys.
+
+    Returns
+    -------
+    tuple of str
+        The model outputs, in the order the law reads them.
+    """
+    raw = RAW_SIGNALS if not vehicle else RAW_SIGNALS[:-1] + (CAR_SOURCE,)
+    return raw + ((OBSERVER_SIGNAL,) if _reads_observer(spec) else ())
 
 
 @dataclass(frozen=True)
@@ -393,7 +420,7 @@ class LoopLaw:
         self._n_buf = self._delay + self._window
         self._speed_quantum = (2 * np.pi / (s.speed_counts * self._window * dt)
                                if s is not None else 0.0)
-        self._observer = spec.feedforward and spec.feedforward_signal == "T_ds_est"
+        self._observer = _reads_observer(spec)
         self._estimate = self._observer or (spec.feedforward
                                             and spec.feedforward_signal == "T_e_est")
         self._n_est = 0
@@ -685,8 +712,7 @@ class LoopLaw:
         """What the simulator hands the law at each sample (`RAW_SIGNALS`, in the car with
         the engine's torque `CAR_SOURCE` as the torque source's, then `OBSERVER_SIGNAL` for
         the driveshaft-torque observer)."""
-        raw = RAW_SIGNALS if not self.model.vehicle else RAW_SIGNALS[:-1] + (CAR_SOURCE,)
-        return raw + ((OBSERVER_SIGNAL,) if self._observer else ())
+        return measured_signals(self.model.vehicle, self.config.spec)
 
     # -- the law ---------------------------------------------------------------------------
     def _R_s(self, r_g: float) -> float:

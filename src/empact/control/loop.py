@@ -37,7 +37,15 @@ from ..params import Params
 from .closed_loop import build_law
 from .controller import Controller
 from .family import LOOP_FAMILY_OUTPUTS, PlantFamily, plant_family
-from .law import CAR_SOURCE, OBSERVER_SIGNAL, RAW_SIGNALS, LoopConfig, LoopLaw, reference_table
+from .law import (
+    CAR_SOURCE,
+    OBSERVER_SIGNAL,
+    RAW_SIGNALS,
+    LoopConfig,
+    LoopLaw,
+    measured_signals,
+    reference_table,
+)
 from .robustness import disk_margin
 
 linalg = lazy_module("scipy.linalg")
@@ -707,14 +715,6 @@ def predict_scenario(scenario: Scenario, params: Params,
                           signals={n: y[:, i] for i, n in enumerate(lm.outputs)})
 
 
-def _measured(model: EmpactModel, config: LoopConfig) -> tuple[str, ...]:
-    """The signals the law of `config` reads on `model` (`LoopLaw.measured`)."""
-    spec = config.spec
-    raw = RAW_SIGNALS if not model.vehicle else RAW_SIGNALS[:-1] + (CAR_SOURCE,)
-    observer = spec.feedforward and spec.feedforward_signal == "T_ds_est"
-    return raw + ((OBSERVER_SIGNAL,) if observer else ())
-
-
 def _engine_torques(family: PlantFamily, model: EmpactModel) -> NDArray[np.float64]:
     """The engine's torque [N m] at every point of a car's family (shape ``family.shape``):
     the family's own trim (`trim_grid` at its slips and clamping forces) again, whose input
@@ -761,7 +761,7 @@ def family_loops(family: PlantFamily, controller: Controller, config: LoopConfig
     """
     if model is None:
         model = nonlinear_model(params, **family.options)
-    signals = _measured(model, config)
+    signals = measured_signals(model.vehicle, config.spec)
     missing = [n for n in signals + PERFORMANCE if n not in family.outputs]
     if missing:
         raise ParameterError(f"the family lacks the outputs {', '.join(missing)} the loop "
