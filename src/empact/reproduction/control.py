@@ -791,24 +791,19 @@ def _claims(family, loops, runs, targets, predictions, envelope) -> list[Claim]:
     claims = []
     axes = ", ".join(f"{k} {v.min():.3g}-{v.max():.3g}" for k, v in family.axes.items())
     for k, lm in loops.items():
-        rho = lm.spectral_radius()
-        dm = lm.disk_margins()
-        stable = rho < 1
-        worst = float(dm["alpha"].min())
-        idx = np.unravel_index(int(np.argmin(dm["alpha"])), dm["alpha"].shape)
-        at = ", ".join(f"{n} = {v[i]:.3g}" for (n, v), i in zip(family.axes.items(), idx))
+        w = _worst_loop(family, lm)
         need = float(SHIPPED_DESIGNS[k]["alpha_min"])
         claims.append(Claim(
             key=f"control.{k}.family", source=SRC,
             claim=f"the {k} controller stabilises every plant of the design family on the "
                   "loop that runs (sampled at 1 kHz, sensors, feedforwards)"
                   + (f" with a multiloop disk margin of at least {need:g}" if need else ""),
-            computed=f"{int(stable.sum())} of {stable.size} closed loops stable ({axes}); worst "
-                     f"disk margin {worst:.3f} (at {at}); largest |z| {rho.max():.6f}",
-            shown=bool(stable.all() and worst >= need),
+            computed=f"{w['stable']} of {w['points']} closed loops stable ({axes}); worst "
+                     f"disk margin {w['disk_margin']:.3f} (at {w['at']}); largest |z| "
+                     f"{w['spectral_radius']:.6f}",
+            shown=w["stable"] == w["points"] and w["disk_margin"] >= need,
             explanation="A plant of the family is not stabilised with the stated margin.",
-            values={"stable": int(stable.sum()), "points": int(stable.size),
-                    "disk_margin": worst, "spectral_radius": float(rho.max())}))
+            values={n: x for n, x in w.items() if n != "at"}))
     for n, checks in targets.items():
         if not checks:
             continue
