@@ -108,6 +108,7 @@ from .controller import SCHEDULE_VARIABLES, Controller, Schedule
 from .family import PlantFamily
 from .law import LoopConfig, LoopLaw
 from .loop import LoopModel, default_omega, family_loops, loop_specification
+from .pi import check_loop_design
 from .robustness import disk_gain_phase, measured_rows, robustness_map
 from .tune import loop_summary
 
@@ -1000,17 +1001,8 @@ def _design_hinf_loop(family: PlantFamily, bandwidth_hz, slip: str, nominal, loo
                       max_iterations: int) -> Controller:
     """`design_hinf` on the loop that runs (module notes)."""
     t0, c0 = time.perf_counter(), time.process_time()
-    if params is None:
-        raise ParameterError("design_hinf with a loop needs params")
-    if not np.all(family.ok):
-        raise ParameterError("the family has points that did not trim; design on a family "
-                             "whose every point trims")
-    base = slip[3:] if slip.startswith("ln_") else slip
-    if base not in ("nu", "nu_r"):
-        raise ParameterError(f"slip = {slip!r}: choose nu, nu_r, ln_nu or ln_nu_r")
-    alpha_min = check_number("alpha_min", alpha_min, 0.05, 1.9)
-    bw = tuple(float(check_number("bandwidth", b, 1e-3, 50.0, lo_open=True, unit="Hz"))
-               for b in bandwidth_hz)
+    params, alpha_min, bw = check_loop_design("design_hinf", family, slip, alpha_min,
+                                              bandwidth_hz, params)
     if len(bw) != 2:
         raise ParameterError(f"bandwidth_hz = {bandwidth_hz}: two values RATIO,SLIP [Hz]")
     if not isinstance(max_iterations, (int, np.integer)) or not 1 <= max_iterations <= 10_000:

@@ -14,6 +14,8 @@ production recipe: robust PI with the highest integral gain the plant spread all
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -34,7 +36,7 @@ from .robustness import (
     robustness_map,
 )
 
-__all__ = ["pi_controller", "design_pi"]
+__all__ = ["pi_controller", "design_pi", "check_loop_design"]
 
 #: crossover scalings tried around the requested bandwidths
 SCALES = (0.5, 0.7, 1.0, 1.4, 2.0)
@@ -241,10 +243,39 @@ def _crossover_gains(family: PlantFamily, measured, wc) -> NDArray[np.float64]:
     return np.abs(kp) * np.sign(kp.reshape(-1, 2)[kp.size // 4])
 
 
-def _design_pi_loop(family, bandwidth_hz, alpha_min, slip, nominal, loop, params, schedule):
-    """`design_pi` on the loop that runs (see there)."""
+def check_loop_design(who: str, family: PlantFamily, slip: str, alpha_min: float,
+                      bandwidth_hz: Sequence[float], params: Params | None
+                      ) -> tuple[Params, float, tuple[float, ...]]:
+    """The arguments every design on the loop that runs checks first (`design_pi`,
+    `empact.control.hinf.design_hinf`): the parameter set given, every family point trimmed,
+    the slip signal, the margin and the bandwidths in range; one `ParameterError` line
+    otherwise.
+
+    Parameters
+    ----------
+    who : str
+        The design function's name, for the message.
+    family : PlantFamily
+        The design family.
+    slip : str
+        ``nu``, ``nu_r``, ``ln_nu`` or ``ln_nu_r``.
+    alpha_min : float
+        The disk margin asked for [-], in [0.05, 1.9].
+    bandwidth_hz : sequence of float
+        The loops' bandwidths [Hz], each in (1e-3, 50].
+    params : Params or None
+        The parameter set of the loop.
+
+    Returns
+    -------
+    params : Params
+        `params`, known to be given.
+    alpha_min : float
+    bandwidths : tuple of float
+        [Hz].
+    """
     if params is None:
-        raise ParameterError("design_pi with a loop needs params")
+        raise ParameterError(f"{who} with a loop needs params")
     if not np.all(family.ok):
         raise ParameterError("the family has points that did not trim; design on a family "
                              "whose every point trims")
@@ -252,8 +283,15 @@ def _design_pi_loop(family, bandwidth_hz, alpha_min, slip, nominal, loop, params
     if base not in ("nu", "nu_r"):
         raise ParameterError(f"slip = {slip!r}: choose nu, nu_r, ln_nu or ln_nu_r")
     alpha_min = check_number("alpha_min", alpha_min, 0.05, 1.9)
-    bw = [check_number("bandwidth", b, 1e-3, 50.0, lo_open=True, unit="Hz")
-          for b in bandwidth_hz]
+    bw = tuple(check_number("bandwidth", b, 1e-3, 50.0, lo_open=True, unit="Hz")
+               for b in bandwidth_hz)
+    return params, alpha_min, bw
+
+
+def _design_pi_loop(family, bandwidth_hz, alpha_min, slip, nominal, loop, params, schedule):
+    """`design_pi` on the loop that runs (see there)."""
+    params, alpha_min, bw = check_loop_design("design_pi", family, slip, alpha_min,
+                                              bandwidth_hz, params)
     if schedule:
         bad = [a for a in family.axes if a not in SCHEDULE_VARIABLES]
         if bad:
