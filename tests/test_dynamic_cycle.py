@@ -46,15 +46,21 @@ def test_stretches_and_launch_speed(params):
 
 def test_run_follows_the_trace_without_macro_slip_or_slack(params, run):
     """Every stretch runs to its end; the car follows the trace within the WLTP's 2 km/h;
-    no belt slack; macro slip is the slip reserve's sign (on this trace's tip-out at 9 s the
-    safety-factor clamping, which follows the engine's torque down while the lagging ratio
-    still brings the engine's inertia torque, reaches the peak: a finding, not excluded); the
-    engine at most at its full-load torque (1e-3 of it: the torque is held over a sample
-    period while the speed moves the curve)."""
+    no belt slack; macro slip is the slip reserve's sign, and the safety-factor clamping
+    does not macro-slip (on this trace's tip-out at 9 s it reached the peak, -0.50 pp, while
+    it followed the engine's torque down at once; it holds it now,
+    `empact.dynamic_cycle.clamping_release`: +1.47 pp).  The slip loop reaches it there
+    (-0.15 pp, measured; its feedforward follows the torque estimate down; a finding, not
+    excluded: the tip-out of this trace, 1.6 m/s^2 ended within 5 s, is harsher than
+    WLTC 3b's, where its reserve stays at or above 0.34 pp).  The engine at most at its
+    full-load torque (1e-3 of it: the torque is held over a sample period while the speed
+    moves the curve)."""
     for s, r in run.runs.items():
         assert r.complete, r.messages
         assert r.speed_error_max_kmh < 2.0, s
         assert r.macro_slip == (r.slip_reserve < 0), s
+        if s != "slip":
+            assert not r.macro_slip, (s, r.slip_reserve)
         assert not r.belt_slack and r.min_clamping_force > 0, s
         sig = r.signals
         full = full_load_torque(params.engine, sig["omega_d"])

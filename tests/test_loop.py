@@ -9,6 +9,7 @@ from scipy.io import loadmat
 from scipy.signal import cont2discrete
 
 from empact.control.closed_loop import (
+    build_law,
     check_targets,
     control_example_path,
     run_closed_loop,
@@ -310,6 +311,67 @@ def test_safety_factor_twin_starts_at_its_own_clamping(params):
     F = res.output("F_s")
     assert np.abs(F - F[0]).max() <= 1e-6 * F[0]
     assert tw.inputs["T_l"][1, 1] > tw.inputs["T_l"][0, 1]
+
+
+def _safety_law_after(params, scale, release, ratio=None):
+    """The pre-processing of the slip-load-step-r1 safety-factor twin (`clamping_release`
+    `release` [s], ideal sensors) over its first samples after the torques it reads
+    (``T_ds``, ``T_l_act``) are scaled by `scale` (and the measured ratio set to `ratio`):
+    the law, the secondary servo torques [N m] and the last sample's errors and
+    measurements."""
+    sc = safety_factor_twin(load_scenario(control_example_path("slip-load-step-r1")), params)
+    sc = replace(sc, controller=replace(sc.controller, clamping_release=release))
+    law = build_law(sc, params, ideal=True)
+    s = law.z0[:law.n_pre].copy()
+    raw = law.raw0.copy()
+    raw[[3, 6]] *= scale
+    if ratio is not None:
+        raw[0] = ratio
+    u1 = []
+    for k in range(60):
+        s, e, u, m = law.preprocess(s, raw, k, ideal=True)
+        u1.append(u[1])
+    return law, np.array(u1), e, m
+
+
+def test_safety_factor_clamping_rises_at_once_and_releases_as_a_first_order_lag(params):
+    """The safety-factor clamping's release (`ControllerSpec.clamping_release`, issue 34):
+    after the torque it clamps for halves, the secondary servo torque's excess over the
+    half torque's value falls by ``exp(-dt / T)`` a sample (to 1e-9 relative; the clamping
+    is linear in the torque at a held ratio, so the half torque's value is half the
+    start's); after it doubles, the servo torque is the doubled torque's at the first
+    sample that sees it, as without a release (to 1e-12 relative); without a release it
+    halves at once."""
+    T = 0.05
+    law, u1, _, _ = _safety_law_after(params, 0.5, T)
+    d = u1 - 0.5 * u1[0]  # the sensor delay: the first sample still sees the start
+    np.testing.assert_allclose(d[2:] / d[1:-1], np.exp(-law.dt / T), rtol=1e-9)
+    _, up, _, _ = _safety_law_after(params, 2.0, T)
+    _, up0, _, _ = _safety_law_after(params, 2.0, 0.0)
+    np.testing.assert_allclose(up[1:], 2 * u1[0], rtol=1e-12)
+    np.testing.assert_allclose(up0[1:], 2 * u1[0], rtol=1e-12)
+    _, down0, _, _ = _safety_law_after(params, 0.5, 0.0)
+    np.testing.assert_allclose(down0[1:], 0.5 * u1[0], rtol=1e-12)
+
+
+def test_safety_factor_clamping_schedules_the_ratio_loop_at_its_own_clamping(params):
+    """Under the safety-factor clamping the gain schedule reads the clamping the law
+    commands (its ``F_s`` axis), not the start's (issue 34: at the start's clamping the
+    car's ratio loop ran with a quarter of its gain in a kickdown at 12-16 kN and missed the
+    trace by 2.2 km/h): with the torque doubled, the ratio error's gain is the schedule's at
+    twice the start's clamping (to 1e-12 relative), and it differs from the start's by more
+    than 10 %."""
+    gains, forces = [], []
+    for scale in (1.0, 2.0):
+        law, u1, e, m = _safety_law_after(params, scale, 0.0, ratio=0.99)
+        tb = law._tb
+        F = u1[-1] / law._tpf
+        g = law.controller.schedule.gains_at([m[0], tb.mu[0] / tb.mu_max[0], F])[0]
+        np.testing.assert_allclose(e[0], g * (tb.r_g[0] - m[0]), rtol=1e-12)
+        gains.append(g)
+        forces.append(F)
+    np.testing.assert_allclose(forces[1], 2 * forces[0], rtol=1e-12)
+    assert abs(gains[1] / gains[0] - 1) > 0.1
 
 
 def test_regression_shipped_pi_is_the_documented_design(params):

@@ -38,9 +38,6 @@ KNOWN_DEVIATIONS = {
     # issue 34, the car: LOW -> OD reaches 0.87 /s, not 1 /s (the engine's inertia torque at
     # LOW, the ratio loop lagging at low primary speed), faster than the bench's 0.33-0.43
     "control.vehicle-upshift", "cycle.car_shift_rate",
-    # issue 34, the dynamic WLTC 3b: the safety-factor clamping (of the engine's torque)
-    # macro-slips briefly at tip-out upshifts, where its speed error is 2.19 km/h
-    "cycle.dynamic_speed", "cycle.dynamic_macro_slip",
     # issue 33 item 4: the PI designed and tuned on the measured driveshaft torque's loop,
     # on the estimates' loops over the design family: the engine-torque estimate's stable at
     # every plant with a worst disk margin of 0.31 (light-load overdrive, 3 kN), the
@@ -136,6 +133,10 @@ def test_drive_cycle_claims(params):
     assert by["cycle.dynamic_loss_agreement"].shown
     assert by["cycle.dynamic_macro_slip"].values["slip"] == {"macro_slip": False,
                                                              "belt_slack": False}
+    # every strategy: no macro slip or slack, within the WLTP's 2 km/h (the safety-factor
+    # strategies since their clamping holds through a tip-out and their ratio loop is
+    # scheduled at their own clamping: 1.0 pp of slip reserve, 1.21 km/h, measured)
+    assert by["cycle.dynamic_macro_slip"].shown and by["cycle.dynamic_speed"].shown
     assert by["cycle.dynamic_saving"].shown
     assert sec.dynamic is not None and sec.dynamic.runs["slip"].complete
 

@@ -63,15 +63,17 @@ from .drive_cycle import (
 from .efficiency import strategy_clamping
 from .engine import fuel_rate
 from .errors import ParameterError
+from .lti import oscillatory
 from .nonlinear import VARIATOR_LOSSES
 from .nonlinear.equilibrium import traction_peak, trim
+from .nonlinear.linearization import linearized_plant
 from .nonlinear.model import EmpactModel, nonlinear_model
 from .nonlinear.simulation import METHODS, simulate
 from .operating import CruisePoint
 from .params import Params
 
 __all__ = ["LAUNCH_MODEL", "LOOPS", "DynamicRun", "DynamicCycleResult", "dynamic_cycle",
-           "launch_speed", "driving_stretches"]
+           "launch_speed", "driving_stretches", "clamping_release"]
 
 #: how the dynamic cycle treats the launch and standstill (module notes; in the JSON)
 LAUNCH_MODEL = ("dynamic at and above the launch speed (LOW at the engine's lowest driving "
@@ -81,7 +83,7 @@ LAUNCH_MODEL = ("dynamic at and above the launch speed (LOW at the engine's lowe
 
 #: the loop law's ``[controller]`` keys by strategy (besides ``file`` and ``rate``): the
 #: slip loop with the engine torque's clamping feedforward, or the safety-factor clamping of
-#: the engine's torque; every one at least `MIN_CLAMPING`
+#: the engine's torque (its release `clamping_release`); every one at least `MIN_CLAMPING`
 LOOPS: dict[str, dict[str, Any]] = {
     "feedback": dict(clamping="feedback", feedforward=True, feedforward_signal="T_e_est",
                      feedforward_gain=0.9, feedforward_filter_hz=100.0, decoupling=True,
@@ -114,6 +116,34 @@ def launch_speed(params: Params) -> float:
     """
     veh = params.vehicle
     return float(params.engine.omega_drive * RATIO_LIMITS[0] * veh.r_wheel / veh.i_fd)
+
+
+def clamping_release(model: EmpactModel) -> float:
+    """The safety-factor clamping's release time constant in the car [s]: one period of the
+    car's slowest torsional mode (the shuffle: engine, variator and vehicle against the
+    driveshaft's twist), at LOW and the engine's lowest driving speed with `MIN_CLAMPING`
+    (2.7 Hz, 0.37 s for the shipped car; 4-5 Hz at r_g = 1, 6-9 Hz in overdrive).
+
+    At a tip-out the engine's torque falls at once, while the driveline's twist and the
+    engine's inertia keep pushing the old torque through the belt for about half that
+    period; a clamping that follows the engine's torque down at once lets the belt slip
+    (the dynamic WLTC 3b run macro-slipped so, at 540 s).  Released with this time constant
+    the clamping still holds 61 % of the drop half a period later.
+
+    Parameters
+    ----------
+    model : EmpactModel
+        The car (``driveline = "vehicle"``).
+
+    Returns
+    -------
+    float
+        ``1 / f_1`` [s], ``f_1`` the lowest natural frequency of the linearised car [Hz].
+    """
+    op = trim(model, CruisePoint(r_g=RATIO_LIMITS[0], omega_p=model.params.engine.omega_drive,
+                                 F_s=MIN_CLAMPING))
+    f_n, _ = oscillatory(np.linalg.eigvals(linearized_plant(op).A))
+    return float(1.0 / f_n[0])
 
 
 def driving_stretches(cycle: Cycle, v_launch: float) -> list[tuple[int, int]]:
@@ -392,7 +422,10 @@ def _run_strategy(params: Params, cycle: Cycle, qs: CycleResult, model: EmpactMo
     """One strategy over every dynamic stretch, then the cycle's energies."""
     veh, eng = params.vehicle, params.engine
     gear = veh.r_wheel / veh.i_fd
-    loop = LoopConfig.of(params, rate=rate, **LOOPS[_LOOP_OF[strategy]])
+    keys = LOOPS[_LOOP_OF[strategy]]
+    if keys["clamping"] == "safety-factor":
+        keys = {**keys, "clamping_release": clamping_release(model)}
+    loop = LoopConfig.of(params, rate=rate, **keys)
     ctrl = resolve_controller("shipped:pi")
     hydraulic = strategy.startswith("hydraulic")
     parts: list[dict[str, NDArray]] = []

@@ -109,6 +109,8 @@ class LawConstants(NamedTuple):
     J_e: float  #: the car's engine and primary inertia [kg m^2]: the clamping feedforward and
     #: the safety-factor clamping add its torque of an upshift at the reference's rate (0 on
     #: the bench, whose drive holds the primary's speed)
+    alpha_rel: float  #: the safety-factor clamping's release: the pole of its torque's
+    #: first-order fall, ``exp(-dt / clamping_release)`` (0: none); it rises at once
     floor: bool  #: hold the secondary servo at or beyond the torque of `min_clamping`
     T_floor: float  #: that torque [N m] (its sign the clamping's: `tpf`'s)
 
@@ -458,26 +460,33 @@ def pre(law, s, out, raw, k, ideal):
     else:
         e1 = slip_ref - y
     f = s[nb]
-    if c.scheduled:
+    u1 = c.bias1
+    if c.safety:
+        e1 = 0.0  # the slip loop is replaced by the open-loop clamping strategy
+        T_sf = m[6] if c.sf_engine else T_b  # the car: the engine's torque at the secondary
+        if c.J_e != 0.0 and rdot > 0.0:  # in the car, upshifting: the engine's inertia
+            T_sf = T_sf + c.J_e * w_p * rdot / (r_m * r_m)
+        # held: up at once, down at the release's rate (its state the feedforward filter's)
+        T_sf = abs(T_sf)
+        f = c.alpha_rel * s[nb] + (1.0 - c.alpha_rel) * T_sf
+        f = T_sf if T_sf > f else f
+        u1 = safety_torque(f, r_m, c, tb, wk)
+        if wk.radius[1] != wk.radius[1]:
+            return 1, e0, e1, c.bias0, u1
+    if c.scheduled:  # at the clamping the law commands (the safety factor's, its floor)
         at = np.empty(3)
         at[0] = r_m
         at[1] = mu_ref / tb.mu_max[kk]
-        at[2] = f if c.feedforward else c.F_s0
+        if c.safety:
+            F_at = u1 / c.tpf
+            at[2] = c.T_floor / c.tpf if c.floor and c.T_floor / c.tpf > F_at else F_at
+        else:
+            at[2] = f if c.feedforward else c.F_s0
         lg = np.empty(2)
         schedule_log_gains(tb.schedule, at, True, lg)
         e0 = e0 * (c.sign0 * math.exp(lg[0]))
         e1 = e1 * (c.sign1 * math.exp(lg[1]))
-    u1 = c.bias1
-    if c.safety:
-        e1 = 0.0  # the slip loop is replaced by the open-loop clamping strategy
-        f = 0.0
-        T_sf = m[6] if c.sf_engine else T_b  # the car: the engine's torque at the secondary
-        if c.J_e != 0.0 and rdot > 0.0:  # in the car, upshifting: the engine's inertia
-            T_sf = T_sf + c.J_e * w_p * rdot / (r_m * r_m)
-        u1 = safety_torque(T_sf, r_m, c, tb, wk)
-        if wk.radius[1] != wk.radius[1]:
-            return 1, e0, e1, c.bias0, u1
-    elif c.feedforward:
+    if c.feedforward and not c.safety:
         if c.shift_ff:  # the secondary pulley's acceleration torque
             T_b = T_b + c.J_s * w_p * rdot
         if c.J_e != 0.0 and rdot > 0.0:  # in the car, upshifting: the engine's
@@ -503,7 +512,7 @@ def pre(law, s, out, raw, k, ideal):
             wk.setpoint[kk, 1] = g
         f = a * f + (1 - a) * ff
         u1 += c.tpf * f
-    else:
+    elif not c.safety:
         f = 0.0
     out[nb] = f
     # the primary servo's feedforward share, low-passed: the decoupler (it follows the

@@ -71,8 +71,9 @@ INTERPOLATION = {
                "gains move)",
     "variables": {"r_g": "the measured ratio [-]",
                   "tau": "the set-point's mu(nu*, r_g*) / mu_max(r_g*) [-]",
-                  "F_s": "the clamping feedforward's filtered force [N] (the start's "
-                         "clamping force without feedforward)"}}
+                  "F_s": "the clamping feedforward's filtered force [N] (under the "
+                         "safety-factor clamping its force, at least min_clamping; the "
+                         "start's clamping force with neither)"}}
 
 #: the signals a controller may measure (a slip or ratio, or its logarithm ``ln_...``)
 MEASURABLE = ("r_g", "nu", "nu_r", "ln_r_g", "ln_nu", "ln_nu_r")

@@ -31,7 +31,11 @@ At each sample ``k`` (period ``dt = 1 / rate``) the law
    ``F_s = SF T_l cos(beta) / (2 mu_design R_s)``, ``mu_design`` the smallest traction peak
    over the ratio range (``mu_design = "ratio-blind"``) or the peak at the measured ratio
    (``"ratio-aware"``), ``T_l`` the driveshaft torque on the bench and in the car the
-   engine's torque at the secondary as its controller reports it (`CAR_SOURCE`);
+   engine's torque at the secondary as its controller reports it (`CAR_SOURCE`), in the car
+   plus the engine's inertia torque of an upshift at the reference's rate; that torque
+   held: up at once, down as a first-order lag of ``clamping_release`` (a tip-out's torque
+   still passes the belt while the driveline unwinds); the gain schedule's ``F_s`` is then
+   this clamping (at least ``min_clamping``);
 5. with ``decoupling``, makes the primary servo torque follow the feedforward's clamping:
    ``T_mp += d LP(T_ms,ff - T_ms,ff*)`` with ``d = T_mp* / T_ms*`` the ratio of the holding
    torques at the reference ratio (`empact.nonlinear.equilibrium.trim_grid`) and ``LP`` a
@@ -512,6 +516,8 @@ class LoopLaw:
             ahead_h0=spec.reserve_ahead_headroom, guard=self._guard,
             guard_margin=spec.slip_guard_margin, guard_gain=spec.slip_guard_gain,
             guard_decay=float(np.exp(-self.dt / spec.slip_guard_release)),
+            alpha_rel=float(np.exp(-self.dt / spec.clamping_release))
+            if spec.clamping_release > 0.0 else 0.0,
             floor=spec.min_clamping > 0.0, T_floor=self._clamping_torque(spec.min_clamping))
         # the shift feedforward's geometry at the reference ratio where it moves
         geo = [np.full(self.n_k, np.nan) for _ in range(4)]
@@ -695,6 +701,8 @@ class LoopLaw:
         z = np.zeros(self.n_state)
         z[:self._nb] = np.repeat(self.raw0[:len(RAW_SIGNALS)], self._n_buf)
         z[self._nb] = self._ff_force(self._ff_torque0(), self.raw0[0], self._mu_at_rest())
+        if self.config.spec.clamping == "safety-factor":  # the held torque at rest
+            z[self._nb] = abs(self.raw0[6] if self.model.vehicle else self._ff_torque0())
         if self._n_est:  # the estimate at rest: its value of the start, settled
             z[self._nb + 2:self._nb + 2 + self._n_est] = self.raw0[6]
         if self._observer:  # the observer at rest: the estimate's torque

@@ -816,7 +816,8 @@ _DECOUPLER_FORMULA = (
     "secondary servo torque before the controller's share")
 _SCHEDULE_POINT = (
     "r_g: the measured ratio; tau: mu(nu*, r_g*) / mu_max(r_g*); F_s: the clamping "
-    "feedforward's filtered force F_ff (the start's clamping force without feedforward)")
+    "feedforward's filtered force F_ff (under the safety-factor clamping its force, at least "
+    "min_clamping; the start's clamping force with neither)")
 
 
 def loop_specification(config: LoopConfig) -> dict[str, Any]:

@@ -138,6 +138,13 @@ class ControllerSpec:
         loop needs it where the belt carries almost no torque (coasting: no slip to control,
         the loop would open the belt) and the safety-factor clamping where the torque
         crosses zero (issue 34; the quasi-static cycle's 3 kN, `empact.drive_cycle`).
+    clamping_release : float
+        The safety-factor clamping's release time constant [s], in [0, 60] (0: none): the
+        torque it clamps for rises at once and falls as a first-order lag, so that the
+        clamping holds through a tip-out while the driveline's twist and the engine's
+        inertia still push the old torque through the belt (issue 34: the car's
+        safety-factor strategies use one period of the car's shuffle mode,
+        `empact.dynamic_cycle`).  The default keeps the bench's strategies as they were.
     anti_windup : bool
     sensors, limits : bool
         The parameter set's (and the scenario's) sensors and servo limits; False: ideal.
@@ -170,6 +177,7 @@ class ControllerSpec:
     slip_guard_gain: float = 2.0
     slip_guard_release: float = 1.0
     min_clamping: float = 0.0
+    clamping_release: float = 0.0
     anti_windup: bool = True
     sensors: bool = True
     limits: bool = True
@@ -207,10 +215,11 @@ class ControllerSpec:
                                       ("reserve_ahead_tau", 0.5, 0.99, False),
                                       ("slip_guard_margin", 0.0, 2.0, True),
                                       ("slip_guard_gain", 0.0, 20.0, True),
-                                      ("slip_guard_release", 0.0, 60.0, True)):
+                                      ("slip_guard_release", 0.0, 60.0, True),
+                                      ("clamping_release", 0.0, 60.0, False)):
             object.__setattr__(self, name, check_number(
                 f"controller.{name}", getattr(self, name), lo, hi, lo_open=lo_open,
-                unit="s" if name == "slip_guard_release" else ""))
+                unit="s" if name.endswith("_release") else ""))
         if self.slip_guard and not self.feedforward:
             raise ParameterError("controller.slip_guard = true: needs the clamping "
                                  "feedforward (controller.feedforward = true)")
