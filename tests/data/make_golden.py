@@ -18,7 +18,9 @@ records it; the shipped file was made from main at ``89f6a97``, the law before i
 compiled sample, issue 31 item 2; its runs and Monte Carlo are bitwise those of ``9bddc97``;
 remade at issue 33 item 1, ``cf367a5``, for the new shipped PI and the feedforward's gain
 table: the shipped runs changed on purpose; remade at issue 33 item 2 for the shipped PI
-retuned by `empact control tune`, on the lossless machine the tests run)::
+retuned by `empact control tune`, on the lossless machine the tests run; remade at issue 34,
+``4ca10a6``, for the safety-factor clamping's gain schedule at its own clamping: only
+shift-low-od-sf13 moved, the other runs within 3.1e-11 of the last golden)::
 
     PYTHONPATH=<that checkout>/src python tests/data/make_golden.py tests/data/golden_loop.npz
 
