@@ -8,7 +8,8 @@ computed in chunks by the sweep layer (`empact.sweep`), in process or on Dask; a
 depends only on the seed and its index, the table is the same whatever the scheduler and the
 number of workers.
 
-With a ``store`` folder a study streams: its chunks (about a second of work each) are written
+With a ``store`` folder a study streams: its chunks (about a second of work each; on several
+workers the first is one run and the last shrink, `empact.sweep.taper_chunks`) are written
 to shards as they complete (`empact.shards`), the parent process keeps none of them while the
 study runs, a killed study resumes from its shards (``resume=True``) and the table is then
 assembled from the shards in run order, bitwise the table of the same study in memory.
@@ -418,7 +419,7 @@ def _study_store(store: str | os.PathLike[str], resume: bool, params: Params, sp
     if resume:
         return ShardStore.open(store, spec)
     chunks = [(s.start, s.stop) for s in plan_chunks(runs, SECONDS_PER_RUN[context.kind], sweep,
-                                                     target=chunk_seconds)]
+                                                     target=chunk_seconds, taper=True)]
     return ShardStore.create(store, spec, chunks)
 
 
