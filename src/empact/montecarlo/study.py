@@ -442,11 +442,12 @@ def _write_runs_json(out: TextIO, head: dict[str, Any],
     -------
     None
     """
-    text = json.dumps(jsonable(head), indent=1)
+    encoder = json.JSONEncoder(indent=1)  # json.dumps(x, indent=1), made once
+    text = encoder.encode(jsonable(head))
     out.write(text[:-2] + ',\n "runs": [')  # the head without its closing "\n}"
     sep = "\n  "
     for row in rows:
-        out.write(sep + json.dumps(jsonable(row), indent=1).replace("\n", "\n  "))
+        out.write(sep + encoder.encode(jsonable(row)).replace("\n", "\n  "))
         sep = ",\n  "
     out.write("\n ]\n}\n" if sep != "\n  " else "]\n}\n")
 
