@@ -137,6 +137,11 @@ def check_address(address: str) -> str:
     return address
 
 
+def _per_chunk(seconds_per_item: float, target: float) -> int:
+    """Items of a chunk of about `target` seconds (at least one)."""
+    return max(1, int(math.ceil(target / max(seconds_per_item, 1e-9))))
+
+
 def chunk_count(n_items: int, seconds_per_item: float, workers: int = 1,
                 target: float = 0.05) -> int:
     """Number of chunks for `n_items` items of `seconds_per_item` each: chunks of about
@@ -159,7 +164,7 @@ def chunk_count(n_items: int, seconds_per_item: float, workers: int = 1,
     int
         The number of chunks, between 1 and `n_items` (1 when there are no items).
     """
-    per = max(1, int(math.ceil(target / max(seconds_per_item, 1e-9))))
+    per = _per_chunk(seconds_per_item, target)
     n = max(1, int(math.ceil(n_items / per)))
     return max(1, min(n_items, max(n, 2 * workers if n_items * seconds_per_item
                                    > 4 * target * workers else n)))
@@ -213,8 +218,7 @@ def plan_chunks(n_items: int, seconds_per_item: float,
     """
     workers = (options or SweepOptions()).parallelism
     if taper and workers > 1:
-        return taper_chunks(n_items, max(1, int(math.ceil(target / max(seconds_per_item,
-                                                                         1e-9)))), workers)
+        return taper_chunks(n_items, _per_chunk(seconds_per_item, target), workers)
     return chunk_slices(n_items, chunk_count(n_items, seconds_per_item, workers, target))
 
 
