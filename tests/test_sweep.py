@@ -31,7 +31,7 @@ from empact.montecarlo.spread import Distribution
 from empact.params import default_params
 from empact.slip.stability import stability_map
 from empact.sweep import (SweepError, SweepOptions, chunk_count, chunk_slices, plan_chunks,
-                          run_chunks)
+                          run_chunks, taper_chunks)
 
 P = default_params()
 
@@ -67,6 +67,27 @@ def test_chunks_cover_the_items_in_order():
     assert plan_chunks(20000, 4e-5) == chunk_slices(20000, chunk_count(20000, 4e-5, 1))
     # 5000 points (0.2 s) on 3 workers: too little work for two chunks per worker -> 4 chunks
     assert len(plan_chunks(5000, 4e-5, SweepOptions("local", workers=3))) == 4
+
+
+def test_tapered_chunks_start_with_one_item_and_shrink_to_the_end():
+    """A streamed study's plan on several workers (`taper_chunks`): one item first (run here
+    before the fork), full chunks, then chunks that shrink to a quarter of a full one."""
+    for n, per, workers in [(200, 13, 2), (12, 2, 2), (10_000, 13, 2), (1, 13, 2), (3, 13, 4),
+                            (1000, 1, 3), (97, 40, 8)]:
+        sl = taper_chunks(n, per, workers)
+        assert [i for s in sl for i in range(n)[s]] == list(range(n))
+        sizes = [s.stop - s.start for s in sl]
+        assert sizes[0] == 1 and max(sizes) <= per and min(sizes) >= 1
+        # shrinking, not below a quarter of a full chunk (the last one: what is left)
+        assert all(a >= b for a, b in zip(sizes[1:], sizes[2:-1]))
+        assert all(x >= -(-per // 4) for x in sizes[1:-1])
+    sizes = [s.stop - s.start for s in taper_chunks(200, 13, 2)]
+    assert sizes == [1] + [13] * 12 + [11, 8, 6, 5, 4, 4, 4, 1]
+    # plan_chunks tapers only when asked and with more than one worker
+    one, two = SweepOptions(), SweepOptions(workers=2)
+    assert plan_chunks(200, 0.08, one, target=1.0, taper=True) == \
+        plan_chunks(200, 0.08, one, target=1.0) == chunk_slices(200, 16)
+    assert plan_chunks(200, 0.08, two, target=1.0, taper=True) == taper_chunks(200, 13, 2)
 
 
 def test_core_never_imports_dask():
