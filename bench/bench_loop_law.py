@@ -6,7 +6,10 @@ Rodas4) with the scenario's `empact.control.law.LoopLaw`; per scenario the law's
 calls it) and the whole run's wall time with the law itself in the loop (compiled with the
 integrator where the law offers `run_compiled`); the compiled loop's CPU time per sample
 (issue 36: a shift's within 1.5x a load step's), the law's construction (`build_law`, CPU)
-and its share of the whole `run_closed_loop` (issue 36: at most 10 % on a shift); then,
+and its share of the whole `run_closed_loop` (issue 36: at most 10 % on a shift); a
+process's *first* law of each shift (`FIRST_BUILD`: a fresh process per scenario, numba's
+cache warm from the runs before, so that the references are not cached: `build_law`, then
+`run_closed_loop`, CPU, and the build's share of the two); then,
 unless ``--no-montecarlo``, the
 200-run closed-loop Monte Carlo of the shipped example spread (slip-load-step-r1, serial, in
 process; `_montecarlo_workload.py`).
@@ -35,6 +38,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 REPEATS = 3
+#: the shipped shifts (a moving ratio reference) whose first law `first_build` times
+FIRST_BUILD = ("shift-low-od", "shift-low-od-sf13", "shift-low-od-slow", "vehicle-kickdown",
+               "vehicle-upshift")
 HERE = Path(__file__).resolve().parent
 OWN_SRC = HERE.parent / "src"
 
@@ -107,6 +113,34 @@ def worker(montecarlo: bool) -> None:
     print(json.dumps(out))
 
 
+def first_build(name: str) -> None:
+    """A process's first law of the scenario `name`, as JSON on stdout: the CPU time [s] of
+    `build_law` (the references computed, not cached) and of the `run_closed_loop` after it
+    (which builds the law again from the cached references, trims and runs)."""
+    from empact.control.closed_loop import build_law, control_example_path, run_closed_loop
+    from empact.nonlinear.scenario import load_scenario
+    from empact.nonlinear.simulation import scenario_model
+    from empact.params import default_params
+
+    params = default_params()
+    sc = load_scenario(control_example_path(name))
+    model, op = scenario_model(sc, params)
+    c0 = time.process_time()
+    build_law(sc, params, None, model, op)
+    c1 = time.process_time()
+    run_closed_loop(sc, params)
+    print(json.dumps([c1 - c0, time.process_time() - c1]))
+
+
+def _first(src: Path, name: str) -> list[float]:
+    env = dict(os.environ, PYTHONPATH=str(src))
+    res = subprocess.run([sys.executable, __file__, "--first-build", name], env=env,
+                         capture_output=True, text=True)
+    if res.returncode:
+        sys.exit(f"the first build of {name} on {src} failed:\n{res.stderr}")
+    return json.loads(res.stdout.splitlines()[-1])
+
+
 def _run(src: Path, montecarlo: bool) -> dict:
     env = dict(os.environ, PYTHONPATH=str(src))
     cmd = [sys.executable, __file__, "--worker"] + ([] if montecarlo else ["--no-montecarlo"])
@@ -120,6 +154,9 @@ def main() -> None:
     montecarlo = "--no-montecarlo" not in sys.argv
     if "--worker" in sys.argv:
         worker(montecarlo)
+        return
+    if "--first-build" in sys.argv:
+        first_build(sys.argv[sys.argv.index("--first-build") + 1])
         return
     trees = {"this": OWN_SRC}
     if "--against" in sys.argv:
@@ -160,6 +197,20 @@ def main() -> None:
         print(f"{key}: compiled shift sample over the load steps': "
               f"{max(cs) / statistics.median(cl):.2f} (largest shift); law build share of a "
               f"shift's run_closed_loop: {max(v[2] / v[4] for k, v in med[key].items() if k.startswith('shift')):.2f} (largest)")
+    # a process's first law of each shift (fresh processes, alternated; medians of REPEATS)
+    first: dict[str, dict[str, list[list[float]]]] = {k: {n: [] for n in FIRST_BUILD}
+                                                       for k in trees}
+    for _ in range(REPEATS):
+        for name in FIRST_BUILD:
+            for key, src in trees.items():
+                first[key][name].append(_first(src, name))
+    print(f"{'first law':22s} {'build [ms]':>10s} {'against':>8s} {'ratio':>6s}  "
+          f"{'then run [ms]':>13s} {'against':>8s}  {'build share':>11s} {'against':>8s}")
+    for name in FIRST_BUILD:
+        (bn, rn), (bo, ro) = ([statistics.median(x[i] for x in first[key][name])
+                               for i in (0, 1)] for key in ("this", other))
+        print(f"{name:22s} {1e3 * bn:10.1f} {1e3 * bo:8.1f} {bn / bo:6.3f}  {1e3 * rn:13.1f} "
+              f"{1e3 * ro:8.1f}  {bn / (bn + rn):11.2f} {bo / (bo + ro):8.2f}")
     if montecarlo:
         mc = {k: statistics.median(r["montecarlo"] for r in runs) for k, runs in got.items()}
         print(f"Monte Carlo, 200 closed-loop runs of slip-load-step-r1, serial: this "

@@ -8,6 +8,7 @@ import pytest
 from scipy.io import loadmat
 from scipy.signal import cont2discrete
 
+from empact.control import law as law_module
 from empact.control.closed_loop import (
     build_law,
     check_targets,
@@ -25,7 +26,7 @@ from empact.errors import ParameterError
 from empact.nonlinear.equilibrium import slip_at_torque_ratio
 from empact.nonlinear.model import nonlinear_model
 from empact.nonlinear.scenario import load_scenario, scenario_from_dict
-from empact.nonlinear.simulation import CompiledSampledController
+from empact.nonlinear.simulation import CompiledSampledController, scenario_model
 from empact.reproduction.control import SHIPPED_DESIGNS, shipped_controller
 from empact.variator.geometry import radii
 
@@ -651,6 +652,95 @@ def test_smallest_slip_reserve_is_the_per_sample_search(params):
         full = np.asarray(traction_peak(model, r)[0]) - nu
         assert r.size > 2000, name  # the interpolation is used
         assert smallest_slip_reserve(model, r, nu) == (float(full.min()), int(full.argmin()))
+
+
+#: the shipped shifts (their ratio references move through 1501 to 10079 distinct ratios)
+SHIFTS = ["shift-low-od", "shift-low-od-sf13", "shift-low-od-slow", "vehicle-kickdown",
+          "vehicle-upshift"]
+
+
+@pytest.mark.parametrize("name", SHIFTS)
+def test_shift_references_from_the_ratio_grid_are_the_per_ratio_route(params, monkeypatch,
+                                                                      name):
+    """A shift's references from the grid of ratios (`law._rising_slips`: the slip
+    set-points polished from a grid's, each certified within 1e-13 of the bisection's;
+    `law._on_ratio_grid`: the decoupler's holding-torque ratio interpolated from a grid's
+    trims, its error estimated below 1e-11) against the per-ratio route they replace (a
+    traction-peak search, a bisection and a trim at every distinct reference ratio: taken with
+    `_GRID_MIN` above the count).  Bounds: the slips and their traction coefficients within
+    1e-16 (about 30 ulp of a slip of 0.02; measured 1.4e-17 and 2.8e-17: the secant's and the
+    bisection's last bits), the decoupler's ratio within 1e-13 of its largest magnitude
+    (measured 3.1e-15: the trims' rounding); the ratio, its rate and the start's torque
+    ratio bitwise.  Every shipped shift's decoupler ratio is interpolated (checked)."""
+    sc = load_scenario(control_example_path(name))
+    model, op = scenario_model(sc, params)
+    taken = []
+    on_grid = law_module._on_ratio_grid
+
+    def spy(values_at, r):
+        out = on_grid(values_at, r)
+        taken.append(out is not None)
+        return out
+
+    monkeypatch.setattr(law_module, "_on_ratio_grid", spy)
+    threshold = law_module._GRID_MIN
+    law_module._REFERENCES.clear()
+    grid = build_law(sc, params, None, model, op)
+    law_module._REFERENCES.clear()
+    monkeypatch.setattr(law_module, "_GRID_MIN", 10 ** 9)
+    exact = build_law(sc, params, None, model, op)
+    law_module._REFERENCES.clear()
+    assert np.unique(grid.refs.r_g).size >= threshold > 0  # the grid route was taken
+    assert taken == [True], taken
+    for f in ("r_g", "rdot"):
+        np.testing.assert_array_equal(getattr(grid.refs, f), getattr(exact.refs, f))
+    assert grid._tau_ref == exact._tau_ref
+    for f in ("slip", "mu", "slip_lo", "mu_lo"):
+        assert np.max(np.abs(getattr(grid.refs, f) - getattr(exact.refs, f))) <= 1e-16, f
+    dec_g, dec_e = grid.refs.decoupling, exact.refs.decoupling
+    assert np.max(np.abs(dec_g - dec_e)) <= 1e-13 * np.max(np.abs(dec_e))
+
+
+def test_grid_helpers_fall_back_where_not_shown(params):
+    """`law._polish_rising` certifies only a slip on the rising branch within its bound (a
+    guess past the traction peak polishes to the falling branch's crossing: not certified,
+    and `law._rising_slips` takes the bisection's there); `law._on_ratio_grid` declines a
+    curve its grid cannot interpolate to its bound 1e-11 (a kink of slope 1e-8 between two
+    nodes), takes one it can (a kink of 1e-9: within the bound; ``ln r_g`` squared: to
+    rounding), and declines a grid not smaller than half the ratios (600 ratios over the
+    357 nodes from 0.5 to 2)."""
+    model = nonlinear_model(params)
+    r = np.geomspace(0.5, 2.0, 400)
+    nu = slip_at_torque_ratio(model, 0.9, r)
+    goal = 0.9 * model.mu_max(r)
+    ok_nu, ok = law_module._polish_rising(model, r, goal, nu * (1 + 1e-5))
+    assert ok.all() and np.max(np.abs(ok_nu - nu)) <= 1e-16
+    far, ok = law_module._polish_rising(model, r, goal, np.full(r.shape, 0.5))
+    assert not ok.any()  # the falling branch's crossing (or none): never certified
+    np.testing.assert_allclose(law_module._rising_slips(model, 0.9, r), nu, rtol=0, atol=1e-16)
+    rr = np.geomspace(0.5, 2.0, 20000)
+    smooth = law_module._on_ratio_grid(lambda q: np.log(q) ** 2, rr)
+    assert smooth is not None and np.max(np.abs(smooth - np.log(rr) ** 2)) <= 1e-12
+    def kinked(size, at=0.1234):
+        return lambda q: 1.0 + size * np.abs(np.log(q) - at)
+
+    # a kink of slope 1e-8: the polynomials through every other node miss by 9.5e-12, those
+    # through all nodes by 1.1e-11 (above the bound 1e-11: declined); of 1e-9: 9.5e-13 and
+    # 1.1e-12 (taken).  Over the kink's place, all nodes' miss is at most 1.7 times every
+    # other node's (measured 1.66; the estimate's factor 4 covers it)
+    assert law_module._on_ratio_grid(kinked(1e-8), rr) is None
+    small = law_module._on_ratio_grid(kinked(1e-9), rr)
+    assert small is not None and np.max(np.abs(small - kinked(1e-9)(rr))) <= 1e-11
+    q = law_module._ratio_nodes(rr, law_module._GRID_STEP)
+    worst = 0.0
+    for at in np.linspace(-0.6, 0.6, 97):
+        v = kinked(1e-8, at)(q)
+        every_other = np.max(np.abs(law_module._interpolate(q[::2], v[::2], q[1::2]) - v[1::2]))
+        worst = max(worst, np.max(np.abs(law_module._interpolate(q, v, rr)
+                                         - kinked(1e-8, at)(rr))) / every_other)
+    assert worst <= 2.0
+    assert law_module._on_ratio_grid(lambda q: np.log(q) ** 2, np.geomspace(0.5, 2.0, 600)) \
+        is None
 
 
 def _array_form_gains(sched, point):

@@ -317,6 +317,122 @@ def _antiwindup_solved(a_shape: tuple[int, ...], c_shape: tuple[int, ...], a: by
     return A @ P @ C.T @ np.linalg.inv(C @ P @ C.T + np.eye(m))
 
 
+#: a reference that moves through at least this many distinct ratios prepares its slips and
+#: holding torques on a grid of ratios (`_rising_slips`, `_on_ratio_grid`): fewer, at each
+#: ratio (a load step's few ratios; a shift's thousands cost about 20 ms of CPU a thousand)
+_GRID_MIN = 256
+#: the grid's spacing in ``ln r_g`` for the slips' first guesses (`_rising_slips`) and for
+#: the interpolated holding torques (`_on_ratio_grid`), and the nodes of each interpolating
+#: polynomial (`_interpolate`: quintic)
+_GUESS_STEP, _GRID_STEP, _POINTS = 1.0 / 64, 1.0 / 256, 6
+#: the interpolated holding torques' ratio: its estimated error's bound, relative to its
+#: largest magnitude (it scales a filtered change of the feedforward's torque: an error of
+#: 1e-11 moves the primary servo torque by less than 1e-11 of its range, against the 1e-10
+#: of a run's golden comparison and the 1e-6 a change of the law makes)
+_GRID_RTOL = 1e-11
+#: the polished slips' certified bound relative to the slip (`_polish_rising`)
+_SLIP_RTOL = 1e-13
+#: secant steps of `_polish_rising` at most (from the shipped shifts' guesses, within 2e-6
+#: of the slip, the last ratio settles after 8: 12 evaluations of the curve in all)
+_POLISH_STEPS = 10
+
+
+def _ratio_nodes(r: NDArray, step: float) -> NDArray[np.float64]:
+    """An odd number (at least 11: every other one at least `_POINTS`) of ratios uniform in
+    ``ln r_g`` from ``min(r)`` to ``max(r)`` (both exactly), at most `step` apart in
+    ``ln r_g``."""
+    lo, hi = float(np.min(r)), float(np.max(r))
+    n = 2 * max(int(np.ceil((np.log(hi) - np.log(lo)) / (2 * step))), _POINTS - 1) + 1
+    q = np.exp(np.linspace(np.log(lo), np.log(hi), n))
+    q[0], q[-1] = lo, hi
+    return q
+
+
+def _interpolate(q: NDArray, v: NDArray, r: NDArray) -> NDArray[np.float64]:
+    """The values `v` at the ratios `q` (uniform in ``ln r_g``, at least `_POINTS`)
+    interpolated at the ratios `r` (inside them): the polynomial through the `_POINTS` nodes
+    around each ratio (Lagrange's form), in ``ln r_g`` (error ``O(h^6)`` on a smooth curve,
+    ``h`` the nodes' spacing)."""
+    lq, x = np.log(q), np.log(r)
+    h = (lq[-1] - lq[0]) / (len(q) - 1)
+    first = _POINTS // 2 - 1  # the nodes i - first ... i - first + _POINTS - 1
+    i = np.clip(np.floor((x - lq[0]) / h).astype(np.intp), first, len(q) - _POINTS + first)
+    s = (x - lq[i]) / h
+    offsets = range(-first, _POINTS - first)
+    out = np.zeros(np.shape(r))
+    for j in offsets:
+        w = np.ones(np.shape(r))
+        for k in offsets:
+            if k != j:
+                w *= (s - k) / (j - k)
+        out += w * v[i + j]
+    return out
+
+
+def _polish_rising(model: EmpactModel, r: NDArray, goal: NDArray,
+                   guess: NDArray) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """The slip where the traction curve at `r` reaches `goal` on its rising branch, by
+    secant steps from `guess` (close to it), and whether it is certified: the curve lies below
+    `goal` at ``(1 - _SLIP_RTOL)`` of the slip and reaches it at ``(1 + _SLIP_RTOL)`` (so
+    the slip is within `_SLIP_RTOL` of the rising branch's crossing, which
+    `empact.nonlinear.equilibrium.slip_at_torque_ratio` bisects to rounding; the curve is
+    unimodal, rising before its peak).  Arrays of one shape; slips [-]."""
+    x0, x1 = guess, guess * (1 + 1e-6)
+    f0, f1 = model.traction(x0, r) - goal, model.traction(x1, r) - goal
+    live = np.ones(r.shape, dtype=bool)
+    for _ in range(_POLISH_STEPS):
+        live &= (f1 != f0) & (f1 != 0)
+        if not live.any():
+            break
+        x2 = np.where(live, x1 - f1 * (x1 - x0) / np.where(live, f1 - f0, 1.0), x1)
+        live &= x2 != x1
+        x0, f0, x1 = x1, f1, x2
+        f1 = model.traction(x1, r) - goal
+    ok = (np.isfinite(x1) & (x1 > 0)
+          & (model.traction(x1 * (1 - _SLIP_RTOL), r) < goal)
+          & (model.traction(x1 * (1 + _SLIP_RTOL), r) >= goal))
+    return x1, ok
+
+
+def _rising_slips(model: EmpactModel, tau: float, r: NDArray) -> NDArray[np.float64]:
+    """`empact.nonlinear.equilibrium.slip_at_torque_ratio` at one torque ratio `tau` [-]
+    and the ratios `r` (1-D) [-]: at fewer than `_GRID_MIN` ratios that function itself (a
+    traction-peak search and a bisection at each ratio); at more, its slips at ratios
+    `_GUESS_STEP` apart in ``ln r_g`` interpolated (`_interpolate`) and polished at each ratio
+    (`_polish_rising`: within `_SLIP_RTOL` of the bisection's, certified; where not, the
+    bisection's).  About 12 traction evaluations a ratio against the search's 157."""
+    if r.size < _GRID_MIN:
+        return slip_at_torque_ratio(model, tau, r)
+    q = _ratio_nodes(r, _GUESS_STEP)
+    guess = _interpolate(q, slip_at_torque_ratio(model, tau, q), r)
+    nu, ok = _polish_rising(model, r, tau * model.mu_max(r), guess)
+    if not ok.all():
+        nu[~ok] = slip_at_torque_ratio(model, tau, r[~ok])
+    return nu
+
+
+def _on_ratio_grid(values_at: Any, r: NDArray) -> NDArray[np.float64] | None:
+    """``values_at(r)`` (a smooth function of the ratio, 1-D arrays) interpolated
+    (`_interpolate`) from its values at ratios `_GRID_STEP` apart in ``ln r_g`` spanning `r`
+    (1-D), or None: when the grid is not smaller than half of `r`, when ``values_at``
+    returns None at the grid, or when the error is not estimated below `_GRID_RTOL` of the
+    largest value.  The estimate: four times the largest miss of the polynomials through
+    every other node at the nodes between (those through all nodes, the ones used, miss by
+    ``2^-6`` of that on a smooth curve, by up to 1.7 times it at a kink, a jump of the
+    slope, over the kink's place between the nodes: `tests/test_loop.py`).  An estimate,
+    not a bound: a feature narrower than the nodes' spacing can hide between them."""
+    q = _ratio_nodes(r, _GRID_STEP)
+    if 2 * q.size > r.size:
+        return None
+    v = values_at(q)
+    if v is None:
+        return None
+    miss = np.max(np.abs(_interpolate(q[::2], v[::2], q[1::2]) - v[1::2]))
+    if not 4 * miss <= _GRID_RTOL * np.max(np.abs(v)):
+        return None
+    return _interpolate(q, v, r)
+
+
 #: the references of the last laws built (`LoopLaw._cached_references`), by a digest of
 #: what they are computed from
 _REFERENCES: "OrderedDict[bytes, tuple[_Refs, float]]" = OrderedDict()
@@ -474,8 +590,6 @@ class LoopLaw:
         self._at: tuple[tuple[float, ...], Any] | None = None  # `_law_at`'s last row
         self.z0 = self.initial_state()
         self.reset()
-        self._sample = _entry(core.sample, self._law, self._z, self._z_spare, self.raw0, 0,
-                              False)
 
     def _pack(self) -> None:
         """The law's constants, per-sample tables and work arrays as the compiled sample
@@ -567,9 +681,9 @@ class LoopLaw:
     # -- set-up ----------------------------------------------------------------------------
     def _cached_references(self, references: Mapping[str, NDArray]) -> _Refs:
         """`_references`, computed once for the same model, start, references and loop (a
-        shift's cost a trim and a traction-peak search per distinct reference ratio, and
-        the report builds one scenario's law for its run, the ideal run, the linear model
-        and the feedforward's estimates: the same references each time)."""
+        shift's cost 30-35 ms of CPU even on the grid of ratios, and the report builds one
+        scenario's law for its run, the ideal run, the linear model and the feedforward's
+        estimates: the same references each time)."""
         h = hashlib.sha256()
         for part in (type(self).__qualname__.encode(), self.model.p.tobytes(),
                      repr(self.model.options).encode(),
@@ -602,17 +716,25 @@ class LoopLaw:
                                  f"range [{lo:.4g}, {hi:.4g}]")
         # the traction peak at each distinct reference ratio, searched once: the slip
         # set-points and the decoupler's trims below share it (a shift's ratio moves at every
-        # sample: a search per sample)
+        # sample: a search per sample).  A reference through `_GRID_MIN` ratios or more (a
+        # shift) searches none: its slips are polished from a grid's (`_rising_slips`) and
+        # its holding torques interpolated from a grid's trims (`_on_ratio_grid`)
         ru, at_ru = np.unique(r, return_inverse=True)
-        peak = traction_peak(self.model, ru) if "tau" in tab or self.config.spec.decoupling \
-            else None
+        grid = ru.size >= _GRID_MIN
+        peak = traction_peak(self.model, ru) if not grid and (
+            "tau" in tab or self.config.spec.decoupling) else None
         by_tau = None  # the distinct (tau, r_g) of a torque-ratio reference and their slips
         if "tau" in tab:
             pairs, inv = _unique_rows(tab["tau"], r)
-            at_pk = np.searchsorted(ru, pairs[:, 1])
-            assert peak is not None
-            at = slip_at_torque_ratio(self.model, pairs[:, 0], pairs[:, 1],
-                                      peak=(peak[0][at_pk], peak[1][at_pk]))
+            if peak is not None:
+                at_pk = np.searchsorted(ru, pairs[:, 1])
+                at = slip_at_torque_ratio(self.model, pairs[:, 0], pairs[:, 1],
+                                          peak=(peak[0][at_pk], peak[1][at_pk]))
+            else:  # by torque ratio (the pairs are sorted by it, then by the ratio)
+                at = np.empty(len(pairs))
+                for tau_k in np.unique(pairs[:, 0]):
+                    sel = np.flatnonzero(pairs[:, 0] == tau_k)
+                    at[sel] = _rising_slips(self.model, float(tau_k), pairs[sel, 1])
             by_tau, slip = (pairs, at), at[inv]
         else:
             slip = tab.get(self.slip_signal if self.slip_signal in tab else
@@ -638,33 +760,48 @@ class LoopLaw:
         if self.config.spec.decoupling:
             # the holding torques' ratio T_mp* / T_ms* at the reference ratios (at the
             # set-point's torque ratio and the starting clamping force)
-            assert peak is not None
-            w, F_s, tau = self.point["omega_p"], self.point["F_s"], np.full(ru.shape,
-                                                                           self._tau_ref)
-            if (by_tau is not None and np.array_equal(by_tau[0][:, 1], ru)
-                    and np.all(by_tau[0][:, 0] == tau)
-                    and np.all(tau * self.model.mu_max(ru) <= peak[1])):
+            ratio = None
+            if grid:
+                ratio = _on_ratio_grid(lambda q: self._holding_ratio(
+                    q, nu=_rising_slips(self.model, self._tau_ref, q), strict=False), ru)
+            tau = np.full(ru.shape, self._tau_ref)
+            if ratio is None and by_tau is not None and np.array_equal(by_tau[0][:, 1], ru) \
+                    and np.all(by_tau[0][:, 0] == tau) \
+                    and (peak is None or np.all(tau * self.model.mu_max(ru) <= peak[1])):
                 # the set-points are at this torque ratio at every distinct ratio: their
-                # slips are the trims' (the same bisection), trimmed at them
-                g = trim_grid(self.model, ru, w, nu=by_tau[1], F_s=F_s)
-            else:
-                g = trim_grid(self.model, ru, w, tau=tau, F_s=F_s, peak=peak)
-            if not np.all(g.ok):
-                bad = ru[~g.ok][0]
-                raise ParameterError(f"decoupling: the machine does not trim at the reference "
-                                     f"ratio {bad:g} ({g.reason[~g.ok][0]})")
-            dec = (g.u[:, 0] / g.u[:, 1])[at_ru]
+                # slips are the trims' (the same bisection, or its polish, certified on the
+                # rising branch), trimmed at them
+                ratio = self._holding_ratio(ru, nu=by_tau[1])
+            if ratio is None:
+                if peak is None:
+                    peak = traction_peak(self.model, ru)
+                ratio = self._holding_ratio(ru, tau=tau, peak=peak)
+            assert ratio is not None  # (strict: a ParameterError where it does not trim)
+            dec = ratio[at_ru]
         slip_lo, mu_lo = np.asarray(slip, float), np.asarray(mu, float)
         if self.config.spec.reserve_ahead:
             # the reserve ahead's lowest set-point: its torque ratio at each reference ratio
             # (never above the reference's own)
-            ru, inv = np.unique(r, return_inverse=True)
-            tau_lo = np.full(ru.shape, self.config.spec.reserve_ahead_tau)
-            nu_lo = slip_at_torque_ratio(self.model, tau_lo, ru)[inv.ravel()]
+            nu_lo = _rising_slips(self.model, self.config.spec.reserve_ahead_tau, ru)[at_ru]
             slip_lo = np.minimum(nu_lo, slip_lo)
             mu_lo = np.asarray(self.model.traction(slip_lo, r), float)
         return _Refs(r_g=r, slip=np.asarray(slip, float), mu=np.asarray(mu, float), rdot=rdot,
                      decoupling=dec, slip_lo=slip_lo, mu_lo=mu_lo)
+
+    def _holding_ratio(self, r: NDArray, strict: bool = True,
+                       **slip: Any) -> NDArray[np.float64] | None:
+        """The holding torques' ratio ``T_mp* / T_ms*`` [-] at the ratios `r` (1-D) [-]: the
+        trims (`trim_grid`) at the starting primary speed and clamping force and the slip
+        `slip` (``nu=`` the slips, or ``tau=`` the torque ratios with ``peak=``).  Where a
+        ratio does not trim: a ParameterError (`strict`), else None."""
+        g = trim_grid(self.model, r, self.point["omega_p"], F_s=self.point["F_s"], **slip)
+        if not np.all(g.ok):
+            if not strict:
+                return None
+            bad = r[~g.ok][0]
+            raise ParameterError(f"decoupling: the machine does not trim at the reference "
+                                 f"ratio {bad:g} ({g.reason[~g.ok][0]})")
+        return g.u[:, 0] / g.u[:, 1]
 
     def _make_noise(self) -> NDArray[np.float64]:
         s = self.config.sensors
@@ -953,6 +1090,16 @@ class LoopLaw:
         if self._sample(law, z, z_next, self._raw(raw), kk, bool(ideal)):
             raise _no_geometry(self._wk.meas[0])
         return z_next, self._wk.u.copy()
+
+    def _sample(self, law: Any, z: NDArray, z_next: NDArray, raw: NDArray, k: int,
+                ideal: bool) -> Any:
+        """One compiled sample (`_law_core.sample`): its overload is resolved on the first
+        call, not when the law is built (a run by `run_compiled` never calls it, and loading
+        it from numba's cache cost 30-50 ms of CPU in a process's first law), and then set on
+        the instance in this method's place (later calls go to it directly)."""
+        entry = _entry(core.sample, self._law, self._z, self._z_spare, self.raw0, 0, False)
+        self._sample = entry  # type: ignore[method-assign]
+        return entry(law, z, z_next, raw, k, ideal)
 
     def _raw(self, raw: NDArray) -> NDArray[np.float64]:
         """The raw measurements as the compiled sample takes them (float64, shape (7,))."""
