@@ -357,11 +357,11 @@ def test_safety_factor_clamping_rises_at_once_and_releases_as_a_first_order_lag(
 
 def test_safety_factor_clamping_schedules_the_ratio_loop_at_its_own_clamping(params):
     """Under the safety-factor clamping the gain schedule reads the clamping the law
-    commands (its ``F_s`` axis), not the start's (issue 34: at the start's clamping the
-    car's ratio loop ran with a quarter of its gain in a kickdown at 12-16 kN and missed the
-    trace by 2.2 km/h): with the torque doubled, the ratio error's gain is the schedule's at
-    twice the start's clamping (to 1e-12 relative), and it differs from the start's by more
-    than 10 %."""
+    commands (its ``F_s`` axis), not the start's (issue 34: scheduled at the stretch's
+    starting 3 kN, the car's ratio loop ran a kickdown at 12-16 kN with 40 % of its gain and
+    missed the trace by 2.2 km/h): with the torque doubled, the ratio error's gain is the
+    schedule's at twice the start's clamping (to 1e-12 relative), and it differs from the
+    start's by more than 10 %."""
     gains, forces = [], []
     for scale in (1.0, 2.0):
         law, u1, e, m = _safety_law_after(params, scale, 0.0, ratio=0.99)
