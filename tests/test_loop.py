@@ -120,6 +120,18 @@ def test_light_load_overdrive_holds_its_slip(params, r_g, F_s):
     assert run.metrics["peak_slip_error"] < 0.001
 
 
+
+def _assert_prediction_within(sc, params, tol, label):
+    """The scenario's linear prediction (`predict_scenario`) against its nonlinear run
+    (ideal sensors): the slip's and the clamping force's excursions from the start differ by
+    at most `tol` of the nonlinear excursion."""
+    res = run_closed_loop(sc, params, ideal=True).result
+    pred = predict_scenario(sc, params)
+    for name in ("nu", "F_s"):
+        yn = res.output(name) - res.output(name)[0]
+        yl = np.interp(res.t, pred.t, pred.output(name)) - pred.output(name)[0]
+        assert np.abs(yn - yl).max() <= tol * np.abs(yn).max(), (label, name)
+
 def test_linear_prediction_matches_the_nonlinear_run_for_a_small_step(params):
     """For a load step of 2 % of the torque capacity the nonlinear closed loop (the same law
     without limits, quantisation and noise) and its linear model agree: the slip's and the
@@ -128,12 +140,7 @@ def test_linear_prediction_matches_the_nonlinear_run_for_a_small_step(params):
     for r in ("0.5", "1", "2"):
         sc = replace(load_scenario(control_example_path(f"slip-small-step-r{r}")),
                      load_step=0.02)
-        res = run_closed_loop(sc, params, ideal=True).result
-        pred = predict_scenario(sc, params)
-        for name in ("nu", "F_s"):
-            yn = res.output(name) - res.output(name)[0]
-            yl = np.interp(res.t, pred.t, pred.output(name)) - pred.output(name)[0]
-            assert np.abs(yn - yl).max() <= 0.05 * np.abs(yn).max(), (r, name)
+        _assert_prediction_within(sc, params, 0.05, r)
 
 
 def test_loop_at_rest_stays_at_the_trim(params):
@@ -932,12 +939,7 @@ def test_linear_prediction_covers_the_torque_estimates(params, signal):
         sc = load_scenario(control_example_path(f"slip-small-step-r{r}"))
         sc = replace(sc, load_step=0.005,
                      controller=replace(sc.controller, feedforward_signal=signal))
-        res = run_closed_loop(sc, params, ideal=True).result
-        pred = predict_scenario(sc, params)
-        for name in ("nu", "F_s"):
-            yn = res.output(name) - res.output(name)[0]
-            yl = np.interp(res.t, pred.t, pred.output(name)) - pred.output(name)[0]
-            assert np.abs(yn - yl).max() <= 0.03 * np.abs(yn).max(), (r, name)
+        _assert_prediction_within(sc, params, 0.03, r)
 
 
 def test_family_loops_of_the_car_read_the_engine_torque(params):

@@ -390,8 +390,11 @@ def dynamic_cycle(params: Params, cycle: Cycle, *,
         if quasi_static is None else quasi_static
     v_launch = launch_speed(params)
     stretches = driving_stretches(cycle, v_launch)
+    # the safety-factor strategies' release (a trim and a linearisation: once, not a strategy)
+    release = clamping_release(model) if any(
+        LOOPS[_LOOP_OF[s]]["clamping"] == "safety-factor" for s in strategies) else 0.0
     runs = {s: _run_strategy(params, cycle, qs, model, s, stretches, float(tau), driver,
-                             output_rate, rate, method) for s in strategies}
+                             output_rate, rate, method, release) for s in strategies}
     return DynamicCycleResult(cycle=cycle, strategies=strategies, quasi_static=qs,
                               stretches=tuple((float(cycle.t[a]), float(cycle.t[b]))
                                               for a, b in stretches),
@@ -418,13 +421,14 @@ def _interval_weights(t: NDArray, use: NDArray[np.bool_]) -> NDArray:
 def _run_strategy(params: Params, cycle: Cycle, qs: CycleResult, model: EmpactModel,
                   strategy: str, stretches: list[tuple[int, int]], tau: float,
                   driver: Driver, output_rate: float, rate: float,
-                  method: str) -> DynamicRun:
-    """One strategy over every dynamic stretch, then the cycle's energies."""
+                  method: str, release: float) -> DynamicRun:
+    """One strategy over every dynamic stretch, then the cycle's energies (`release`: the
+    safety-factor clamping's, `clamping_release` [s])."""
     veh, eng = params.vehicle, params.engine
     gear = veh.r_wheel / veh.i_fd
     keys = LOOPS[_LOOP_OF[strategy]]
     if keys["clamping"] == "safety-factor":
-        keys = {**keys, "clamping_release": clamping_release(model)}
+        keys = {**keys, "clamping_release": release}
     loop = LoopConfig.of(params, rate=rate, **keys)
     ctrl = resolve_controller("shipped:pi")
     hydraulic = strategy.startswith("hydraulic")

@@ -246,8 +246,9 @@ def _dynamic(dyn: DynamicCycleResult, qs: dict) -> tuple[list[list[object]], tup
                            "table's slip reserve and clamping name where).")
               if bad else "The safety-factor clamping holds the engine's torque through "
                           "a tip-out (released over one period of the car's shuffle mode, "
-                          "0.37 s): the driveline's twist and the engine's inertia push the "
-                          "old torque through the belt for about half that period.",
+                          "empact.dynamic_cycle.clamping_release): the driveline's twist "
+                          "and the engine's inertia push the old torque through the belt "
+                          "for about half that period.",
               values={s: {"macro_slip": e["macro_slip"], "belt_slack": e["belt_slack"]}
                       for s, e in S.items()}),
         Claim(key="cycle.dynamic_loss_agreement", source=src,
