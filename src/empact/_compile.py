@@ -266,7 +266,7 @@ def compile_all() -> float:
     law.update(law.z0, law.raw0, 0, ideal=True)
     law.preprocess(law.z0[:law.n_pre], law.raw0, 0, np.array([law.point["r_g"], 0.01, 0.05,
                                                                  0.0]), ideal=True)
-    law.sense(law.z0[:law.n_pre - 2].reshape(len(law.raw0), -1))
+    law.sense(law.z0[:law._nb].reshape(len(law.raw0), -1))  # the buffers
     # the safety-factor clamping's torque at rest (a safety-factor law's set-up)
     _law_core.safety_torque(law.raw0[3], law.raw0[0], law._c, law._tb, law._wk)
     if law.controller.schedule is not None:

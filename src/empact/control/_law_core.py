@@ -101,7 +101,8 @@ class LawConstants(NamedTuple):
     ahead_h0: float  #: the headroom share below which the set-point moves [-]
     guard: bool  #: the slip-runaway guard (its state last of the pre-processing's)
     guard_margin: float  #: the slip's share above its set-point where it acts [-]
-    guard_gain: float  #: its clamping per share of slip beyond the margin [-]
+    guard_gain: float  #: its clamping (a share of the set-point's) per share of slip beyond
+    #: the margin [-]; its state the clamping it adds [N]
     guard_decay: float  #: its release per sample, ``exp(-dt / guard_release)`` [-]
     # the clamping floor (issue 34; `floor` False: none)
     sf_engine: bool  #: the safety-factor clamping's torque is the engine's (raw[6], in the
@@ -501,15 +502,16 @@ def pre(law, s, out, raw, k, ideal):
         else:
             ff = c.ff_gain * T_b * c.cosb / (c.ff_den * mu_ref * R_s)
         if c.guard:  # the slip-runaway guard: clamping at once when the measured slip
-            # passes its set-point by more than the margin, held and released slowly
+            # passes its set-point by more than the margin, held as a force (so that the
+            # driveshaft torque's swings do not move it) and released slowly
             og = c.n_pre - 1
             x = c.guard_gain * (y / slip_ref - 1.0 - c.guard_margin)
+            x = (1.0 if x > 1.0 else x) * F_full  # at most the set-point's clamping more
             g = c.guard_decay * s[og]
             g = x if x > g else g
-            g = 1.0 if g > 1.0 else g  # at most twice the set-point's clamping
             out[og] = g
-            ff += g * F_full
-            wk.setpoint[kk, 1] = g
+            ff += g
+            wk.setpoint[kk, 1] = g / F_full if F_full > 0.0 else 0.0
         f = a * f + (1 - a) * ff
         u1 += c.tpf * f
     elif not c.safety:

@@ -73,7 +73,7 @@ def _state_steps(law: LoopLaw) -> NDArray[np.float64]:
     (`empact.control._law_core.pre`): the raw signals' buffers (signal-major, ``n_buf``
     each), the clamping feedforward's filter [N] and the decoupler's [N m], the torque
     estimate's delay line [N m] (``n_est``), the observer's torque [N m], the slip-runaway
-    guard's share [-]."""
+    guard's clamping [N]."""
     c = law._c
     n_sig = len(RAW_SIGNALS)
     n_tail = law.n_pre - 2 - n_sig * c.n_buf
@@ -81,7 +81,7 @@ def _state_steps(law: LoopLaw) -> NDArray[np.float64]:
     n_guard = n_tail - n_est - n_obs
     assert n_guard in (0, 1), (n_tail, n_est, n_obs)
     return np.concatenate([np.repeat(_H_RAW, c.n_buf), [1e-3, 1e-6], np.full(n_est, 1e-4),
-                           np.full(n_obs, 1e-4), np.full(n_guard, 1e-6)])
+                           np.full(n_obs, 1e-4), np.full(n_guard, 1e-3)])
 _H_REF = np.array([1e-6, 1e-8, 1e-7, 1e-6])
 
 

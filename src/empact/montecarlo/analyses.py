@@ -38,7 +38,7 @@ from ..nonlinear.linearization import plant
 from ..params import Params
 from ..slip.coupling import linearize_belt
 from ..slip.stability import stability_map
-from .spread import Spread, apply_scenario
+from .spread import Spread, apply_scenario, resolve_peak_slips
 
 __all__ = ["ANALYSES", "OUTPUTS", "AnalysisContext", "RunFailed", "evaluate", "output_units",
            "prepare", "TARGET_PREFIX"]
@@ -149,7 +149,7 @@ def prepare(params: Params, spread: Spread, row: Any,
         The run's parameter set and its context with its own scenario.
     """
     values, scen = spread.split(row)
-    p = params.from_dotted(values)
+    p = params.from_dotted(resolve_peak_slips(values, params))
     if scen:
         context = replace(context, scenario=apply_scenario(context.scenario, scen, params))
     return p, context

@@ -25,7 +25,7 @@ from ..dynamic_cycle import dynamic_cycle
 from ..errors import ParameterError
 from ..params import Params
 from ..sweep import SweepOptions, plan_chunks, run_chunks
-from .spread import Spread
+from .spread import Spread, resolve_peak_slips
 
 __all__ = ["CycleStudy", "cycle_monte_carlo"]
 
@@ -86,7 +86,7 @@ def _runs_chunk(task: tuple) -> dict[str, Any]:
     fuel = {s: np.empty(len(rows)) for s in strategies}
     macro = {s: np.zeros(len(rows), dtype=bool) for s in strategies}
     for i, row in enumerate(rows):
-        p = params.from_dotted(dict(zip(names, map(float, row))))
+        p = params.from_dotted(resolve_peak_slips(dict(zip(names, map(float, row))), params))
         if dynamic:
             res = dynamic_cycle(p, cycle, strategies=strategies)
             for s in strategies:

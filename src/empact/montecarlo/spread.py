@@ -27,6 +27,14 @@ value is the scenario's; each is checked as the scenario file's own value is (`a
 the operating point's ranges, the variator's ratio range, the load step's [-1, 2]) when the
 spread is loaded, before any run.
 
+The magic formula's peak slip at each of its ratios is a variable of its own
+(``traction.peak_slip_low``, ``_med``, ``_od`` [-], `PEAK_SLIP_VARIABLES`; its nominal value
+the parameter set's curve's): a run's ``B`` at that ratio is the one that puts the peak at the
+drawn slip with the run's ``C`` and ``E`` (`stiffness_for_peak_slip`), so that a spread can
+vary the peak slip by a stated band and the shape factor ``C`` on its own (drawing ``B`` and
+``C`` independently moves the peak slip by both).  A spread gives ``B`` or the peak slip at a
+ratio, not both.
+
 Sampling is by inverse transform of the (truncated) distribution, one uniform number per
 parameter and run: run ``i`` draws from its own stream ``SeedSequence(seed, spawn_key=(i,))``,
 so a run's sample depends on the seed and its index only, never on how the runs are chunked
@@ -42,6 +50,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.optimize import brentq
 from scipy.special import ndtr, ndtri
 
 from .._validate import check_number, fmt
@@ -51,7 +60,8 @@ from ..variator.geometry import check_ratio
 from ..variator.traction import traction_from_params
 
 __all__ = ["Distribution", "Spread", "load_spread", "spread_from_dict", "DISTRIBUTIONS",
-           "SCENARIO_VARIABLES", "apply_scenario"]
+           "SCENARIO_VARIABLES", "PEAK_SLIP_VARIABLES", "apply_scenario", "peak_slip",
+           "stiffness_for_peak_slip", "resolve_peak_slips"]
 
 DISTRIBUTIONS = ("normal", "uniform", "lognormal")
 
@@ -118,6 +128,90 @@ def apply_scenario(scenario: Any, values: Mapping[str, float], params: Params) -
         raise ParameterError(f"scenario.initial.F_s = {fmt(initial.F_s)}: a clamping force "
                              "is > 0 [N]")
     return replace(scenario, initial=initial, load_step=load_step)
+
+
+#: spread variables of the magic formula's peak slip [-] -> the ratio's suffix
+PEAK_SLIP_VARIABLES = {f"traction.peak_slip_{k}": k for k in ("low", "med", "od")}
+
+
+def _peak_argument(C: float, E: float) -> float:
+    """``x = B nu_peak`` of the magic formula: where ``C atan(x - E (x - atan x)) = pi/2``,
+    i.e. ``(1 - E) x + E atan x = tan(pi / (2 C))`` (monotone in ``x`` for ``E < 1``)."""
+    if not 1.0 < C <= 2.0:
+        raise ParameterError(f"traction C = {fmt(C)}: the magic formula has a peak only for "
+                             "C in (1, 2]")
+    t = math.tan(math.pi / (2.0 * C))
+    if E == 0.0:
+        return t
+    if E >= 1.0:
+        raise ParameterError(f"traction E = {fmt(E)}: the peak slip is defined for E < 1")
+    hi = t / (1.0 - E) + 2.0 * abs(E) + 1.0  # f(hi) >= t: (1-E) hi + E atan(hi) > t
+    return float(brentq(lambda x: (1.0 - E) * x + E * math.atan(x) - t, 0.0, hi,
+                        xtol=1e-15, rtol=1e-15))
+
+
+def peak_slip(B: float, C: float, E: float = 0.0) -> float:
+    """The slip [-] at the magic formula's peak, ``x / B`` (``x`` where ``C atan(x - E (x -
+    atan x)) = pi / 2``).
+
+    Parameters
+    ----------
+    B, C, E : float
+        The formula's stiffness [-], shape (in (1, 2]) [-] and curvature (< 1) [-] factors.
+
+    Returns
+    -------
+    float
+        The peak's slip [-].
+    """
+    return _peak_argument(C, E) / B
+
+
+def stiffness_for_peak_slip(nu_peak: float, C: float, E: float = 0.0) -> float:
+    """The stiffness factor ``B`` [-] that puts the magic formula's peak at the slip
+    `nu_peak` [-] with shape `C` and curvature `E` (`peak_slip`'s inverse in ``B``).
+
+    Parameters
+    ----------
+    nu_peak : float
+        The peak's slip [-], > 0.
+    C, E : float
+        The formula's shape (in (1, 2]) and curvature (< 1) factors [-].
+
+    Returns
+    -------
+    float
+        The stiffness factor ``B`` [-].
+    """
+    if not nu_peak > 0:
+        raise ParameterError(f"traction peak slip = {fmt(nu_peak)}: a peak slip is > 0 [-]")
+    return _peak_argument(C, E) / nu_peak
+
+
+def resolve_peak_slips(values: Mapping[str, float], params: Params) -> dict[str, float]:
+    """`values` (dotted names -> values) with each ``traction.peak_slip_*``
+    (`PEAK_SLIP_VARIABLES`) replaced by the stiffness ``traction.B_*`` that puts the peak
+    there with the ratio's ``C`` and ``E`` (`values`' where given, else `params`').
+
+    Parameters
+    ----------
+    values : mapping str -> float
+        One run's parameter values by dotted name.
+    params : Params
+        The nominal set (``C`` and ``E`` where `values` does not give them).
+
+    Returns
+    -------
+    dict of str to float
+        The values `Params.from_dotted` takes.
+    """
+    out = {k: v for k, v in values.items() if k not in PEAK_SLIP_VARIABLES}
+    for name, k in PEAK_SLIP_VARIABLES.items():
+        if name in values:
+            C = values.get(f"traction.C_{k}", params.get(f"traction.C_{k}"))
+            E = values.get(f"traction.E_{k}", params.get(f"traction.E_{k}"))
+            out[f"traction.B_{k}"] = stiffness_for_peak_slip(values[name], C, E)
+    return out
 
 
 #: a truncation keeping less probability than this is refused (bounds far in a tail)
@@ -255,6 +349,13 @@ def _distribution(name: str, table: Any, params: Params, src: str,
         if nominal is None:
             raise ParameterError(f"{where}: the scenario {scenario.name!r} does not give "
                                  f"{key}; it cannot be varied")
+    elif name in PEAK_SLIP_VARIABLES:
+        k = PEAK_SLIP_VARIABLES[name]
+        if params.traction_table is not None:
+            raise ParameterError(f"{where}: {name} is a variable of the magic formula; the "
+                                 "parameter set's traction is a table "
+                                 f"({params.traction_table_file}), which a spread does not vary")
+        nominal = peak_slip(*(params.get(f"traction.{c}_{k}") for c in "BCE"))
     else:
         try:
             nominal = params.get(name, unset_ok=True)
@@ -326,7 +427,7 @@ def _check_reachable(d: Distribution, params: Params, where: str, scenario: Any 
             if d.name.startswith("scenario."):
                 apply_scenario(scenario, {d.name: float(x)}, params)
                 continue
-            p = params.from_dotted({d.name: float(x)})
+            p = params.from_dotted(resolve_peak_slips({d.name: float(x)}, params))
             nu = p.operating.nu
             if d.name == "operating.nu" and nu is not None:
                 lo, hi = traction_from_params(p).nu_range
@@ -401,6 +502,11 @@ def spread_from_dict(data: Mapping[str, Any], params: Params, source: str = "",
                 flat[name] = value
 
     collect("", tables)
+    both = [n for n, k in PEAK_SLIP_VARIABLES.items() if n in flat and f"traction.B_{k}" in flat]
+    if both:
+        k = PEAK_SLIP_VARIABLES[both[0]]
+        raise ParameterError(f"{where}: {both[0]} and traction.B_{k} both given; the peak slip "
+                             f"sets B_{k} (with C_{k} and E_{k}): give one of them")
     return Spread(tuple(_distribution(n, t, params, source, scenario)
                         for n, t in flat.items()), source=source)
 

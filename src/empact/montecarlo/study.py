@@ -48,7 +48,7 @@ from .analyses import (
     output_units,
     prepare,
 )
-from .spread import SCENARIO_VARIABLES, Spread
+from .spread import PEAK_SLIP_VARIABLES, SCENARIO_VARIABLES, Spread
 
 __all__ = ["MonteCarloResult", "monte_carlo", "save_montecarlo", "failure_kind", "QUANTILES",
            "MAX_RUNS", "study_spec", "CHUNK_SECONDS"]
@@ -366,7 +366,8 @@ def monte_carlo(params: Params, spread: Spread, runs: int, analysis: str = "plan
     samples = np.concatenate([p[0] for p in parts]).reshape(runs, len(spread.names))
     out_units = output_units(context)
     outputs = tuple(out_units)
-    units = {**{n: SCENARIO_VARIABLES.get(n) or params.unit(n) for n in spread.names},
+    units = {**{n: SCENARIO_VARIABLES.get(n) or ("-" if n in PEAK_SLIP_VARIABLES else
+                                                params.unit(n)) for n in spread.names},
              **out_units}
     return MonteCarloResult(analysis=analysis, seed=seed, spread=spread, samples=samples,
                             outputs=outputs, units=units,

@@ -376,7 +376,8 @@ def studies(ctx: Context, res: rep.StudiesSection) -> str:
                                            "load cut [N m]", "lowest slip set-point [%]"],
                     sat_rows,
                     "Saturation (issue 33 item 3): 50 % load steps from tau = 0.9 over "
-                    "ratio x starting clamping force, as shipped and with the reserve ahead "
+                    "ratio x starting clamping force, as shipped (the slip guard on, "
+                    "controller.slip_guard) and with the reserve ahead "
                     "and the honoured torque request (controller.reserve_ahead, "
                     "torque_request = 'honoured'; off in the shipped scenarios, which the "
                     "CHANGELOG's Monte Carlo measurements explain); within the capacity: the "
