@@ -509,7 +509,13 @@ def pre(law, s, out, raw, k, ideal):
             x = (1.0 if x > 1.0 else x) * F_full  # at most the set-point's clamping more
             g = c.guard_decay * s[og]
             g = x if x > g else g
-            out[og] = g
+            # never past the servo: at most the headroom its last torque left (a demand
+            # beyond it would unwind the controller through the anti-windup and move the
+            # primary through the decoupler, and clamp nothing)
+            out[og] = g  # held whole; applied within the headroom
+            room = c.F_max - wk.u[1] / c.tpf
+            room = 0.0 if 0.0 > room else room
+            g = room if g > room else g
             ff += g
             wk.setpoint[kk, 1] = g / F_full if F_full > 0.0 else 0.0
         f = a * f + (1 - a) * ff

@@ -112,9 +112,9 @@ FAIR_STRATEGIES = {
 #: is about 20.2 kN)
 SATURATION_GRID = {"r_g": (0.5, 0.7, 1.0, 1.4, 2.0),
                    "F_s": (5e3, 10e3, 12.5e3, 15e3, 17.5e3, 20e3)}
-#: the protections the sweep runs with (``[controller]`` keys): the reserve ahead and the
-#: honoured torque request (off in the shipped scenarios: the reserve ahead lowers the wide
-#: Monte Carlo spread's clean runs at r_g = 0.5, CHANGELOG)
+#: the protections the sweep runs with (``[controller]`` keys) besides the shipped slip guard:
+#: the reserve ahead and the honoured torque request (off in the shipped scenarios: the
+#: reserve ahead moves the nominal load steps' set-point, CHANGELOG)
 PROTECTION = {"reserve_ahead": True, "torque_request": "honoured"}
 
 SRC = "issue 21 (beyond the paper)"
@@ -1001,7 +1001,8 @@ def _saturation_claim(rows: list[dict[str, Any]]) -> Claim:
                  f"slack protected in {sum(r['protected']['belt_slack'] for r in beyond)}",
         shown=not miss and not any(r["protected"]["belt_slack"] for r in beyond),
         explanation="A step misses with the protections: at light load (5 kN, r_g = 0.5) "
-                    "neither acts (the servo has room); the peak is the loop's.",
+                    "the servo has room, so the reserve ahead does not act and the slip guard "
+                    "acts only past its margin; the peak is the loop's.",
         values={f"r_g={r['r_g']:g},F_s={r['F_s']:g}": r["protected"]["peak_slip_error"]
                 for r in rows})
 
