@@ -72,3 +72,15 @@ def test_report_renders_in_a_real_browser_with_every_image(tmp_path, params):
                          capture_output=True, text=True, timeout=120).stdout
     # ... and after a rebuild every image loads
     assert re.search(r'data-images="5"', dom) and re.search(r'data-broken-images="0"', dom)
+
+
+def test_a_table_cell_without_a_value_is_a_dash_not_nan():
+    """A reader never sees ``nan`` (the fair-saving table's open loop that finds no steady
+    start has no mean clamping): NaN is an en dash, a float four significant digits, text
+    escaped; the CSV beside keeps ``nan`` for scripts."""
+    import numpy as np
+
+    from empact.report.context import fmt_cell
+
+    assert fmt_cell(float("nan")) == fmt_cell(np.float64("nan")) == "\u2013"
+    assert fmt_cell(1.234567) == "1.235" and fmt_cell("a<b") == "a&lt;b"

@@ -89,7 +89,8 @@ def csv_slip_columns(header: Sequence[str], rows: Sequence[Sequence[object]]
 
 
 def fmt_cell(value: object) -> str:
-    """A table cell: floats with 4 significant digits, everything else as text (escaped).
+    """A table cell: floats with 4 significant digits (NaN, no value, as a dash), everything
+    else as text (escaped).
 
     Parameters
     ----------
@@ -99,10 +100,11 @@ def fmt_cell(value: object) -> str:
     Returns
     -------
     str
-        HTML text of the cell (``f"{value:.4g}"`` for a float, else ``str`` HTML-escaped).
+        HTML text of the cell (``f"{value:.4g}"`` for a float, an en dash for NaN, else
+        ``str`` HTML-escaped).
     """
     if isinstance(value, (float, np.floating)):
-        return f"{value:.4g}"
+        return "\u2013" if value != value else f"{value:.4g}"
     return html.escape(str(value))
 
 
