@@ -193,7 +193,8 @@ COVERAGE: dict[tuple[str, str], tuple[str, str] | tuple[str]] = {
         "excluded", "needs a Dask cluster: a scheduler on a head node, workers on compute "
         "nodes (tests/test_sweep.py runs a study on a LocalCluster)"),
     ("docs/dask.rst", "from dask_jobqueue import SLURMCluster"): (
-        "excluded", "needs SLURM or PBS and dask-jobqueue (not installed here)"),
+        "excluded", "needs SLURM or PBS and dask-jobqueue (not in the CI; run by hand on a "
+        "one-node SLURM, as the page says)"),
     ("docs/dask.rst", "empact montecarlo --spread spread.toml --runs 100000 --analy"): (
         "excluded", "needs a Dask scheduler at tcp://head:8786 and hours of runs "
         "(tests/test_shards.py kills and resumes a stored study on forked workers and on a "
