@@ -174,6 +174,19 @@ def test_a_drawn_peak_slip_puts_the_curves_peak_there(E):
     assert peak_slip(values["traction.B_low"], 1.4, E) == pytest.approx(0.03, rel=1e-12)
 
 
+@pytest.mark.parametrize("lower, upper", [(-0.02, -0.01), (2.0, 3.0)])
+def test_a_peak_slip_outside_the_formulas_slips_is_refused_before_any_run(lower, upper):
+    """A peak slip is in (0, 0.2), the slips the magic formula is used at: a spread wholly
+    outside is one line when it is loaded (a 2-3 peak slip used to load, and every run
+    failed on its B)."""
+    data = {"spread": {"traction.peak_slip_med": {"distribution": "uniform", "lower": lower,
+                                                  "upper": upper}}}
+    with pytest.raises(ParameterError, match=r"lies wholly outside .*a peak slip is in "
+                                             r"\(0, 0.2\)") as err:
+        spread_from_dict(data, P)
+    assert "\n" not in str(err.value)
+
+
 def test_a_peak_slip_and_its_stiffness_together_are_one_line():
     data = {"spread": {"traction.peak_slip_med": {"distribution": "uniform", "lower": 0.02,
                                                   "upper": 0.04},

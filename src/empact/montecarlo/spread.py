@@ -57,7 +57,7 @@ from .._validate import check_number, fmt
 from ..errors import ParameterError
 from ..params import Params, read_toml
 from ..variator.geometry import check_ratio
-from ..variator.traction import traction_from_params
+from ..variator.traction import MAGIC_NU_MAX, traction_from_params
 
 __all__ = ["Distribution", "Spread", "load_spread", "spread_from_dict", "DISTRIBUTIONS",
            "SCENARIO_VARIABLES", "PEAK_SLIP_VARIABLES", "apply_scenario", "peak_slip",
@@ -174,7 +174,7 @@ def stiffness_for_peak_slip(nu_peak: float, C: float, E: float = 0.0) -> float:
     Parameters
     ----------
     nu_peak : float
-        The peak's slip [-], > 0.
+        The peak's slip [-], in (0, `MAGIC_NU_MAX`) (the slips the formula is used at).
     C, E : float
         The formula's shape (in (1, 2]) and curvature (< 1) factors [-].
 
@@ -183,8 +183,9 @@ def stiffness_for_peak_slip(nu_peak: float, C: float, E: float = 0.0) -> float:
     float
         The stiffness factor ``B`` [-].
     """
-    if not nu_peak > 0:
-        raise ParameterError(f"traction peak slip = {fmt(nu_peak)}: a peak slip is > 0 [-]")
+    if not 0 < nu_peak < MAGIC_NU_MAX:
+        raise ParameterError(f"traction peak slip = {fmt(nu_peak)}: a peak slip is in (0, "
+                             f"{fmt(MAGIC_NU_MAX)}) [-], the slips the magic formula is used at")
     return _peak_argument(C, E) / nu_peak
 
 
