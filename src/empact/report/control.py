@@ -379,8 +379,9 @@ def studies(ctx: Context, res: rep.StudiesSection) -> str:
                     "ratio x starting clamping force, as shipped (the slip guard on, "
                     "controller.slip_guard) and with the reserve ahead "
                     "and the honoured torque request (controller.reserve_ahead, "
-                    "torque_request = 'honoured'; off in the shipped scenarios, which the "
-                    "CHANGELOG's Monte Carlo measurements explain); within the capacity: the "
+                    "torque_request = 'honoured'; off in the shipped scenarios, where the reserve "
+                    "ahead would move the nominal load steps' set-point: CHANGELOG); within "
+                    "the capacity: the "
                     "step's steady clamping below what the secondary servo's torque limit "
                     "holds; the protected slip error is against the set-point the law ran")
         + ctx.claims(res.claims))

@@ -114,7 +114,8 @@ SATURATION_GRID = {"r_g": (0.5, 0.7, 1.0, 1.4, 2.0),
                    "F_s": (5e3, 10e3, 12.5e3, 15e3, 17.5e3, 20e3)}
 #: the protections the sweep runs with (``[controller]`` keys) besides the shipped slip guard:
 #: the reserve ahead and the honoured torque request (off in the shipped scenarios: the
-#: reserve ahead moves the nominal load steps' set-point, CHANGELOG)
+#: reserve ahead moves the nominal load steps' set-point: at r_g 0.5 from 1.85 to 1.65 % for
+#: 1.9 s, +1.5 % mean clamping; measured at stop 44)
 PROTECTION = {"reserve_ahead": True, "torque_request": "honoured"}
 
 SRC = "issue 21 (beyond the paper)"
