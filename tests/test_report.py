@@ -3,7 +3,10 @@ summary, claims.json, tables and figures (the full build is in test_cli.py)."""
 import json
 import re
 
+import numpy as np
+
 from empact.report import SECTIONS, build_report
+from empact.report.context import fmt_cell
 
 
 def test_reduced_report_structure(tmp_path, params):
@@ -78,9 +81,5 @@ def test_a_table_cell_without_a_value_is_a_dash_not_nan():
     """A reader never sees ``nan`` (the fair-saving table's open loop that finds no steady
     start has no mean clamping): NaN is an en dash, a float four significant digits, text
     escaped; the CSV beside keeps ``nan`` for scripts."""
-    import numpy as np
-
-    from empact.report.context import fmt_cell
-
     assert fmt_cell(float("nan")) == fmt_cell(np.float64("nan")) == "\u2013"
     assert fmt_cell(1.234567) == "1.235" and fmt_cell("a<b") == "a&lt;b"
